@@ -1,0 +1,3 @@
+"""Evaluation: relative pose error, homing, map quality, experiments."""
+
+__all__: list[str] = []

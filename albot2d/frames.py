@@ -1,0 +1,108 @@
+"""Sensor data value types shared by the simulator, log readers and mappers: ``Scan`` and ``Frame``.
+
+A ``Scan`` is one laser sweep in the laser's own frame; a ``Frame`` is one step of a
+run: the scan plus odometry (and, in simulation, the true pose). Simulated runs and
+real CARMEN logs both become streams of ``Frame``s, so every mapper runs on both.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from albot2d.geometry import Pose, transform_points
+
+__all__ = ["Frame", "Scan", "beam_angles"]
+
+FloatArray = NDArray[np.float64]
+
+
+def beam_angles(n_beams: int, fov_rad: float = math.pi, *, inclusive: bool = True) -> FloatArray:
+    """Beam angles (radians, counter-clockwise, 0 = forward) of an ``n_beams`` sweep.
+
+    ``inclusive=True`` spreads beams from -fov/2 to +fov/2 inclusive (step fov/(n-1): the
+    181- and 361-beam SICK modes). ``inclusive=False`` uses step fov/n from -fov/2, the
+    reading of CARMEN FLASER lines with 180 or 360 beams (-90° … +89°).
+    """
+    if n_beams < 2:
+        raise ValueError(f"n_beams must be >= 2, got {n_beams}")
+    step = fov_rad / (n_beams - 1) if inclusive else fov_rad / n_beams
+    return -0.5 * fov_rad + step * np.arange(n_beams, dtype=np.float64)
+
+
+def _readonly(arr: np.ndarray, dtype: type) -> np.ndarray:
+    out = np.array(arr, dtype=dtype, copy=True)
+    out.flags.writeable = False
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Scan:
+    """One laser sweep, beams ordered right to left (counter-clockwise).
+
+    - ``ranges``: ``(n,)`` metres. Where ``valid`` is False the value is not a hit
+      (no return, dropout, or at/over ``max_range_m``) and must not be used as a point.
+    - ``angles``: ``(n,)`` beam angles in the laser frame, radians.
+    - ``laser_pose``: the laser's mount pose in the robot frame (REP-103: x forward).
+    """
+
+    ranges: FloatArray
+    angles: FloatArray
+    valid: NDArray[np.bool_]
+    max_range_m: float
+    timestamp: float = 0.0
+    laser_pose: Pose = field(default_factory=Pose)
+
+    def __post_init__(self) -> None:
+        ranges = _readonly(self.ranges, np.float64)
+        angles = _readonly(self.angles, np.float64)
+        valid = _readonly(self.valid, np.bool_)
+        if not (ranges.ndim == angles.ndim == valid.ndim == 1):
+            raise ValueError("Scan.ranges, angles and valid must be 1-D arrays")
+        if not (len(ranges) == len(angles) == len(valid)):
+            raise ValueError(
+                f"Scan arrays differ in length: ranges {len(ranges)}, "
+                f"angles {len(angles)}, valid {len(valid)}"
+            )
+        object.__setattr__(self, "ranges", ranges)
+        object.__setattr__(self, "angles", angles)
+        object.__setattr__(self, "valid", valid)
+
+    @property
+    def n_beams(self) -> int:
+        return len(self.ranges)
+
+    def points_laser(self) -> FloatArray:
+        """``(n, 2)`` points of every beam in the laser frame (invalid beams included)."""
+        r, a = self.ranges, self.angles
+        return np.column_stack([r * np.cos(a), r * np.sin(a)])
+
+    def points(self, *, valid_only: bool = True) -> FloatArray:
+        """Hit points in the robot frame (laser mount applied); ``(k, 2)``."""
+        pts = self.points_laser()
+        if valid_only:
+            pts = pts[self.valid]
+        return transform_points(self.laser_pose.as_array(), pts)
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """One step of a run.
+
+    - ``odom_pose``: the integrated (possibly noisy) odometry pose, odometry frame.
+    - ``odom_increment``: ``prev_odom_pose⁻¹ ⊕ odom_pose``, the measured motion since the
+      previous frame in the previous robot frame (identity for the first frame).
+    - ``true_pose``: ground truth in the world frame; ``None`` for real logs.
+    - ``collided``: the motion into this frame was blocked by an obstacle.
+    """
+
+    index: int
+    timestamp: float
+    scan: Scan
+    odom_pose: Pose
+    odom_increment: Pose
+    true_pose: Pose | None = None
+    collided: bool = False

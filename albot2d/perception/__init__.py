@@ -1,0 +1,3 @@
+"""Perception: laser points → surfaces (line extraction, occlusion) and surface tracking."""
+
+__all__: list[str] = []

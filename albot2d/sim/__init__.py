@@ -1,0 +1,3 @@
+"""Simulation: kinematic robot on pymunk, 2D laser, noisy odometry, driving profiles."""
+
+__all__: list[str] = []

@@ -1,0 +1,9 @@
+"""worldgen: procedural 2D worlds (corridors, rooms, open halls, offices) for robot simulation.
+
+Imports only ``albot2d.geometry`` / ``albot2d.errors`` / ``albot2d.seeding`` from albot2d,
+never its higher layers.
+"""
+
+from worldgen.world import DynamicObstacle, Roadmap, Tour, World
+
+__all__ = ["DynamicObstacle", "Roadmap", "Tour", "World"]
