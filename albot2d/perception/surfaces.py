@@ -1,0 +1,110 @@
+"""The surfaces of one view as parallel arrays (``Surfaces``), and a scalar ``Surface`` view of one.
+
+Endpoint order is scan order: endpoint 0 comes from the lower beam index (the robot's
+right), endpoint 1 from the higher (its left). ``occluded[i, k]`` says endpoint ``k`` of
+surface ``i`` is not a real corner: a nearer reading next to it, a no-return neighbour
+or the edge of the field of view hides where the surface really ends.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from albot2d.geometry import (
+    as_segments,
+    segment_angles,
+    segment_lengths,
+    transform_segments,
+)
+
+__all__ = ["Surface", "Surfaces"]
+
+FloatArray = NDArray[np.float64]
+
+
+def _readonly(arr: ArrayLike, dtype: type, shape: tuple[int, ...]) -> np.ndarray:
+    out = np.array(arr, dtype=dtype, copy=True).reshape(shape)
+    out.flags.writeable = False
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class Surface:
+    """One surface: endpoints ``p0``/``p1`` (metres, view frame) and their occlusion flags."""
+
+    p0: tuple[float, float]
+    p1: tuple[float, float]
+    p0_occluded: bool
+    p1_occluded: bool
+
+    @property
+    def length_m(self) -> float:
+        return float(np.hypot(self.p1[0] - self.p0[0], self.p1[1] - self.p0[1]))
+
+
+@dataclass(frozen=True, eq=False)
+class Surfaces:
+    """N surfaces of one view.
+
+    - ``segments``: ``(N, 4)`` endpoints ``[x0, y0, x1, y1]`` in the view (robot) frame.
+    - ``occluded``: ``(N, 2)`` bool, per endpoint.
+    - ``beams``: ``(N, 2)`` int, first and last beam index of the supporting points
+      (``-1`` when the surfaces did not come from a scan, e.g. were transformed).
+    """
+
+    segments: FloatArray
+    occluded: NDArray[np.bool_]
+    beams: NDArray[np.int64]
+
+    def __post_init__(self) -> None:
+        segs = as_segments(self.segments)
+        n = len(segs)
+        object.__setattr__(self, "segments", _readonly(segs, np.float64, (n, 4)))
+        object.__setattr__(self, "occluded", _readonly(self.occluded, np.bool_, (n, 2)))
+        object.__setattr__(self, "beams", _readonly(self.beams, np.int64, (n, 2)))
+
+    @classmethod
+    def empty(cls) -> Surfaces:
+        return cls(np.zeros((0, 4)), np.zeros((0, 2), bool), np.zeros((0, 2), np.int64))
+
+    @classmethod
+    def from_segments(cls, segments: ArrayLike, occluded: ArrayLike | None = None) -> Surfaces:
+        """Surfaces from bare segments (no beams); endpoints unoccluded unless given."""
+        segs = as_segments(segments)
+        occ = np.zeros((len(segs), 2), bool) if occluded is None else occluded
+        return cls(segs, occ, np.full((len(segs), 2), -1, np.int64))
+
+    def __len__(self) -> int:
+        return len(self.segments)
+
+    @property
+    def lengths_m(self) -> FloatArray:
+        return segment_lengths(self.segments)
+
+    @property
+    def angles_rad(self) -> FloatArray:
+        return segment_angles(self.segments)
+
+    def select(self, index: ArrayLike) -> Surfaces:
+        """A subset by boolean mask or integer indices (order of ``index`` kept)."""
+        idx = np.asarray(index)
+        return Surfaces(self.segments[idx], self.occluded[idx], self.beams[idx])
+
+    def transformed(self, pose: ArrayLike) -> Surfaces:
+        """The same surfaces mapped from this view's frame by ``pose`` ([x, y, theta])."""
+        return Surfaces(transform_segments(pose, self.segments), self.occluded, self.beams)
+
+    def surface(self, i: int) -> Surface:
+        s = self.segments[i]
+        return Surface(
+            (float(s[0]), float(s[1])),
+            (float(s[2]), float(s[3])),
+            bool(self.occluded[i, 0]),
+            bool(self.occluded[i, 1]),
+        )
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        return (self.surface(i) for i in range(len(self)))
