@@ -1,0 +1,65 @@
+"""An incremental uniform-grid index over segment bounding boxes.
+
+The global map grows and shrinks one view at a time, so a static tree (rebuilt per
+update, O(M)) would make each update cost follow the map's size. Here inserting a
+segment touches only the cells its bounding box covers, and a query touches only the
+cells of the query box: the cost follows what is near, not how big the map is.
+Deleted segments stay in their cells and are filtered by the caller's alive mask.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["SegmentGridIndex"]
+
+
+class SegmentGridIndex:
+    """Maps grid cells of side ``cell_m`` to the ids of segments whose bbox touches them."""
+
+    def __init__(self, cell_m: float = 2.0) -> None:
+        if not (math.isfinite(cell_m) and cell_m > 0):
+            raise ValueError(f"cell_m must be > 0, got {cell_m!r}")
+        self.cell_m = float(cell_m)
+        self._cells: dict[tuple[int, int], list[int]] = {}
+
+    def _cell_ranges(self, boxes: NDArray[np.float64]) -> NDArray[np.int64]:
+        return np.floor(boxes / self.cell_m).astype(np.int64)
+
+    def insert(self, ids: NDArray[np.int64], segments: NDArray[np.float64]) -> None:
+        """Index ``segments`` (``(K, 4)``) under the integer ``ids`` (``(K,)``)."""
+        if len(ids) == 0:
+            return
+        boxes = np.column_stack(
+            [
+                np.minimum(segments[:, 0], segments[:, 2]),
+                np.minimum(segments[:, 1], segments[:, 3]),
+                np.maximum(segments[:, 0], segments[:, 2]),
+                np.maximum(segments[:, 1], segments[:, 3]),
+            ]
+        )
+        cells = self._cell_ranges(boxes)
+        for sid, (x0, y0, x1, y1) in zip(ids.tolist(), cells.tolist(), strict=True):
+            for ix in range(x0, x1 + 1):
+                for iy in range(y0, y1 + 1):
+                    self._cells.setdefault((ix, iy), []).append(sid)
+
+    def query_box(self, xmin: float, ymin: float, xmax: float, ymax: float) -> NDArray[np.int64]:
+        """Sorted unique ids of segments whose cells meet the box (a superset of true hits)."""
+        x0, y0, x1, y1 = self._cell_ranges(np.array([xmin, ymin, xmax, ymax])).tolist()
+        found: list[int] = []
+        cells = self._cells
+        if (x1 - x0 + 1) * (y1 - y0 + 1) > len(cells):
+            for (ix, iy), ids in cells.items():
+                if x0 <= ix <= x1 and y0 <= iy <= y1:
+                    found.extend(ids)
+        else:
+            for ix in range(x0, x1 + 1):
+                for iy in range(y0, y1 + 1):
+                    ids = cells.get((ix, iy))
+                    if ids:
+                        found.extend(ids)
+        return np.unique(np.asarray(found, dtype=np.int64))
