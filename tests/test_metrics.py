@@ -1,0 +1,86 @@
+"""Metric unit tests with hand-computed answers: RPE of known perturbations, homing signs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from albot2d.errors import InputError
+from albot2d.evaluation.homing import homing, homing_to_start
+from albot2d.evaluation.rpe import relative_pose_error
+from albot2d.geometry import Pose, between_arrays
+
+
+def straight_line(n: int = 5) -> tuple[np.ndarray, np.ndarray]:
+    t = np.arange(n, dtype=float)
+    poses = np.column_stack([t, np.zeros(n), np.zeros(n)])
+    return t, poses
+
+
+def test_perfect_estimate_has_zero_error() -> None:
+    t, truth = straight_line()
+    rel = between_arrays(truth[:-1], truth[1:])
+    r = relative_pose_error(t, truth, t[:-1], t[1:], rel)
+    assert r.overall.relations == 4
+    assert r.overall.trans_m_mean == pytest.approx(0.0)
+    assert r.overall.rot_deg_mean == pytest.approx(0.0)
+
+
+def test_known_perturbation() -> None:
+    t, truth = straight_line(3)
+    est = truth.copy()
+    est[2] = [2.0, 0.0, math.radians(10.0)]  # last pose rotated by 10 degrees only
+    est[1, 0] = 1.5  # middle pose 0.5 m too far
+    rel = between_arrays(truth[:-1], truth[1:])
+    r = relative_pose_error(t, est, t[:-1], t[1:], rel)
+    # relation 0->1: 1.5 m instead of 1 m -> 0.5 m, 0 deg
+    # relation 1->2: 0.5 m instead of 1 m (0.5 m), heading +10 deg
+    assert r.overall.trans_m_mean == pytest.approx(0.5)
+    assert r.overall.rot_deg_mean == pytest.approx(5.0)
+    assert r.overall.rot_deg_std == pytest.approx(5.0)
+
+
+def test_short_long_split_and_missing_timestamps() -> None:
+    t, truth = straight_line(6)
+    t1 = np.array([0.0, 0.0, 1.0, 99.0])
+    t2 = np.array([1.0, 5.0, 2.0, 100.0])
+    rel = np.array([[1, 0, 0], [5, 0, 0], [1, 0, 0], [1, 0, 0]], float)
+    est = truth.copy()
+    est[5, 1] = 0.3  # the long relation 0->5 is off by 0.3 m sideways
+    r = relative_pose_error(t, est, t1, t2, rel)
+    assert r.overall.relations == 3  # the relation at t=99..100 has no poses
+    assert r.short.relations == 2 and r.long.relations == 1
+    assert r.long.trans_m_mean == pytest.approx(0.3)
+    assert r.short.trans_m_mean == pytest.approx(0.0)
+
+
+def test_rpe_rejects_bad_split() -> None:
+    t, truth = straight_line()
+    with pytest.raises(InputError, match="split_s"):
+        relative_pose_error(t, truth, t, t, truth, split_s=-1)
+
+
+def test_homing_bearing_sign_convention() -> None:
+    # Facing +x, start on the left (+y): turn left = positive bearing.
+    b, d = homing(Pose(0, 0, 0), (0.0, 2.0))
+    assert b == pytest.approx(90.0) and d == pytest.approx(2.0)
+    b, _ = homing(Pose(0, 0, 0), (0.0, -2.0))
+    assert b == pytest.approx(-90.0)
+    b, _ = homing(Pose(1, 1, math.pi / 2), (1.0, 0.0))  # facing +y, start behind
+    assert abs(b) == pytest.approx(180.0)
+
+
+def test_homing_to_start_compares_each_trajectory_in_its_own_frame() -> None:
+    truth = np.array([[0, 0, 0], [3, 4, math.pi / 2]], float)
+    # The estimate lives in a frame rotated by 30 degrees: homing must not care.
+    rot = math.radians(30)
+    c, s = math.cos(rot), math.sin(rot)
+    est = np.column_stack(
+        [c * truth[:, 0] - s * truth[:, 1], s * truth[:, 0] + c * truth[:, 1], truth[:, 2] + rot]
+    )
+    h = homing_to_start(1, est, truth)
+    assert h.distance_true_m == pytest.approx(5.0)
+    assert h.bearing_error_deg == pytest.approx(0.0, abs=1e-9)
+    assert h.distance_error_m == pytest.approx(0.0, abs=1e-9)
