@@ -4,6 +4,18 @@ Imports only ``albot2d.geometry`` / ``albot2d.errors`` / ``albot2d.seeding`` fro
 never its higher layers.
 """
 
+from worldgen.io import load, save, world_from_json, world_to_json
+from worldgen.space import build_space
 from worldgen.world import DynamicObstacle, Roadmap, Tour, World
 
-__all__ = ["DynamicObstacle", "Roadmap", "Tour", "World"]
+__all__ = [
+    "DynamicObstacle",
+    "Roadmap",
+    "Tour",
+    "World",
+    "build_space",
+    "load",
+    "save",
+    "world_from_json",
+    "world_to_json",
+]
