@@ -4,6 +4,7 @@ Imports only ``albot2d.geometry`` / ``albot2d.errors`` / ``albot2d.seeding`` fro
 never its higher layers.
 """
 
+from worldgen.houseexpo import from_houseexpo
 from worldgen.io import load, save, world_from_json, world_to_json
 from worldgen.space import build_space
 from worldgen.world import DynamicObstacle, Roadmap, Tour, World
@@ -14,6 +15,7 @@ __all__ = [
     "Tour",
     "World",
     "build_space",
+    "from_houseexpo",
     "load",
     "save",
     "world_from_json",
