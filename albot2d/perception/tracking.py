@@ -1,0 +1,275 @@
+"""Trackable surfaces and Albot1's algorithm #1, RTSV: recognising tracked surfaces in a view.
+
+Trackable (the paper's three criteria, ``TrackingParams``): longer than 40 cm, seen under a
+viewing angle (between the bearings of its two endpoints from the robot) of at least 3°,
+and with at least one unoccluded endpoint.
+
+RTSV: each tracked surface's latest observation is moved onto the new view by the inverse
+of the odometry increment (the full relative pose ``prev⁻¹ ⊕ current``) and recognised as
+a trackable surface of the new view when their undirected line directions differ by less
+than 5° and, over corresponding endpoints (scan order) unoccluded in both, the nearest pair
+is closer than 40 cm. Matching is one-to-one, greedy by that distance (the pseudocode would
+allow many-to-many matches). A pair with no endpoint unoccluded in both observations is not
+recognised: the paper compares "occluding points", i.e. real corners, and an occluded end
+says nothing about where a surface ends. ``TrackingParams.line_distance_fallback`` instead
+compares such pairs by the distance of each unoccluded endpoint to the other segment.
+
+Unlike the pseudocode, which replaces S_t by the matched surfaces of the view, the tracker
+state (``TrackedSurfaces``) keeps each surface's geometry in the local map too: triangulation
+needs both observations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from albot2d.errors import InputError
+from albot2d.geometry import (
+    Pose,
+    point_segment_distance,
+    segment_angles,
+    undirected_angle_difference,
+)
+from albot2d.perception.surfaces import Surfaces
+from albot2d.validation import check_in_range, check_non_negative, check_positive
+
+__all__ = [
+    "MatchInfo",
+    "TrackedSurfaces",
+    "TrackingParams",
+    "match_surfaces",
+    "rtsv",
+    "start_tracking",
+    "trackable_mask",
+    "view_angles_rad",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+
+@dataclass(frozen=True, slots=True)
+class TrackingParams:
+    """Trackable-surface criteria and RTSV gates; defaults are the paper's values.
+
+    - ``min_length_m``: a trackable surface is strictly longer.
+    - ``min_view_angle_deg``: least angle between the bearings of its endpoints.
+    - ``match_angle_deg``: recognised only if undirected directions differ by less.
+    - ``match_distance_m``: recognised only if corresponding unoccluded endpoints are closer.
+    - ``line_distance_fallback``: pairs without an endpoint unoccluded in both views are
+      compared by endpoint-to-segment distance instead of being rejected (off: the paper's
+      "distance between occluding points" needs a shared real corner).
+    """
+
+    min_length_m: float = 0.40
+    min_view_angle_deg: float = 3.0
+    match_angle_deg: float = 5.0
+    match_distance_m: float = 0.40
+    line_distance_fallback: bool = False
+
+    def __post_init__(self) -> None:
+        check_non_negative(self, "min_length_m")
+        check_in_range(self, "min_view_angle_deg", 0.0, 180.0)
+        check_in_range(self, "match_angle_deg", 0.0, 90.0)
+        check_positive(self, "match_angle_deg", "match_distance_m")
+        if not isinstance(self.line_distance_fallback, bool):
+            raise InputError(
+                "TrackingParams.line_distance_fallback must be true or false, "
+                f"got {self.line_distance_fallback!r}"
+            )
+
+
+def view_angles_rad(surfaces: Surfaces) -> FloatArray:
+    """Angle (radians, in [0, pi]) between the bearings of each surface's two endpoints,
+    seen from the origin of the surfaces' frame (the robot)."""
+    s = surfaces.segments
+    cross = s[:, 0] * s[:, 3] - s[:, 1] * s[:, 2]
+    dot = s[:, 0] * s[:, 2] + s[:, 1] * s[:, 3]
+    return np.arctan2(np.abs(cross), dot)
+
+
+def trackable_mask(surfaces: Surfaces, params: TrackingParams | None = None) -> BoolArray:
+    """``(N,)`` bool: the surface meets all three of the paper's tracking criteria."""
+    params = TrackingParams() if params is None else params
+    return (
+        (surfaces.lengths_m > params.min_length_m)
+        & (view_angles_rad(surfaces) >= math.radians(params.min_view_angle_deg))
+        & ~surfaces.occluded.all(axis=1)
+    )
+
+
+def _readonly_ids(ids: ArrayLike) -> IntArray:
+    out = np.array(ids, dtype=np.int64, copy=True).reshape(-1)
+    out.flags.writeable = False
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class TrackedSurfaces:
+    """The tracker state: K surfaces of the current local map still in view.
+
+    - ``ids``: ``(K,)`` identity of each surface, stable across views.
+    - ``local``: its geometry in the current local map's frame, as observed when that
+      local map was remembered (what triangulation compares against).
+    - ``current``: its latest observation, in the latest view's frame.
+    """
+
+    ids: IntArray
+    local: Surfaces
+    current: Surfaces
+
+    def __post_init__(self) -> None:
+        ids = _readonly_ids(self.ids)
+        if not len(ids) == len(self.local) == len(self.current):
+            raise ValueError(
+                f"TrackedSurfaces needs one id per surface: {len(ids)} ids, "
+                f"{len(self.local)} local, {len(self.current)} current"
+            )
+        if len(np.unique(ids)) != len(ids):
+            raise ValueError(f"TrackedSurfaces ids must be unique, got {ids.tolist()}")
+        object.__setattr__(self, "ids", ids)
+
+    @classmethod
+    def empty(cls) -> TrackedSurfaces:
+        return cls(np.zeros(0, np.int64), Surfaces.empty(), Surfaces.empty())
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    @property
+    def next_id(self) -> int:
+        """One past the largest id (0 when empty): a fresh id for new tracks."""
+        return int(self.ids.max()) + 1 if len(self.ids) else 0
+
+    def select(self, index: ArrayLike) -> TrackedSurfaces:
+        """A subset by boolean mask or integer indices (order of ``index`` kept)."""
+        idx = np.asarray(index)
+        return TrackedSurfaces(self.ids[idx], self.local.select(idx), self.current.select(idx))
+
+
+def start_tracking(
+    view: Surfaces, params: TrackingParams | None = None, first_id: int = 0
+) -> TrackedSurfaces:
+    """Track the trackable surfaces of a view that becomes the local map.
+
+    Ids are ``first_id, first_id + 1, …`` in scan order; ``local`` and ``current`` are both
+    that view's observations.
+    """
+    chosen = view.select(trackable_mask(view, params))
+    ids = first_id + np.arange(len(chosen), dtype=np.int64)
+    return TrackedSurfaces(ids, chosen, chosen)
+
+
+@dataclass(frozen=True, eq=False)
+class MatchInfo:
+    """What one RTSV step recognised.
+
+    - ``tracked_index``: ``(M,)`` indices into the tracked set before the step, ascending.
+    - ``view_index``: ``(M,)`` indices into the new view's surfaces.
+    - ``distance_m``, ``angle_rad``: the matched pairs' endpoint distance and direction gap.
+    - ``predicted``: every tracked surface's prediction in the new view's frame.
+    - ``candidates``: ``(N,)`` bool over the new view, the trackable surfaces considered.
+    """
+
+    tracked_index: IntArray
+    view_index: IntArray
+    distance_m: FloatArray
+    angle_rad: FloatArray
+    predicted: Surfaces
+    candidates: BoolArray
+
+    def __len__(self) -> int:
+        return len(self.tracked_index)
+
+
+def _endpoint_distances(predicted: Surfaces, view: Surfaces, fallback: bool) -> FloatArray:
+    """``(K, N)`` distance between corresponding endpoints unoccluded in both (inf if none)."""
+    p = predicted.segments.reshape(-1, 1, 2, 2)
+    v = view.segments.reshape(1, -1, 2, 2)
+    d = np.hypot(p[..., 0] - v[..., 0], p[..., 1] - v[..., 1])  # (K, N, 2)
+    shared = ~predicted.occluded[:, None, :] & ~view.occluded[None, :, :]
+    dist = np.where(shared, d, np.inf).min(axis=2)
+    if fallback:
+        # Unoccluded endpoints of each side against the other side's whole segment.
+        k, n = len(predicted), len(view)
+        p_to_v = point_segment_distance(predicted.segments.reshape(-1, 2), view.segments)
+        p_to_v = np.where(predicted.occluded.reshape(-1, 1), np.inf, p_to_v)
+        p_to_v = p_to_v.reshape(k, 2, n).min(axis=1)
+        v_to_p = point_segment_distance(view.segments.reshape(-1, 2), predicted.segments)
+        v_to_p = np.where(view.occluded.reshape(-1, 1), np.inf, v_to_p)
+        v_to_p = v_to_p.reshape(n, 2, k).min(axis=1).T
+        dist = np.where(shared.any(axis=2), dist, np.minimum(p_to_v, v_to_p))
+    return dist
+
+
+def match_surfaces(
+    predicted: Surfaces,
+    view: Surfaces,
+    params: TrackingParams | None = None,
+    candidates: ArrayLike | None = None,
+) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
+    """One-to-one greedy matching of ``predicted`` to ``view`` surfaces (same frame).
+
+    Only ``view`` surfaces in ``candidates`` (bool mask; default all) may match. Returns
+    ``(predicted_index, view_index, distance_m, angle_rad)`` sorted by predicted index.
+    Ties in distance go to the lower predicted, then lower view index.
+    """
+    params = TrackingParams() if params is None else params
+    cand = np.ones(len(view), bool) if candidates is None else np.asarray(candidates, bool)
+    if cand.shape != (len(view),):
+        raise ValueError(f"candidates must have shape ({len(view)},), got {cand.shape}")
+    empty_i = np.zeros(0, np.int64)
+    if not len(predicted) or not cand.any():
+        return empty_i, empty_i.copy(), np.zeros(0), np.zeros(0)
+    angle = undirected_angle_difference(
+        segment_angles(predicted.segments)[:, None], segment_angles(view.segments)[None, :]
+    )
+    dist = _endpoint_distances(predicted, view, params.line_distance_fallback)
+    ok = (
+        cand[None, :]
+        & (angle < math.radians(params.match_angle_deg))
+        & (dist < params.match_distance_m)
+    )
+    pi, vj = np.nonzero(ok)
+    order = np.lexsort((vj, pi, dist[pi, vj]))
+    used_p = np.zeros(len(predicted), bool)
+    used_v = np.zeros(len(view), bool)
+    chosen: list[int] = []
+    for o in order:
+        i, j = pi[o], vj[o]
+        if not (used_p[i] or used_v[j]):
+            used_p[i] = used_v[j] = True
+            chosen.append(int(o))
+    sel = np.asarray(chosen, np.int64)
+    sel = sel[np.argsort(pi[sel], kind="stable")]
+    mi, mj = pi[sel].astype(np.int64), vj[sel].astype(np.int64)
+    return mi, mj, dist[mi, mj], angle[mi, mj]
+
+
+def rtsv(
+    tracked: TrackedSurfaces,
+    view: Surfaces,
+    increment: Pose,
+    params: TrackingParams | None = None,
+    *,
+    candidates: ArrayLike | None = None,
+) -> tuple[TrackedSurfaces, MatchInfo]:
+    """Algorithm #1: which tracked surfaces are still in the new ``view``.
+
+    ``increment`` is the odometry motion from the previous view to this one
+    (``prev⁻¹ ⊕ current``, in the previous view's frame). ``candidates`` (bool over
+    ``view``) overrides which view surfaces may match; by default the trackable ones.
+    Survivors keep their ``ids`` and ``local`` geometry; ``current`` becomes the matched
+    observation in ``view``.
+    """
+    params = TrackingParams() if params is None else params
+    cand = trackable_mask(view, params) if candidates is None else np.asarray(candidates, bool)
+    predicted = tracked.current.transformed(increment.inverse().as_array())
+    ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
+    survivors = TrackedSurfaces(tracked.ids[ti], tracked.local.select(ti), view.select(vj))
+    return survivors, MatchInfo(ti, vj, dist, angle, predicted, cand)
