@@ -51,9 +51,12 @@ def _new_axes(world: World) -> Axes:
 
 
 def _polygon_path(polygon: Any) -> Any:
-    """A matplotlib Path of a shapely polygon, holes included (even-odd filling)."""
+    """A matplotlib Path of a shapely polygon with its holes left unfilled."""
     from matplotlib.path import Path
+    from shapely.geometry.polygon import orient
 
+    # Holes wind opposite to the exterior, so the nonzero fill rule leaves them empty.
+    polygon = orient(polygon, sign=1.0)
     vertices, codes = [], []
     for ring in [polygon.exterior, *polygon.interiors]:
         coords = np.asarray(ring.coords, dtype=np.float64)

@@ -78,3 +78,28 @@ def test_save_world_png_into_missing_dir_leaves_nothing(tmp_path: Path) -> None:
     with pytest.raises(FileNotFoundError):
         save_world_png(sample_world(), tmp_path / "nope" / "world.png", dpi=30)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_free_space_holes_are_not_filled() -> None:
+    import dataclasses
+
+    import shapely
+    from matplotlib.colors import to_rgb
+
+    from albot2d.plots import FREE_SPACE_COLOR, plot_world
+
+    world = sample_world()
+    # A hole that is not clutter, so only the free-space fill decides its colour.
+    holed = shapely.box(0, 0, 20, 10).difference(shapely.box(14, 6, 18, 9))
+    world = dataclasses.replace(world, clutter=(), free_space=holed, dynamic_obstacles=())
+    ax = plot_world(world, show_roadmap=False)
+    ax.figure.canvas.draw()
+    rgba = np.asarray(ax.figure.canvas.buffer_rgba())
+
+    def colour_at(x: float, y: float) -> np.ndarray:
+        px, py = ax.transData.transform((x, y))
+        return rgba[rgba.shape[0] - int(py), int(px), :3] / 255.0
+
+    free = np.array(to_rgb(FREE_SPACE_COLOR))
+    assert np.allclose(colour_at(16.0, 7.5), 1.0, atol=0.02)  # the hole: white background
+    assert np.allclose(colour_at(12.0, 3.0), free, atol=0.02)
