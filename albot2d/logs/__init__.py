@@ -1,3 +1,79 @@
-"""Robot log I/O: CARMEN logs (read and write) and Kümmerle relations files."""
+"""Robot log I/O: CARMEN logs (read and write), Kümmerle relations files, simulated run dirs.
 
-__all__: list[str] = []
+- ``carmen``: record types, the streaming reader (plain/gzip) and the record writer;
+- ``frames``: CARMEN records ↔ albot2d ``Frame`` streams (``read_frames``, ``write_carmen``);
+- ``relations``: relations files and relations from a truth trajectory;
+- ``run_files``: a simulated run directory (log, truth, relations, manifest).
+"""
+
+from albot2d.logs.carmen import (
+    EXACT,
+    LOG_PRECISION,
+    CarmenReader,
+    CarmenStats,
+    CommentRecord,
+    FloatFormat,
+    LaserRecord,
+    NeffRecord,
+    OdomRecord,
+    ParamRecord,
+    Record,
+    format_record,
+    read_carmen,
+    write_records,
+)
+from albot2d.logs.frames import (
+    DEFAULT_EVEN_BEAM_CONVENTION,
+    DEFAULT_FOV_DEG,
+    DEFAULT_NO_RETURN_THRESHOLD_M,
+    EvenBeamConvention,
+    frames_to_records,
+    read_frames,
+    records_to_frames,
+    write_carmen,
+)
+from albot2d.logs.relations import (
+    Relations,
+    RelationsOptions,
+    match_timestamps,
+    read_relations,
+    relations_from_truth,
+    write_relations,
+)
+from albot2d.logs.run_files import Run, read_run, read_truth, write_run, write_truth
+
+__all__ = [
+    "DEFAULT_EVEN_BEAM_CONVENTION",
+    "DEFAULT_FOV_DEG",
+    "DEFAULT_NO_RETURN_THRESHOLD_M",
+    "EXACT",
+    "LOG_PRECISION",
+    "CarmenReader",
+    "CarmenStats",
+    "CommentRecord",
+    "EvenBeamConvention",
+    "FloatFormat",
+    "LaserRecord",
+    "NeffRecord",
+    "OdomRecord",
+    "ParamRecord",
+    "Record",
+    "Relations",
+    "RelationsOptions",
+    "Run",
+    "format_record",
+    "frames_to_records",
+    "match_timestamps",
+    "read_carmen",
+    "read_frames",
+    "read_relations",
+    "read_run",
+    "read_truth",
+    "records_to_frames",
+    "relations_from_truth",
+    "write_carmen",
+    "write_records",
+    "write_relations",
+    "write_run",
+    "write_truth",
+]

@@ -1,0 +1,502 @@
+"""CARMEN log records, a streaming reader (plain or gzip) and a record writer.
+
+Formats are those of ``shared/data/SOURCES.md`` §1.1. :class:`CarmenReader` yields one frozen
+record per data line, lazily; ``FLASER``/``RLASER`` (any beam count), ``ROBOTLASER1``, ``ODOM``,
+``PARAM`` and ``NEFF`` are understood, ``#`` lines are comments, and any other message type is
+skipped and counted in :attr:`CarmenReader.stats`. A malformed line raises
+:class:`~albot2d.errors.InputError` as ``file:line: <message> <what is wrong>``.
+
+Pose fields keep CARMEN's meaning: ``LaserRecord.pose`` is the first pose of the line (the laser
+pose; in raw logs identical to odometry) and ``odom_pose`` the second (the robot's odometry).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections import Counter
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from typing import TypeAlias
+
+import numpy as np
+from numpy.typing import NDArray
+
+from albot2d.errors import InputError
+from albot2d.geometry import Pose
+from albot2d.logs.textio import atomic_text_output, open_text
+
+__all__ = [
+    "EXACT",
+    "LOG_PRECISION",
+    "CarmenReader",
+    "CarmenStats",
+    "CommentRecord",
+    "FloatFormat",
+    "LaserRecord",
+    "NeffRecord",
+    "OdomRecord",
+    "ParamRecord",
+    "Record",
+    "format_float",
+    "format_record",
+    "read_carmen",
+    "write_records",
+]
+
+FloatArray = NDArray[np.float64]
+
+_POSE_NAMES = ("x", "y", "theta", "odom_x", "odom_y", "odom_theta")
+_STAMP_NAMES = ("ipc_timestamp", "ipc_hostname", "logger_timestamp")
+_FLASER_TAIL = (*_POSE_NAMES, *_STAMP_NAMES)
+_ODOM_NAMES = ("x", "y", "theta", "tv", "rv", "accel", *_STAMP_NAMES)
+_ROBOTLASER_HEAD = (
+    "laser_type", "start_angle", "fov", "angular_res", "max_range", "accuracy", "remission_mode",
+)  # fmt: skip
+_ROBOTLASER_TAIL = (
+    "laser_x", "laser_y", "laser_theta", "robot_x", "robot_y", "robot_theta", "tv", "rv",
+    "forward_safety_dist", "side_safety_dist", "turn_axis", *_STAMP_NAMES,
+)  # fmt: skip
+
+
+def _readonly(values: FloatArray) -> FloatArray:
+    values.flags.writeable = False
+    return values
+
+
+@dataclass(frozen=True, eq=False, slots=True)
+class LaserRecord:
+    """An ``FLASER``/``RLASER`` (old format) or ``ROBOTLASER1`` line.
+
+    The ``ROBOTLASER1``-only fields are ``None`` for the old format, which records no angles.
+    """
+
+    message: str
+    ranges: FloatArray
+    pose: Pose
+    odom_pose: Pose
+    ipc_timestamp: float
+    hostname: str
+    logger_timestamp: float
+    line_number: int = 0
+    laser_type: int | None = None
+    start_angle_rad: float | None = None
+    fov_rad: float | None = None
+    angular_resolution_rad: float | None = None
+    max_range_m: float | None = None
+    accuracy_m: float | None = None
+    remission_mode: int | None = None
+    remissions: FloatArray | None = None
+    tv_mps: float | None = None
+    rv_radps: float | None = None
+    forward_safety_dist_m: float | None = None
+    side_safety_dist_m: float | None = None
+    turn_axis: float | None = None
+
+    @property
+    def n_beams(self) -> int:
+        return len(self.ranges)
+
+
+@dataclass(frozen=True, slots=True)
+class OdomRecord:
+    """An ``ODOM`` line: odometry pose and velocities."""
+
+    pose: Pose
+    tv_mps: float
+    rv_radps: float
+    accel_mps2: float
+    ipc_timestamp: float
+    hostname: str
+    logger_timestamp: float
+    line_number: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class ParamRecord:
+    """A ``PARAM name value [ipc_timestamp host logger_timestamp]`` line; ``value`` is text."""
+
+    name: str
+    value: str
+    ipc_timestamp: float | None = None
+    hostname: str | None = None
+    logger_timestamp: float | None = None
+    line_number: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class NeffRecord:
+    """A ``NEFF value`` line (gmapping's effective sample size after the previous scan)."""
+
+    value: float
+    line_number: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class CommentRecord:
+    """A ``#`` line, text without the leading ``#``; yielded only with ``include_comments``."""
+
+    text: str
+    line_number: int = 0
+
+
+Record: TypeAlias = LaserRecord | OdomRecord | ParamRecord | NeffRecord | CommentRecord
+
+
+@dataclass(frozen=True)
+class CarmenStats:
+    """What a reader has seen so far: records per message type and skipped unknown types."""
+
+    counts: dict[str, int] = field(default_factory=dict)
+    skipped: dict[str, int] = field(default_factory=dict)
+    n_lines: int = 0
+    n_comments: int = 0
+    n_blank: int = 0
+
+    @property
+    def n_skipped(self) -> int:
+        return sum(self.skipped.values())
+
+
+class _LineError(Exception):
+    """A reason a line is malformed; the reader adds ``file:line``."""
+
+
+def _count_error(message: str, tokens: list[str], expected: int, names: list[str]) -> _LineError:
+    """Field-count error naming what is missing (``names`` are the field names after the type)."""
+    got = len(tokens)
+    if got < expected:
+        missing = names[got - 1 : expected - 1]
+        shown = ", ".join(missing[:4]) + (", ..." if len(missing) > 4 else "")
+        return _LineError(f"{message} has {got} fields, expected {expected} (missing {shown})")
+    return _LineError(f"{message} has {got} fields, expected {expected} ({got - expected} extra)")
+
+
+def _float(tokens: list[str], index: int, name: str, *, finite: bool = True) -> float:
+    try:
+        value = float(tokens[index])
+    except ValueError:
+        raise _LineError(f"{name} {tokens[index]!r} (field {index}) is not a number") from None
+    if finite and not math.isfinite(value):
+        raise _LineError(f"{name} {tokens[index]!r} (field {index}) is not finite")
+    return value
+
+
+def _int(tokens: list[str], index: int, name: str) -> int:
+    try:
+        value = int(tokens[index])
+    except ValueError:
+        raise _LineError(f"{name} {tokens[index]!r} (field {index}) is not an integer") from None
+    if value < 0:
+        raise _LineError(f"{name} must be >= 0, got {value} (field {index})")
+    return value
+
+
+def _floats(tokens: list[str], start: int, count: int, name: str) -> FloatArray:
+    """``count`` numbers from ``start``; non-finite values are allowed (they mark no-returns)."""
+    chunk = tokens[start : start + count]
+    try:
+        return _readonly(np.array(chunk, dtype=np.float64))
+    except ValueError:
+        for k, text in enumerate(chunk):
+            try:
+                float(text)
+            except ValueError:
+                raise _LineError(
+                    f"{name} {k} {text!r} (field {start + k}) is not a number"
+                ) from None
+        raise
+
+
+def _pose(tokens: list[str], start: int, names: tuple[str, ...]) -> Pose:
+    return Pose(*(_float(tokens, start + k, names[k]) for k in range(3)))
+
+
+def _beam_count(tokens: list[str], message: str, index: int = 1, name: str = "n") -> int:
+    if len(tokens) <= index:
+        raise _LineError(f"{message} has no {name} (number of readings)")
+    return _int(tokens, index, name)
+
+
+def _parse_flaser(tokens: list[str], line_number: int) -> LaserRecord:
+    message = tokens[0]
+    n = _beam_count(tokens, message)
+    expected = 2 + n + len(_FLASER_TAIL)
+    if len(tokens) != expected:
+        names = ["n", *(f"range {k}" for k in range(n)), *_FLASER_TAIL]
+        raise _count_error(f"{message} with n={n}", tokens, expected, names)
+    ranges = _floats(tokens, 2, n, "range")
+    tail = 2 + n
+    return LaserRecord(
+        message=message,
+        ranges=ranges,
+        pose=_pose(tokens, tail, _FLASER_TAIL[:3]),
+        odom_pose=_pose(tokens, tail + 3, _FLASER_TAIL[3:6]),
+        ipc_timestamp=_float(tokens, tail + 6, "ipc_timestamp"),
+        hostname=tokens[tail + 7],
+        logger_timestamp=_float(tokens, tail + 8, "logger_timestamp"),
+        line_number=line_number,
+    )
+
+
+def _parse_robotlaser(tokens: list[str], line_number: int) -> LaserRecord:
+    message = tokens[0]
+    head = 1 + len(_ROBOTLASER_HEAD)
+    n = _beam_count(tokens, message, head, "num_readings")
+    rem_index = head + 1 + n
+    if len(tokens) <= rem_index:
+        names = [*_ROBOTLASER_HEAD, "num_readings", *(f"range {k}" for k in range(n)), "n_rem"]
+        raise _count_error(f"{message} with n={n}", tokens, rem_index + 1, names)
+    n_rem = _int(tokens, rem_index, "num_remissions")
+    expected = rem_index + 1 + n_rem + len(_ROBOTLASER_TAIL)
+    if len(tokens) != expected:
+        names = [
+            *_ROBOTLASER_HEAD, "num_readings", *(f"range {k}" for k in range(n)),
+            "num_remissions", *(f"remission {k}" for k in range(n_rem)), *_ROBOTLASER_TAIL,
+        ]  # fmt: skip
+        raise _count_error(f"{message} with n={n}, n_rem={n_rem}", tokens, expected, names)
+    tail = rem_index + 1 + n_rem
+    values = [_float(tokens, tail + k, _ROBOTLASER_TAIL[k]) for k in range(11)]
+    return LaserRecord(
+        message=message,
+        ranges=_floats(tokens, head + 1, n, "range"),
+        pose=Pose(*values[0:3]),
+        odom_pose=Pose(*values[3:6]),
+        ipc_timestamp=_float(tokens, tail + 11, "ipc_timestamp"),
+        hostname=tokens[tail + 12],
+        logger_timestamp=_float(tokens, tail + 13, "logger_timestamp"),
+        line_number=line_number,
+        laser_type=_int(tokens, 1, "laser_type"),
+        start_angle_rad=_float(tokens, 2, "start_angle"),
+        fov_rad=_float(tokens, 3, "fov"),
+        angular_resolution_rad=_float(tokens, 4, "angular_res"),
+        max_range_m=_float(tokens, 5, "max_range"),
+        accuracy_m=_float(tokens, 6, "accuracy"),
+        remission_mode=_int(tokens, 7, "remission_mode"),
+        remissions=_floats(tokens, rem_index + 1, n_rem, "remission"),
+        tv_mps=values[6],
+        rv_radps=values[7],
+        forward_safety_dist_m=values[8],
+        side_safety_dist_m=values[9],
+        turn_axis=values[10],
+    )
+
+
+def _parse_odom(tokens: list[str], line_number: int) -> OdomRecord:
+    expected = 1 + len(_ODOM_NAMES)
+    if len(tokens) != expected:
+        raise _count_error("ODOM", tokens, expected, list(_ODOM_NAMES))
+    values = [_float(tokens, 1 + k, _ODOM_NAMES[k]) for k in range(7)]
+    return OdomRecord(
+        pose=Pose(*values[0:3]),
+        tv_mps=values[3],
+        rv_radps=values[4],
+        accel_mps2=values[5],
+        ipc_timestamp=values[6],
+        hostname=tokens[8],
+        logger_timestamp=_float(tokens, 9, "logger_timestamp"),
+        line_number=line_number,
+    )
+
+
+def _parse_param(tokens: list[str], line_number: int) -> ParamRecord:
+    if len(tokens) < 3:
+        raise _LineError(f"PARAM needs a name and a value, got {len(tokens) - 1} field(s)")
+    if len(tokens) == 6:
+        return ParamRecord(
+            name=tokens[1],
+            value=tokens[2],
+            ipc_timestamp=_float(tokens, 3, "ipc_timestamp"),
+            hostname=tokens[4],
+            logger_timestamp=_float(tokens, 5, "logger_timestamp"),
+            line_number=line_number,
+        )
+    # Hand-written logs drop some or all of the stamp fields; the value is still tokens[2].
+    return ParamRecord(name=tokens[1], value=tokens[2], line_number=line_number)
+
+
+def _parse_neff(tokens: list[str], line_number: int) -> NeffRecord:
+    if len(tokens) not in (2, 5):
+        raise _LineError(f"NEFF has {len(tokens)} fields, expected 2 (or 5 with stamps)")
+    return NeffRecord(value=_float(tokens, 1, "value"), line_number=line_number)
+
+
+_PARSERS = {
+    "FLASER": _parse_flaser,
+    "RLASER": _parse_flaser,
+    "ROBOTLASER1": _parse_robotlaser,
+    "ODOM": _parse_odom,
+    "PARAM": _parse_param,
+    "NEFF": _parse_neff,
+}
+
+
+class CarmenReader:
+    """Stream the records of a CARMEN log (plain text or gzip, detected by magic bytes).
+
+    Iterate it to get records lazily; :attr:`stats` describes the lines seen by the latest
+    iteration (complete once the iteration has finished).
+    """
+
+    def __init__(self, path: str | os.PathLike[str], *, include_comments: bool = False) -> None:
+        self.path = os.fspath(path)
+        self.include_comments = include_comments
+        self._counts: Counter[str] = Counter()
+        self._skipped: Counter[str] = Counter()
+        self._lines = self._comments = self._blank = 0
+
+    @property
+    def stats(self) -> CarmenStats:
+        return CarmenStats(
+            counts=dict(self._counts),
+            skipped=dict(self._skipped),
+            n_lines=self._lines,
+            n_comments=self._comments,
+            n_blank=self._blank,
+        )
+
+    def __iter__(self) -> Iterator[Record]:
+        self._counts, self._skipped = Counter(), Counter()
+        self._lines = self._comments = self._blank = 0
+        with open_text(self.path) as handle:
+            for line_number, line in enumerate(handle, start=1):
+                self._lines = line_number
+                record = self._parse_line(line, line_number)
+                if record is not None:
+                    yield record
+
+    def _parse_line(self, line: str, line_number: int) -> Record | None:
+        stripped = line.strip()
+        if not stripped:
+            self._blank += 1
+            return None
+        if stripped.startswith("#"):
+            self._comments += 1
+            return (
+                CommentRecord(stripped[1:].strip(), line_number) if self.include_comments else None
+            )
+        tokens = stripped.split()
+        parser = _PARSERS.get(tokens[0])
+        if parser is None:
+            self._skipped[tokens[0]] += 1
+            return None
+        try:
+            record = parser(tokens, line_number)
+        except _LineError as exc:
+            raise InputError(f"{self.path}:{line_number}: {tokens[0]} {exc}") from None
+        self._counts[tokens[0]] += 1
+        return record
+
+
+def read_carmen(
+    path: str | os.PathLike[str], *, include_comments: bool = False
+) -> Iterator[Record]:
+    """Iterate the records of a CARMEN log; use :class:`CarmenReader` to get the stats too."""
+    return iter(CarmenReader(path, include_comments=include_comments))
+
+
+@dataclass(frozen=True)
+class FloatFormat:
+    """Decimals written per kind of number; ``None`` writes ``repr`` (exact round trip).
+
+    The default (:data:`LOG_PRECISION`) is what real logs use: ranges to 1 mm, poses to 1e-6 m
+    or rad, timestamps to 1 µs. :data:`EXACT` reproduces every float bit for bit.
+    """
+
+    range_decimals: int | None = 3
+    pose_decimals: int | None = 6
+    timestamp_decimals: int | None = 6
+
+
+LOG_PRECISION = FloatFormat()
+EXACT = FloatFormat(None, None, None)
+
+
+def format_float(value: float, decimals: int | None) -> str:
+    """``value`` to ``decimals`` places; its shortest exact ``repr`` when ``decimals`` is None."""
+    value = float(value)
+    if decimals is None:
+        return repr(value)
+    return f"{value:.{decimals}f}"
+
+
+def _join(values: Iterable[float], decimals: int | None) -> str:
+    if decimals is None:
+        return " ".join(map(repr, values))
+    spec = f".{decimals}f"
+    return " ".join(format(v, spec) for v in values)
+
+
+def _pose_text(pose: Pose, fmt: FloatFormat) -> str:
+    return _join((pose.x, pose.y, pose.theta), fmt.pose_decimals)
+
+
+def _stamps(ipc: float, host: str, logger: float, fmt: FloatFormat) -> str:
+    d = fmt.timestamp_decimals
+    return f"{format_float(ipc, d)} {host} {format_float(logger, d)}"
+
+
+def format_record(record: Record, fmt: FloatFormat = LOG_PRECISION) -> str:
+    """One CARMEN line (no newline) for ``record``; :class:`CarmenReader` parses it back."""
+    if isinstance(record, LaserRecord):
+        return _format_laser(record, fmt)
+    if isinstance(record, OdomRecord):
+        motion = _join((record.tv_mps, record.rv_radps, record.accel_mps2), fmt.pose_decimals)
+        stamps = _stamps(record.ipc_timestamp, record.hostname, record.logger_timestamp, fmt)
+        return f"ODOM {_pose_text(record.pose, fmt)} {motion} {stamps}"
+    if isinstance(record, ParamRecord):
+        if record.ipc_timestamp is None or record.logger_timestamp is None:
+            return f"PARAM {record.name} {record.value}"
+        host = record.hostname or "nohost"
+        return f"PARAM {record.name} {record.value} " + _stamps(
+            record.ipc_timestamp, host, record.logger_timestamp, fmt
+        )
+    if isinstance(record, NeffRecord):
+        return f"NEFF {record.value!r}"
+    if isinstance(record, CommentRecord):
+        return f"# {record.text}"
+    raise TypeError(f"not a CARMEN record: {record!r}")
+
+
+def _format_laser(record: LaserRecord, fmt: FloatFormat) -> str:
+    ranges = _join(record.ranges.tolist(), fmt.range_decimals)
+    stamps = _stamps(record.ipc_timestamp, record.hostname, record.logger_timestamp, fmt)
+    poses = f"{_pose_text(record.pose, fmt)} {_pose_text(record.odom_pose, fmt)}"
+    if record.message != "ROBOTLASER1":
+        return f"{record.message} {record.n_beams} {ranges} {poses} {stamps}"
+    remissions = record.remissions if record.remissions is not None else np.empty(0)
+
+    def num(value: float | None) -> str:
+        return repr(float(value or 0.0))
+
+    head = " ".join(
+        [str(record.laser_type or 0), num(record.start_angle_rad), num(record.fov_rad),
+         num(record.angular_resolution_rad), num(record.max_range_m), num(record.accuracy_m),
+         str(record.remission_mode or 0)]
+    )  # fmt: skip
+    rems = _join(remissions.tolist(), None)
+    motion = " ".join(
+        num(v) for v in (record.tv_mps, record.rv_radps, record.forward_safety_dist_m,
+                         record.side_safety_dist_m, record.turn_axis)
+    )  # fmt: skip
+    parts = [
+        "ROBOTLASER1", head, str(record.n_beams), ranges, str(len(remissions)), rems,
+        poses, motion, stamps,
+    ]  # fmt: skip
+    return " ".join(part for part in parts if part)
+
+
+def write_records(
+    path: str | os.PathLike[str], records: Iterable[Record], fmt: FloatFormat = LOG_PRECISION
+) -> int:
+    """Write ``records`` as a CARMEN log, atomically (gzip if ``path`` ends in .gz).
+
+    Streams: records are formatted one at a time. Returns the number of records written.
+    """
+    count = 0
+    with atomic_text_output(path) as out:
+        for record in records:
+            out.write(format_record(record, fmt))
+            out.write("\n")
+            count += 1
+    return count
