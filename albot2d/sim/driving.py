@@ -1,0 +1,166 @@
+"""How the robot is driven along a tour: ``DrivingProfile`` presets and ``TourController``.
+
+The controller reproduces the paper's way of moving, linear motion "turn α then move δ":
+at each waypoint it turns towards the next one, then drives straight to it, splitting
+turns and moves into equal steps no larger than the profile's ``turn_step_deg`` and
+``move_step_m``. The robot records a view after each step (``view_after_turn=False``:
+only after moves). Presets (Yeap et al.'s datasets):
+
+- ``dataset1``: a view every 10 cm or 1° (the paper's 1330-view run).
+- ``dataset2``: dataset1 with +10 cm / +1° added to each odometry step (the true motion
+  is unchanged; see ``albot2d.sim.odometry``).
+- ``dataset3``: a view every 1 m or 10° (the 217-view run).
+- ``start_stop``: turn to the next waypoint, move up to ~3 m, view (Fig. 14: "each move
+  is on average about 3 m").
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from albot2d.errors import InputError
+from albot2d.geometry import Pose
+from albot2d.sim.odometry import StepKind
+from albot2d.validation import check_finite, check_non_negative, check_positive, check_positive_int
+
+__all__ = ["PROFILES", "DrivingProfile", "Step", "TourController", "get_profile"]
+
+# Splitting tolerance: a turn of exactly k·turn_step (within float noise) takes k steps.
+_SPLIT_SLACK = 1e-9
+
+
+@dataclass(frozen=True)
+class DrivingProfile:
+    """How a tour is driven and when views are recorded.
+
+    - ``move_step_m`` / ``turn_step_deg``: the largest move / turn between two steps.
+    - ``view_after_turn``: record a view after turn steps too (else only after moves).
+    - ``induced_step_m`` / ``induced_step_deg``: odometry error added per move / turn step.
+    - ``speed_m_s`` / ``turn_rate_deg_s``: nominal speeds, which set the timestamps.
+    - ``stop_pause_s``: time the robot stands still at each view.
+    - ``heading_tolerance_deg`` / ``waypoint_tolerance_m``: smaller turns are skipped;
+      a waypoint this close counts as reached.
+    - ``max_blocked_steps``: after this many blocked moves in a row (an obstacle in the
+      way) the controller gives up the waypoint and heads for the next.
+    """
+
+    name: str
+    move_step_m: float
+    turn_step_deg: float
+    view_after_turn: bool = True
+    induced_step_m: float = 0.0
+    induced_step_deg: float = 0.0
+    speed_m_s: float = 0.3
+    turn_rate_deg_s: float = 30.0
+    stop_pause_s: float = 0.0
+    heading_tolerance_deg: float = 1e-6
+    waypoint_tolerance_m: float = 1e-6
+    max_blocked_steps: int = 30
+
+    def __post_init__(self) -> None:
+        check_positive(self, "move_step_m", "turn_step_deg", "speed_m_s", "turn_rate_deg_s",
+                       "heading_tolerance_deg", "waypoint_tolerance_m")
+        check_non_negative(self, "stop_pause_s")
+        check_finite(self, "induced_step_m")
+        check_finite(self, "induced_step_deg")
+        check_positive_int(self, "max_blocked_steps")
+        if not isinstance(self.view_after_turn, bool):
+            raise InputError(
+                "DrivingProfile.view_after_turn must be true or false, "
+                f"got {self.view_after_turn!r}"
+            )
+
+    def step_duration_s(self, kind: StepKind, amount: float) -> float:
+        """Seconds a step of ``amount`` (m or rad) takes at the nominal speeds."""
+        if kind == "turn":
+            return abs(amount) / math.radians(self.turn_rate_deg_s)
+        return abs(amount) / self.speed_m_s
+
+
+_DATASET1 = DrivingProfile("dataset1", move_step_m=0.10, turn_step_deg=1.0)
+
+PROFILES: dict[str, DrivingProfile] = {
+    "dataset1": _DATASET1,
+    "dataset2": dataclasses.replace(
+        _DATASET1, name="dataset2", induced_step_m=0.10, induced_step_deg=1.0
+    ),
+    "dataset3": DrivingProfile("dataset3", move_step_m=1.0, turn_step_deg=10.0),
+    "start_stop": DrivingProfile(
+        "start_stop", move_step_m=3.0, turn_step_deg=180.0, view_after_turn=False,
+        stop_pause_s=1.0,
+    ),
+}
+
+
+def get_profile(profile: str | DrivingProfile) -> DrivingProfile:
+    """A preset by name (or a profile passed through); unknown names list the valid ones."""
+    if isinstance(profile, DrivingProfile):
+        return profile
+    try:
+        return PROFILES[profile]
+    except (KeyError, TypeError):
+        raise InputError(
+            f"unknown driving profile {profile!r}; valid: {', '.join(PROFILES)}"
+        ) from None
+
+
+class Step(NamedTuple):
+    """One command: turn by ``amount`` rad or move by ``amount`` m; ``view``: record a frame."""
+
+    kind: StepKind
+    amount: float
+    view: bool
+    waypoint: int
+
+
+class TourController:
+    """Closed-loop turn-then-move driving through ``waypoints`` (from the true pose).
+
+    Call ``next_step(pose)`` for the next command (None when the tour is done) and
+    ``report(step, collided)`` after executing it.
+    """
+
+    def __init__(self, waypoints: ArrayLike, profile: str | DrivingProfile) -> None:
+        self.profile = get_profile(profile)
+        wp = np.asarray(waypoints, dtype=np.float64)
+        if wp.ndim != 2 or wp.shape[1] != 2 or not np.isfinite(wp).all():
+            raise InputError(f"tour waypoints must be a finite (K, 2) array, got shape {wp.shape}")
+        self.waypoints = wp
+        self.index = 0
+        self._blocked = 0
+        self._turn_step = math.radians(self.profile.turn_step_deg)
+        self._heading_tol = math.radians(self.profile.heading_tolerance_deg)
+
+    @property
+    def done(self) -> bool:
+        return self.index >= len(self.waypoints)
+
+    def next_step(self, pose: Pose) -> Step | None:
+        p = self.profile
+        while self.index < len(self.waypoints):
+            tx, ty = self.waypoints[self.index].tolist()
+            dx, dy = tx - pose.x, ty - pose.y
+            dist = math.hypot(dx, dy)
+            if dist <= p.waypoint_tolerance_m or self._blocked >= p.max_blocked_steps:
+                self.index += 1
+                self._blocked = 0
+                continue
+            bearing = math.atan2(dy, dx) - pose.theta
+            bearing = (bearing + math.pi) % (2.0 * math.pi) - math.pi
+            if abs(bearing) > self._heading_tol:
+                n = max(1, math.ceil(abs(bearing) / self._turn_step - _SPLIT_SLACK))
+                return Step("turn", bearing / n, p.view_after_turn, self.index)
+            n = max(1, math.ceil(dist / p.move_step_m - _SPLIT_SLACK))
+            return Step("move", dist / n, True, self.index)
+        return None
+
+    def report(self, step: Step, collided: bool) -> None:
+        """Tell the controller whether ``step`` was blocked (only moves can be)."""
+        if step.kind == "move":
+            self._blocked = self._blocked + 1 if collided else 0
