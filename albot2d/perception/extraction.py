@@ -15,13 +15,21 @@ The pipeline (all parameters in ``ExtractionParams``):
 3. **Drop** pieces with fewer than ``min_points`` beams.
 4. **Merge** collinear neighbours of the same run while their union's fitted line keeps
    every point within ``merge_distance_m`` (best pairs first, repeated until none).
-5. **Fit**: each surface is its points' total-least-squares line (closed-form moments from
+5. **Grow** surfaces back over the beams of dropped pieces of their run that still fit
+   their line (a split a few beams off a corner leaves such a piece), so they reach the
+   corner; if both neighbours claim beams, the boundary is the beam nearest their lines'
+   intersection.
+6. **Fit**: each surface is its points' total-least-squares line (closed-form moments from
    prefix sums, vectorised over segments), its endpoints the first and last points
    projected onto that line, then mapped into the robot frame by ``scan.laser_pose``.
 
 Occlusion: an endpoint at the end of a run is occluded when the neighbouring beam is nearer
 (a range jump in front of it), has no return, or when it is the first/last beam of the scan.
-An endpoint inside a run (a corner or any split point) is a real end: unoccluded.
+An endpoint inside a run (a corner or any split point) is a real end: unoccluded. Beyond
+that plain rule (``continuation_distance_m``, on by default): an end whose farther neighbour
+still lies on the surface's line is a wall thinning out at a grazing angle, not a corner, so
+it is occluded too. On the MIT CSAIL log this cuts the mean error of endpoints used for
+matching by about a third (0.095 → 0.067 m between views ≈ 0.4 s apart, ground-truth motion).
 """
 
 from __future__ import annotations
