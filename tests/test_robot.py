@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -240,3 +241,20 @@ def test_params_validated(field: str) -> None:
         RobotParams(**{field: 0.0})
     with pytest.raises(InputError, match="contact_skin_m"):
         RobotParams(contact_skin_m=-1.0)
+
+
+def test_move_in_substeps_calls_back_and_stays_an_exact_composition() -> None:
+    room = Room(10.0, 4.0, [], [])
+    start = Pose(1.0, 2.0, 0.1)
+    robot = KinematicRobot(room.space(), pose=start)
+    calls: list[tuple[Pose, Pose]] = []
+    result = robot.move(3.0, substeps=7, on_substep=lambda a, b: calls.append((a, b)))
+    assert len(calls) == 7 and calls[0][0] == start and calls[-1][1] == result.pose
+    assert all(a[1] == b[0] for a, b in itertools.pairwise(calls))
+    assert result.pose == start.compose(result.increment)
+    assert result.increment.y == 0.0 and result.increment.theta == 0.0
+    assert result.distance_m == pytest.approx(3.0)
+    blocked = robot.move(20.0, substeps=10, on_substep=lambda a, b: calls.append((a, b)))
+    assert blocked.collided and len(calls) < 7 + 10
+    with pytest.raises(InputError, match="substeps"):
+        robot.move(1.0, substeps=0)

@@ -13,6 +13,7 @@ composition odometry uses, so zero-noise odometry equals the truth bit for bit.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -202,11 +203,32 @@ class KinematicRobot:
         self.sync_body()
         return MoveResult(self._pose, 0.0, angle, False, increment)
 
-    def move(self, distance_m: float) -> MoveResult:
-        """Drive straight by ``distance_m`` (negative: backwards), stopping at contact."""
+    def move(self, distance_m: float, *, substeps: int = 1,
+             on_substep: Callable[[Pose, Pose], None] | None = None) -> MoveResult:
+        """Drive straight by ``distance_m`` (negative: backwards), stopping at contact.
+
+        With ``substeps`` > 1 the move is made in that many equal parts and
+        ``on_substep(previous_pose, new_pose)`` runs after each (the simulator steps the
+        physics there, so moving obstacles move and pushed boxes get pushed). The pose
+        stays ``start ⊕ Pose(moved, 0, 0)`` exactly, whatever the number of parts.
+        """
         distance = _check_finite("move distance_m", distance_m)
-        done, fraction, _ = self._slide(self._pose, None, Pose(distance, 0.0, 0.0))
-        return MoveResult(self._pose, abs(done.x), 0.0, fraction < 1.0, done)
+        if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
+            raise InputError(f"move substeps must be a positive integer, got {substeps!r}")
+        start = self._pose
+        part = Pose(distance / substeps, 0.0, 0.0) if substeps > 1 else Pose(distance, 0.0, 0.0)
+        before: Pose | None = None
+        blocked = False
+        for _ in range(substeps):
+            previous = self._pose
+            _, fraction, before = self._slide(start, before, part)
+            if on_substep is not None:
+                on_substep(previous, self._pose)
+            if fraction < 1.0:
+                blocked = True
+                break
+        done = before if before is not None else Pose()
+        return MoveResult(self._pose, abs(done.x), 0.0, blocked, done)
 
     def turn_then_move(self, angle_rad: float, distance_m: float) -> MoveResult:
         """The paper's linear motion: turn ``angle_rad`` then move ``distance_m``."""
