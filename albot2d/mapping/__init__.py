@@ -1,3 +1,42 @@
 """Mapping: the Albot1 view-based mapper, its route and global maps, and the Albot_x baselines."""
 
-__all__: list[str] = []
+from albot2d.mapping.albot1 import Albot1, Albot1Params, StepRecord
+from albot2d.mapping.baselines import GroundTruthIntegration, NaiveIntegration
+from albot2d.mapping.global_map import (
+    GlobalMap,
+    GlobalMapParams,
+    MapSnapshot,
+    UpdateReport,
+    view_polygon,
+)
+from albot2d.mapping.protocol import Mapper, MapperCounts, StageTimer
+from albot2d.mapping.route_map import LocalMap, Method, RouteMap
+from albot2d.mapping.triangulation import (
+    Affordances,
+    TriangulationParams,
+    pose_affordances,
+    triangulate,
+)
+
+__all__ = [
+    "Affordances",
+    "Albot1",
+    "Albot1Params",
+    "GlobalMap",
+    "GlobalMapParams",
+    "GroundTruthIntegration",
+    "LocalMap",
+    "MapSnapshot",
+    "Mapper",
+    "MapperCounts",
+    "Method",
+    "NaiveIntegration",
+    "RouteMap",
+    "StageTimer",
+    "StepRecord",
+    "TriangulationParams",
+    "UpdateReport",
+    "pose_affordances",
+    "triangulate",
+    "view_polygon",
+]
