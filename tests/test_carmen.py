@@ -328,3 +328,37 @@ def test_writer_rejects_what_flaser_cannot_record(
     with pytest.raises(InputError, match="no whitespace"):
         write_carmen(tmp_path / "out.clf", frames, params={"name": "two words"})
     assert not list(tmp_path.glob("out.clf*")) and not list(tmp_path.glob(".out.clf*"))
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"even_beam_convention": "fov"}, "even_beam_convention must be"),
+        ({"fov_deg": 0.0}, "fov_deg must be a finite number > 0, got 0.0"),
+        ({"max_range_m": math.nan}, "max_range_m must be"),
+        ({"no_return_threshold_m": -5}, "no_return_threshold_m must be"),
+    ],
+)
+def test_bad_read_options_fail_before_reading(tmp_path, options, message):
+    with pytest.raises(InputError, match=message):
+        read_frames(tmp_path / "never-opened.clf", **options)
+
+
+@pytest.mark.parametrize(
+    ("param", "message"),
+    [
+        ("robot_front_laser_max -3", "PARAM robot_front_laser_max value '-3' is not a number > 0"),
+        ("laser_front_laser_fov wide", "PARAM laser_front_laser_fov value 'wide'"),
+        (
+            "robot_frontlaser_offset nan",
+            "PARAM robot_frontlaser_offset value 'nan' is not a finite",
+        ),
+    ],
+)
+def test_bad_geometry_params(tmp_path, param, message):
+    path = _write(tmp_path, f"PARAM {param}\n" + _flaser([1.0]) + "\n")
+    with pytest.raises(InputError) as info:
+        list(read_frames(path))
+    assert str(info.value).startswith(f"{path}:1: {message}")
+    # Non-geometry PARAMs may hold any text.
+    assert len(list(read_frames(_write(tmp_path, "PARAM laser_dev /dev/ttyS0\n", "b.clf")))) == 0

@@ -1,25 +1,27 @@
 """Robot log I/O: CARMEN logs (read and write), Kümmerle relations files, simulated run dirs.
 
-- ``carmen``: record types, the streaming reader (plain/gzip) and the record writer;
+- ``carmen``: record types and the streaming reader (plain/gzip); ``carmen_writer``: the writer;
 - ``frames``: CARMEN records ↔ albot2d ``Frame`` streams (``read_frames``, ``write_carmen``);
 - ``relations``: relations files and relations from a truth trajectory;
 - ``run_files``: a simulated run directory (log, truth, relations, manifest).
 """
 
 from albot2d.logs.carmen import (
-    EXACT,
-    LOG_PRECISION,
     CarmenReader,
     CarmenStats,
     CommentRecord,
-    FloatFormat,
     LaserRecord,
     NeffRecord,
     OdomRecord,
     ParamRecord,
     Record,
-    format_record,
     read_carmen,
+)
+from albot2d.logs.carmen_writer import (
+    EXACT,
+    LOG_PRECISION,
+    FloatFormat,
+    format_record,
     write_records,
 )
 from albot2d.logs.frames import (

@@ -41,17 +41,8 @@ from albot2d import __version__
 from albot2d.errors import InputError
 from albot2d.frames import Frame, Scan
 from albot2d.geometry import Pose
-from albot2d.logs.carmen import (
-    LOG_PRECISION,
-    CarmenReader,
-    FloatFormat,
-    LaserRecord,
-    OdomRecord,
-    ParamRecord,
-    Record,
-    format_float,
-    write_records,
-)
+from albot2d.logs.carmen import CarmenReader, LaserRecord, OdomRecord, ParamRecord, Record
+from albot2d.logs.carmen_writer import LOG_PRECISION, FloatFormat, format_float, write_records
 
 __all__ = [
     "DEFAULT_EVEN_BEAM_CONVENTION",
@@ -116,7 +107,10 @@ def records_to_frames(
     even_beam_convention: EvenBeamConvention | None = None,
     max_range_m: float | None = None,
 ) -> Iterator[Frame]:
-    """Turn a record stream into ``Frame``s; ``source`` names the file in error messages."""
+    """Turn a record stream into ``Frame``s; ``source`` names the file in error messages.
+
+    Options are checked now; records are consumed lazily as the frames are iterated.
+    """
     if even_beam_convention not in (None, "fov_over_n", "fov_over_n_minus_1"):
         raise InputError(
             f"even_beam_convention must be 'fov_over_n' or 'fov_over_n_minus_1', "
@@ -129,6 +123,19 @@ def records_to_frames(
     ):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise InputError(f"{name} must be a finite number > 0, got {value!r}")
+    return _frames(
+        records, source, fov_deg, no_return_threshold_m, even_beam_convention, max_range_m
+    )
+
+
+def _frames(
+    records: Iterable[Record],
+    source: str,
+    fov_deg: float | None,
+    no_return_threshold_m: float | None,
+    even_beam_convention: EvenBeamConvention | None,
+    max_range_m: float | None,
+) -> Iterator[Frame]:
     params: dict[str, float] = {}
     angle_cache: dict[tuple[int, float, float], np.ndarray] = {}
     prev_odom: Pose | None = None
@@ -295,7 +302,7 @@ def frames_to_records(
     first = next(stream, None)
     t0 = first.timestamp if first is not None else 0.0
     geometry = _LaserGeometry.of(first.scan, first.index) if first is not None else None
-    laser = geometry.params() if geometry is not None else {}
+    laser: dict[str, float | str] = dict(geometry.params()) if geometry is not None else {}
     entries = laser | _flatten_params(params or {}) | {PARAM_VERSION: __version__}
     for name, value in entries.items():
         text = value if isinstance(value, str) else repr(float(value))

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from albot2d.errors import InputError
 from albot2d.geometry import between_arrays
-from albot2d.logs.carmen import format_float
+from albot2d.logs.carmen_writer import format_float
 from albot2d.logs.textio import atomic_text_output, open_text
 from albot2d.validation import check_positive, check_positive_int
 
@@ -148,8 +148,8 @@ def match_timestamps(
     if len(bad):
         k = int(bad[0])
         raise InputError(
-            f"{what} [{k}] = {q.flat[k]!r} matches no reference time within {tolerance_s} s "
-            f"(nearest {ref[nearest.flat[k]]!r}); {len(bad)} unmatched"
+            f"{what} [{k}] = {float(q.flat[k])!r} matches no reference time within {tolerance_s} s "
+            f"(nearest {float(ref[nearest.flat[k]])!r}); {len(bad)} unmatched"
         )
     return nearest.astype(np.int64)
 

@@ -32,7 +32,7 @@ from albot2d.atomic import atomic_path
 from albot2d.errors import InputError
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
-from albot2d.logs.carmen import LOG_PRECISION, FloatFormat, format_float
+from albot2d.logs.carmen_writer import LOG_PRECISION, FloatFormat, format_float
 from albot2d.logs.frames import read_frames, write_carmen
 from albot2d.logs.relations import (
     Relations,
@@ -224,7 +224,7 @@ def read_run(run_dir: str | os.PathLike[str]) -> Run:
     for k, frame in enumerate(frames):
         if abs(frame.timestamp - t[k]) > _TIMESTAMP_MATCH_S:
             raise InputError(
-                f"{truth_path}: pose {k} has timestamp {t[k]!r}, "
+                f"{truth_path}: pose {k} has timestamp {float(t[k])!r}, "
                 f"but log scan {k} has {frame.timestamp!r}"
             )
         true_pose = Pose.from_array(poses[k])
