@@ -84,3 +84,33 @@ def test_homing_to_start_compares_each_trajectory_in_its_own_frame() -> None:
     assert h.distance_true_m == pytest.approx(5.0)
     assert h.bearing_error_deg == pytest.approx(0.0, abs=1e-9)
     assert h.distance_error_m == pytest.approx(0.0, abs=1e-9)
+
+
+# -- map quality ----------------------------------------------------------------------
+def test_map_quality_known_offsets() -> None:
+    from albot2d.evaluation.map_quality import map_quality, sample_segments
+
+    truth = np.array([[0.0, 0.0, 10.0, 0.0]])
+    # A map surface 5 cm off the wall, expressed in a mapper frame whose origin is the
+    # true start pose (2, 1) facing +y.
+    start = Pose(2.0, 1.0, math.pi / 2)
+    world_seg = np.array([[1.0, 0.05, 3.0, 0.05]])
+    local = np.hstack(
+        [start.inverse().transform_points(world_seg[:, :2]),
+         start.inverse().transform_points(world_seg[:, 2:])]
+    )
+    seen = sample_segments(np.array([[0.0, 0.0, 4.0, 0.0]]), 0.5)  # 4 m seen, 2 m mapped
+    q = map_quality(local, truth, start_pose=start, seen_points=seen)
+    assert q.accuracy_m_mean == pytest.approx(0.05)
+    assert q.accuracy_m_max == pytest.approx(0.05)
+    assert q.completeness == pytest.approx(5 / 9)  # points x = 1.0 … 3.0 of 0, 0.5, … 4.0
+    empty = map_quality(np.zeros((0, 4)), truth, start_pose=start)
+    assert empty.accuracy_m_mean is None and empty.surfaces == 0
+
+
+def test_sample_segments_spacing_and_endpoints() -> None:
+    from albot2d.evaluation.map_quality import sample_segments
+
+    pts = sample_segments(np.array([[0, 0, 1, 0], [0, 0, 0, 0.01]], float), 0.25)
+    assert len(pts) == 5 + 2
+    np.testing.assert_allclose(pts[:5, 0], [0, 0.25, 0.5, 0.75, 1.0])

@@ -1,0 +1,80 @@
+"""Mapper names → factories, and user mappers given as ``module:Class``.
+
+Every factory takes no arguments and returns a fresh object that implements the mapper
+protocol. Built-in names: ``albot1``, ``naive``, ``truth`` (simulation only) and
+``slam`` (an optional scan-matching baseline, when its extra is installed).
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+
+from albot2d.errors import InputError
+from albot2d.mapping.protocol import Mapper
+
+__all__ = ["BUILTIN_MAPPERS", "mapper_factory", "resolve_mappers"]
+
+
+def _albot1() -> Mapper:
+    from albot2d.mapping.albot1 import Albot1
+
+    return Albot1()
+
+
+def _naive() -> Mapper:
+    from albot2d.mapping.baselines import NaiveIntegration
+
+    return NaiveIntegration()
+
+
+def _truth() -> Mapper:
+    from albot2d.mapping.baselines import GroundTruthIntegration
+
+    return GroundTruthIntegration()
+
+
+BUILTIN_MAPPERS: dict[str, Callable[[], Mapper]] = {
+    "albot1": _albot1,
+    "naive": _naive,
+    "truth": _truth,
+}
+
+_REQUIRED = ("observe", "pose", "global_map", "trajectory", "counts", "timings_ms")
+
+
+def mapper_factory(spec: str) -> Callable[[], Mapper]:
+    """A factory for a built-in name or a ``module:Class`` that implements the protocol."""
+    if spec in BUILTIN_MAPPERS:
+        return BUILTIN_MAPPERS[spec]
+    if ":" not in spec:
+        raise InputError(
+            f"unknown mapper {spec!r}; built-in mappers: {', '.join(sorted(BUILTIN_MAPPERS))}; "
+            "or give your own as module:Class"
+        )
+    module_name, _, attr = spec.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise InputError(f"mapper {spec!r}: cannot import module {module_name!r}: {exc}") from exc
+    cls = getattr(module, attr, None)
+    if cls is None or not callable(cls):
+        raise InputError(f"mapper {spec!r}: module {module_name!r} has no class {attr!r}")
+    missing = [name for name in _REQUIRED if not callable(getattr(cls, name, None))]
+    if missing:
+        raise InputError(
+            f"mapper {spec!r} does not implement the mapper protocol: missing {', '.join(missing)}"
+        )
+    return cls  # type: ignore[no-any-return]
+
+
+def resolve_mappers(specs: list[str]) -> dict[str, Callable[[], Mapper]]:
+    """Factories keyed by report name (a built-in name, or the class name for plugins)."""
+    out: dict[str, Callable[[], Mapper]] = {}
+    for spec in specs:
+        factory = mapper_factory(spec)
+        name = spec if spec in BUILTIN_MAPPERS else spec.partition(":")[2]
+        if name in out:
+            raise InputError(f"mapper {name!r} given twice")
+        out[name] = factory
+    return out
