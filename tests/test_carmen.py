@@ -167,6 +167,14 @@ def test_unknown_types_counted_and_comments(tmp_path):
     assert frame.index == 0 and frame.scan.laser_pose == Pose(0.25, 0.0, 0.0)
 
 
+def test_truncated_gzip_names_the_file(tmp_path):
+    data = gzip.compress(("\n".join([_flaser([1.0] * 50)] * 50) + "\n").encode())
+    path = tmp_path / "cut.clf.gz"
+    path.write_bytes(data[: len(data) // 2])
+    with pytest.raises(InputError, match=r"cut\.clf\.gz: corrupt or truncated gzip data"):
+        list(read_carmen(path))
+
+
 def test_reader_is_lazy(tmp_path):
     path = _write(tmp_path, _flaser([1.0]) + "\nFLASER 2 oops\n")
     records = read_carmen(path)
@@ -179,21 +187,29 @@ BAD_LINES = [
     ("FLASER", "no n"),
     ("FLASER x 1 0 0 0 0 0 0 " + STAMPS, "'x' (field 1) is not an integer"),
     ("FLASER -2 " + STAMPS, "must be >= 0, got -2"),
-    ("FLASER 3 1 2 0 0 0 0 0 0 " + STAMPS, "n=3 has 13 fields, expected 14"),
+    ("FLASER 3 1 2 0 0 0 0 0 0 " + STAMPS, "n=3 has 13 fields, expected 14 (ends where logger_"),
+    (
+        "FLASER 4 1",
+        "n=4 has 3 fields, expected 15 (ends where range 1, range 2, range 3, x, ... should be)",
+    ),
+    ("FLASER 999999999999 1 2", "expected 1000000000010 (ends where range 2, range 3, range 4, "),
     ("FLASER 2 1 2 3 0 0 0 0 0 0 " + STAMPS, "1 extra"),
-    ("FLASER 2 1 2 0 0 0 0 0 0", "missing ipc_timestamp, ipc_hostname, logger_timestamp"),
-    ("FLASER 2 1 2 0 0 0 0 0 0 1.5 host", "missing logger_timestamp"),
+    ("FLASER 2 1 2 0 0 0 0 0 0", "ends where ipc_timestamp, ipc_hostname, logger_timestamp"),
+    ("FLASER 2 1 2 0 0 0 0 0 0 1.5 host", "ends where logger_timestamp"),
     ("FLASER 2 1.0 abc 0 0 0 0 0 0 " + STAMPS, "range 1 'abc' (field 3) is not a number"),
     ("FLASER 2 1 2 0 zz 0 0 0 0 " + STAMPS, "y 'zz' (field 5) is not a number"),
     ("FLASER 2 1 2 0 0 0 0 0 0 nan host 0.25", "ipc_timestamp 'nan' (field 10) is not finite"),
     ("RLASER 1 1 0 0 0 0 0 0 x host 0", "ipc_timestamp 'x'"),
-    ("ODOM 1 2 3 0 0 0 1.5 host", "ODOM has 9 fields, expected 10 (missing logger_timestamp)"),
+    (
+        "ODOM 1 2 3 0 0 0 1.5 host",
+        "ODOM has 9 fields, expected 10 (ends where logger_timestamp should be)",
+    ),
     ("ODOM 1 2 q 0 0 0 " + STAMPS, "theta 'q' (field 3) is not a number"),
     ("ODOM 1 2 3 0 0 inf " + STAMPS, "accel 'inf' (field 6) is not finite"),
     ("PARAM lonely", "needs a name and a value"),
     ("NEFF", "NEFF has 1 fields"),
     ("NEFF many", "value 'many'"),
-    ("ROBOTLASER1 0 -1.5 3.1 0.01 50 0.01 0 2 1 2", "missing n_rem"),
+    ("ROBOTLASER1 0 -1.5 3.1 0.01 50 0.01 0 2 1 2", "ends where num_remissions should be"),
     ("ROBOTLASER1 0 -1.5 3.1 0.01 50 0.01 0 2 1 2 3 1 2 " + "0 " * 11 + STAMPS, "n_rem=3"),
     ("ROBOTLASER1 0 -1.5 3.1 0.01 50 0.01 0 -1", "num_readings must be >= 0"),
     ("ROBOTLASER1 0 -1.5 3.1 0.01 50 0.01 0 1 1 0 " + "0 " * 10 + "x " + STAMPS, "turn_axis"),
@@ -206,7 +222,9 @@ def test_bad_lines_name_file_line_and_reason(tmp_path, line, reason):
     with pytest.raises(InputError) as info:
         list(read_carmen(path))
     message = str(info.value)
-    assert message.startswith(f"{path}:2: {line.split()[0]} ")
+    kind = line.split()[0]
+    assert message.startswith(f"{path}:2: {kind} ")
+    assert f"{kind} {kind}" not in message
     assert reason in message
 
 

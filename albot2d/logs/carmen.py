@@ -156,14 +156,38 @@ class _LineError(Exception):
     """A reason a line is malformed; the reader adds ``file:line``."""
 
 
-def _count_error(message: str, tokens: list[str], expected: int, names: list[str]) -> _LineError:
-    """Field-count error naming what is missing (``names`` are the field names after the type)."""
+_Layout = list[str | tuple[str, int]]  # field names after the type; (label, k) = k repeats
+
+
+def _names(layout: _Layout, start: int, limit: int) -> list[str]:
+    """Up to ``limit`` field names from position ``start`` (0 = first field after the type)."""
+    names: list[str] = []
+    position = 0
+    for part in layout:
+        label, count = (part, 1) if isinstance(part, str) else part
+        first = max(start - position, 0)
+        for k in range(first, min(count, first + limit - len(names))):
+            names.append(label if isinstance(part, str) else f"{label} {k}")
+        position += count
+        if len(names) >= limit:
+            break
+    return names
+
+
+def _count_error(context: str, tokens: list[str], expected: int, layout: _Layout) -> _LineError:
+    """Field-count error naming the first missing fields, or how many are extra.
+
+    The reader prefixes the message type; ``context`` adds e.g. the declared beam count.
+    """
     got = len(tokens)
+    message = f"{context} has" if context else "has"
     if got < expected:
-        missing = names[got - 1 : expected - 1]
-        shown = ", ".join(missing[:4]) + (", ..." if len(missing) > 4 else "")
-        return _LineError(f"{message} has {got} fields, expected {expected} (missing {shown})")
-    return _LineError(f"{message} has {got} fields, expected {expected} ({got - expected} extra)")
+        missing = _names(layout, got - 1, min(expected - got, 4))
+        shown = ", ".join(missing) + (", ..." if expected - got > 4 else "")
+        return _LineError(
+            f"{message} {got} fields, expected {expected} (ends where {shown} should be)"
+        )
+    return _LineError(f"{message} {got} fields, expected {expected} ({got - expected} extra)")
 
 
 def _float(tokens: list[str], index: int, name: str, *, finite: bool = True) -> float:
@@ -206,19 +230,19 @@ def _pose(tokens: list[str], start: int, names: tuple[str, ...]) -> Pose:
     return Pose(*(_float(tokens, start + k, names[k]) for k in range(3)))
 
 
-def _beam_count(tokens: list[str], message: str, index: int = 1, name: str = "n") -> int:
+def _beam_count(tokens: list[str], index: int = 1, name: str = "n") -> int:
     if len(tokens) <= index:
-        raise _LineError(f"{message} has no {name} (number of readings)")
+        raise _LineError(f"has no {name} (number of readings)")
     return _int(tokens, index, name)
 
 
 def _parse_flaser(tokens: list[str], line_number: int) -> LaserRecord:
     message = tokens[0]
-    n = _beam_count(tokens, message)
+    n = _beam_count(tokens)
     expected = 2 + n + len(_FLASER_TAIL)
     if len(tokens) != expected:
-        names = ["n", *(f"range {k}" for k in range(n)), *_FLASER_TAIL]
-        raise _count_error(f"{message} with n={n}", tokens, expected, names)
+        layout: _Layout = ["n", ("range", n), *_FLASER_TAIL]
+        raise _count_error(f"with n={n}", tokens, expected, layout)
     ranges = _floats(tokens, 2, n, "range")
     tail = 2 + n
     return LaserRecord(
@@ -236,19 +260,19 @@ def _parse_flaser(tokens: list[str], line_number: int) -> LaserRecord:
 def _parse_robotlaser(tokens: list[str], line_number: int) -> LaserRecord:
     message = tokens[0]
     head = 1 + len(_ROBOTLASER_HEAD)
-    n = _beam_count(tokens, message, head, "num_readings")
+    n = _beam_count(tokens, head, "num_readings")
     rem_index = head + 1 + n
     if len(tokens) <= rem_index:
-        names = [*_ROBOTLASER_HEAD, "num_readings", *(f"range {k}" for k in range(n)), "n_rem"]
-        raise _count_error(f"{message} with n={n}", tokens, rem_index + 1, names)
+        layout: _Layout = [*_ROBOTLASER_HEAD, "num_readings", ("range", n), "num_remissions"]
+        raise _count_error(f"with n={n}", tokens, rem_index + 1, layout)
     n_rem = _int(tokens, rem_index, "num_remissions")
     expected = rem_index + 1 + n_rem + len(_ROBOTLASER_TAIL)
     if len(tokens) != expected:
-        names = [
-            *_ROBOTLASER_HEAD, "num_readings", *(f"range {k}" for k in range(n)),
-            "num_remissions", *(f"remission {k}" for k in range(n_rem)), *_ROBOTLASER_TAIL,
+        layout = [
+            *_ROBOTLASER_HEAD, "num_readings", ("range", n), "num_remissions",
+            ("remission", n_rem), *_ROBOTLASER_TAIL,
         ]  # fmt: skip
-        raise _count_error(f"{message} with n={n}, n_rem={n_rem}", tokens, expected, names)
+        raise _count_error(f"with n={n}, n_rem={n_rem}", tokens, expected, layout)
     tail = rem_index + 1 + n_rem
     values = [_float(tokens, tail + k, _ROBOTLASER_TAIL[k]) for k in range(11)]
     return LaserRecord(
@@ -279,7 +303,7 @@ def _parse_robotlaser(tokens: list[str], line_number: int) -> LaserRecord:
 def _parse_odom(tokens: list[str], line_number: int) -> OdomRecord:
     expected = 1 + len(_ODOM_NAMES)
     if len(tokens) != expected:
-        raise _count_error("ODOM", tokens, expected, list(_ODOM_NAMES))
+        raise _count_error("", tokens, expected, list(_ODOM_NAMES))
     values = [_float(tokens, 1 + k, _ODOM_NAMES[k]) for k in range(7)]
     return OdomRecord(
         pose=Pose(*values[0:3]),
@@ -295,7 +319,7 @@ def _parse_odom(tokens: list[str], line_number: int) -> OdomRecord:
 
 def _parse_param(tokens: list[str], line_number: int) -> ParamRecord:
     if len(tokens) < 3:
-        raise _LineError(f"PARAM needs a name and a value, got {len(tokens) - 1} field(s)")
+        raise _LineError(f"needs a name and a value, got {len(tokens) - 1} field(s)")
     if len(tokens) == 6:
         return ParamRecord(
             name=tokens[1],
@@ -311,7 +335,7 @@ def _parse_param(tokens: list[str], line_number: int) -> ParamRecord:
 
 def _parse_neff(tokens: list[str], line_number: int) -> NeffRecord:
     if len(tokens) not in (2, 5):
-        raise _LineError(f"NEFF has {len(tokens)} fields, expected 2 (or 5 with stamps)")
+        raise _LineError(f"has {len(tokens)} fields, expected 2 (or 5 with stamps)")
     return NeffRecord(value=_float(tokens, 1, "value"), line_number=line_number)
 
 
