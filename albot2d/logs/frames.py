@@ -361,27 +361,29 @@ def write_carmen(
 
 
 def _flatten_params(params: Mapping[str, Any], prefix: str = "") -> dict[str, str]:
-    """``{"laser": {"noise_m": 0.01}}`` → ``{"albot2d_laser.noise_m": "0.01"}``."""
+    """``{"laser": {"noise_m": 0.01}}`` → ``{"albot2d_laser.noise_m": "0.01"}``.
+
+    A PARAM value is one token: plain strings stay as they are; other values become compact
+    JSON, and so do strings that are empty or hold whitespace, with the whitespace written as
+    ``\\uXXXX`` escapes (still valid JSON). Whitespace in names becomes "_".
+    """
     out: dict[str, str] = {}
     for key, value in params.items():
-        name = f"{prefix}{key}"
+        name = "".join("_" if ch.isspace() else ch for ch in f"{prefix}{key}")
         if dataclasses.is_dataclass(value) and not isinstance(value, type):
             value = dataclasses.asdict(value)
         if isinstance(value, Mapping):
             out |= _flatten_params(value, f"{name}.")
             continue
-        if isinstance(value, str):
+        if isinstance(value, str) and value and not any(ch.isspace() for ch in value):
             text = value
         else:
             try:
                 text = json.dumps(_plain(value), separators=(",", ":"), allow_nan=True)
             except TypeError:
                 raise InputError(f"params[{name!r}]: cannot write {type(value).__name__}") from None
-        if not text or any(ch.isspace() for ch in text) or any(ch.isspace() for ch in name):
-            raise InputError(
-                f"params[{name!r}] = {text!r}: CARMEN PARAM names and values must be "
-                "non-empty and contain no whitespace"
-            )
+        # Compact JSON has whitespace only inside strings, where a \\u escape means the same.
+        text = "".join(f"\\u{ord(ch):04x}" if ch.isspace() else ch for ch in text)
         out[f"{_USER_PARAM_PREFIX}{name}"] = text
     return out
 
