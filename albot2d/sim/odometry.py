@@ -102,11 +102,11 @@ NOISE_PRESETS: dict[str, OdometryNoise] = {
     # Roughly a Pioneer 3-DX on a smooth floor: a few percent, with a small steady drift.
     "typical": OdometryNoise(
         alpha1=0.05, alpha2=0.01, alpha3=0.03, alpha4=0.005,
-        distance_scale_error=0.01, heading_drift_deg_per_m=0.5,
+        distance_scale_error=0.01, heading_drift_deg_per_m=0.1,
     ),
     "high": OdometryNoise(
         alpha1=0.1, alpha2=0.05, alpha3=0.1, alpha4=0.02,
-        distance_scale_error=0.03, heading_drift_deg_per_m=2.0,
+        distance_scale_error=0.03, heading_drift_deg_per_m=0.5,
     ),
 }
 
