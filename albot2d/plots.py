@@ -21,7 +21,13 @@ if TYPE_CHECKING:
 
     from worldgen.world import Tour, World
 
-__all__ = ["plot_world", "render_world_png", "save_world_png"]
+__all__ = [
+    "plot_paths",
+    "plot_world",
+    "render_paths_png",
+    "render_world_png",
+    "save_world_png",
+]
 
 FREE_SPACE_COLOR = "#f4f1e8"
 WALL_COLOR = "#1a1a1a"
@@ -219,3 +225,77 @@ def save_world_png(
 ) -> None:
     """Write the world picture to ``path`` as PNG, atomically (no partial file on failure)."""
     atomic_write_bytes(path, render_world_png(world, tour=tour, dpi=dpi))
+
+
+TRUE_PATH_COLOR = "#1565c0"
+ODOM_PATH_COLOR = "#d32f2f"
+COLLISION_COLOR = "#ff6f00"
+
+
+def _xy(points: Any) -> np.ndarray:
+    arr = np.asarray(points, dtype=np.float64)
+    return arr[:, :2] if arr.ndim == 2 and arr.shape[1] >= 2 else arr.reshape(0, 2)
+
+
+def plot_paths(
+    world: World,
+    true_xy: Any,
+    odom_xy: Any,
+    *,
+    collided: Any = None,
+    title: str | None = None,
+    ax: Axes | None = None,
+) -> Axes:
+    """Draw ``world`` with a run's true path and odometry path (``(N, 2)`` or ``(N, 3)``
+    arrays; only x, y are used). ``collided`` (``(N,)`` bool) marks frames whose motion was
+    blocked. The world's own legend entries are kept and the paths added to them."""
+    from matplotlib.lines import Line2D
+
+    true_xy, odom_xy = _xy(true_xy), _xy(odom_xy)
+    ax = plot_world(world, ax=ax, show_roadmap=False)
+    old = ax.get_legend()
+    handles = list(old.legend_handles) if old is not None else []
+    if len(true_xy):
+        ax.plot(*true_xy.T, "-", color=TRUE_PATH_COLOR, lw=1.4, zorder=7)
+        ax.plot(*true_xy[-1], "o", color=TRUE_PATH_COLOR, ms=5, zorder=7)
+    if len(odom_xy):
+        ax.plot(*odom_xy.T, "--", color=ODOM_PATH_COLOR, lw=1.2, zorder=7)
+        ax.plot(*odom_xy[-1], "o", color=ODOM_PATH_COLOR, ms=5, zorder=7)
+    handles.append(Line2D([], [], color=TRUE_PATH_COLOR, lw=1.4, label="true path"))
+    handles.append(Line2D([], [], color=ODOM_PATH_COLOR, lw=1.2, ls="--", label="odometry"))
+    if collided is not None and len(true_xy):
+        hits = true_xy[np.asarray(collided, dtype=bool)]
+        if len(hits):
+            ax.plot(*hits.T, "x", color=COLLISION_COLOR, ms=5, zorder=8)
+            handles.append(Line2D([], [], color=COLLISION_COLOR, marker="x", ls="",
+                                  label="collision"))
+    # Odometry may drift outside the world: widen the view to keep it in the picture.
+    both = np.vstack([true_xy, odom_xy]) if len(true_xy) + len(odom_xy) else np.zeros((0, 2))
+    if len(both):
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        margin = PLOT_MARGIN_FRACTION * max(world.width_m, world.height_m)
+        ax.set_xlim(min(x0, both[:, 0].min() - margin), max(x1, both[:, 0].max() + margin))
+        ax.set_ylim(min(y0, both[:, 1].min() - margin), max(y1, both[:, 1].max() + margin))
+    ax.legend(
+        handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12),
+        ncol=min(len(handles), 8), fontsize=8, frameon=False,
+    )  # fmt: skip
+    if title is not None:
+        ax.set_title(title)
+    return ax
+
+
+def render_paths_png(
+    world: World,
+    true_xy: Any,
+    odom_xy: Any,
+    *,
+    collided: Any = None,
+    title: str | None = None,
+    dpi: int = DEFAULT_DPI,
+) -> bytes:
+    """The paths picture (see ``plot_paths``) as PNG bytes, made in memory."""
+    ax = plot_paths(world, true_xy, odom_xy, collided=collided, title=title)
+    buf = io.BytesIO()
+    ax.figure.savefig(buf, format="png", dpi=dpi)
+    return buf.getvalue()
