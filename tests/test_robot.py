@@ -125,9 +125,12 @@ def test_blocked_move_stops_at_contact_and_reports_collision() -> None:
     room = Room(4.0, 2.0, [], [])
     params = RobotParams(radius_m=R, contact_skin_m=1e-6)
     robot = KinematicRobot(room.space(), params, Pose(1.0, 1.0, 0.0))
+    assert robot.clearance_m() == pytest.approx(1.0 - R)
+    assert robot.clearance_m(max_distance_m=0.5) == math.inf
     result = robot.move(10.0)
     assert result.collided
     assert result.pose.x == pytest.approx(4.0 - R - 1e-6, abs=1e-9)
+    assert robot.clearance_m() == pytest.approx(1e-6, abs=1e-9)
     assert result.distance_m == pytest.approx(result.pose.x - 1.0, abs=1e-12)
     assert result.increment == Pose(result.distance_m, 0.0, 0.0)
     # Pushing on into the wall moves nothing; backing off is free.

@@ -151,9 +151,10 @@ class KinematicRobot:
         hits = self.space.point_query((x, y), limit, self._query_filter)
         return {h.shape: h.distance for h in hits if self._blocks(h.shape) and h.distance < limit}
 
-    def clearance_m(self, max_distance_m: float = math.inf) -> float:
-        """Distance from the robot's centre to the nearest blocking shape, minus the radius."""
-        reach = max_distance_m + self.params.radius_m if math.isfinite(max_distance_m) else 1e9
+    def clearance_m(self, max_distance_m: float = 10.0) -> float:
+        """The gap between the disc and the nearest blocking shape (``inf`` if none within
+        ``max_distance_m``); negative when something overlaps the robot."""
+        reach = max_distance_m + self.params.radius_m
         hits = self.space.point_query((self._pose.x, self._pose.y), reach, self._query_filter)
         dists = [h.distance for h in hits if self._blocks(h.shape)]
         return (min(dists) if dists else math.inf) - self.params.radius_m
