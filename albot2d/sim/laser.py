@@ -1,0 +1,251 @@
+"""The simulated 2D laser range finder: ``LaserParams`` (geometry), ``LaserNoise``, ``Laser``.
+
+``Laser.scan(pose, rng)`` casts the beams exactly (``albot2d.sim.raycast``) from the laser's
+world pose (robot pose ⊕ mount) against the static walls and any moving obstacles, then
+applies the noise model, in this fixed order, each step drawing from ``rng`` only when
+enabled (so a zero-noise laser consumes no randomness and returns exact ranges):
+
+1. angular jitter — each beam is cast at ``nominal + N(0, angle_jitter_deg)`` but reported
+   at its nominal angle;
+2. mixed pixels — where two neighbouring hits differ by more than
+   ``mixed_pixel_min_jump_m``, with probability ``mixed_pixel_prob`` one of the two beams
+   (either, at random) returns a range uniformly between the foreground and background;
+3. Gaussian range noise — ``N(0, range_sigma_m + range_sigma_per_m * range)``;
+4. quantisation to multiples of ``range_resolution_m`` (0 = off);
+5. validity — a beam is valid when it hit something and its range lies in
+   ``[min_range_m, max_range_m)``;
+6. dropouts — each valid beam independently returns nothing with ``dropout_prob``.
+
+Invalid beams report ``max_range_m`` (as CARMEN logs report no-return readings).
+The default mount is the robot's rotation centre (``mount_x_m = 0``); a Pioneer-style
+front mount is ``mount_x_m = 0.16``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from albot2d.errors import InputError
+from albot2d.frames import Scan, beam_angles
+from albot2d.geometry import Pose
+from albot2d.sim.raycast import BeamFan, RayCaster
+from albot2d.validation import check_finite, check_in_range, check_non_negative
+
+__all__ = ["Laser", "LaserNoise", "LaserParams"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class LaserParams:
+    """Beam geometry and mount of a SICK LMS-like laser (defaults: 180°, 181 beams, 30 m).
+
+    ``n_beams`` beams spread evenly over ``fov_deg`` with both ends included (181 → 1°,
+    361 → 0.5°); a full 360° sweep leaves out the duplicate end beam. ``mount_*`` is the
+    laser's pose in the robot frame.
+    """
+
+    fov_deg: float = 180.0
+    n_beams: int = 181
+    max_range_m: float = 30.0
+    min_range_m: float = 0.05
+    mount_x_m: float = 0.0
+    mount_y_m: float = 0.0
+    mount_yaw_deg: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_in_range(self, "fov_deg", 1e-6, 360.0)
+        if isinstance(self.n_beams, bool) or not isinstance(self.n_beams, int):
+            raise InputError(f"LaserParams.n_beams must be an integer, got {self.n_beams!r}")
+        if self.n_beams < 2:
+            raise InputError(f"LaserParams.n_beams must be >= 2, got {self.n_beams!r}")
+        check_in_range(self, "max_range_m", 1e-6, 1e6)
+        check_non_negative(self, "min_range_m")
+        if self.min_range_m >= self.max_range_m:
+            raise InputError(
+                f"LaserParams.min_range_m must be < max_range_m ({self.max_range_m!r}), "
+                f"got {self.min_range_m!r}"
+            )
+        for name in ("mount_x_m", "mount_y_m", "mount_yaw_deg"):
+            check_finite(self, name)
+
+    @classmethod
+    def sick_lms200(cls, *, n_beams: int = 181, max_range_m: float = 80.0) -> LaserParams:
+        """SICK LMS200: 180°, 181 (1°) or 361 (0.5°) beams, 80 m long-range mode."""
+        return cls(n_beams=n_beams, max_range_m=max_range_m)
+
+    @property
+    def mount_pose(self) -> Pose:
+        return Pose(self.mount_x_m, self.mount_y_m, math.radians(self.mount_yaw_deg))
+
+    def beam_angles(self) -> FloatArray:
+        """Nominal beam angles (radians, laser frame, right to left)."""
+        fov = math.radians(self.fov_deg)
+        full_circle = self.fov_deg >= 360.0
+        return beam_angles(self.n_beams, fov, inclusive=not full_circle)
+
+
+@dataclass(frozen=True)
+class LaserNoise:
+    """Noise model parameters (see the module docstring); every one can be zero.
+
+    The defaults are plausible SICK LMS200 values (``sick_lms200()``), not a calibration;
+    ``LaserNoise.zero()`` gives exact ranges.
+    """
+
+    range_sigma_m: float = 0.005
+    range_sigma_per_m: float = 0.001
+    angle_jitter_deg: float = 0.01
+    dropout_prob: float = 0.001
+    range_resolution_m: float = 0.01
+    mixed_pixel_prob: float = 0.3
+    mixed_pixel_min_jump_m: float = 0.2
+
+    def __post_init__(self) -> None:
+        check_non_negative(
+            self,
+            "range_sigma_m",
+            "range_sigma_per_m",
+            "angle_jitter_deg",
+            "range_resolution_m",
+            "mixed_pixel_min_jump_m",
+        )
+        check_in_range(self, "dropout_prob", 0.0, 1.0)
+        check_in_range(self, "mixed_pixel_prob", 0.0, 1.0)
+
+    @classmethod
+    def zero(cls) -> LaserNoise:
+        """No noise at all: ranges are the exact distances."""
+        return cls(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+    @classmethod
+    def sick_lms200(cls) -> LaserNoise:
+        """Plausible SICK LMS200 noise (1 cm resolution, ~5 mm + 0.1 % sigma)."""
+        return cls()
+
+    @property
+    def is_zero(self) -> bool:
+        return (
+            self.range_sigma_m == 0.0
+            and self.range_sigma_per_m == 0.0
+            and self.angle_jitter_deg == 0.0
+            and self.dropout_prob == 0.0
+            and self.range_resolution_m == 0.0
+            and self.mixed_pixel_prob == 0.0
+        )
+
+
+class Laser:
+    """A laser mounted on a robot, seeing ``static_segments`` plus per-scan extra segments.
+
+    ``static_segments`` is an ``(N, 4)`` array (e.g. ``World.obstacle_segments``) or a
+    prebuilt ``RayCaster`` to share one index between lasers.
+    """
+
+    def __init__(
+        self,
+        static_segments: ArrayLike | RayCaster,
+        params: LaserParams | None = None,
+        noise: LaserNoise | None = None,
+    ) -> None:
+        self.params = params if params is not None else LaserParams()
+        self.noise = noise if noise is not None else LaserNoise()
+        if isinstance(static_segments, RayCaster):
+            self.caster = static_segments
+        else:
+            self.caster = RayCaster(static_segments)
+        self.angles: FloatArray = self.params.beam_angles()
+        self.angles.flags.writeable = False
+        self._fan = BeamFan.from_angles(self.angles)
+        self._mount = self.params.mount_pose
+
+    @classmethod
+    def for_world(
+        cls, world: object, params: LaserParams | None = None, noise: LaserNoise | None = None
+    ) -> Laser:
+        """A laser seeing a ``worldgen.World``'s walls and clutter (``obstacle_segments``)."""
+        return cls(world.obstacle_segments, params, noise)  # type: ignore[attr-defined]
+
+    @property
+    def n_beams(self) -> int:
+        return len(self.angles)
+
+    def laser_pose(self, robot_pose: Pose) -> Pose:
+        """The laser's world pose for a robot at ``robot_pose``."""
+        return robot_pose.compose(self._mount)
+
+    def true_ranges(
+        self, robot_pose: Pose, *, extra_segments: ArrayLike | None = None
+    ) -> FloatArray:
+        """Exact ranges at the nominal beam angles; ``inf`` where nothing is within range."""
+        lp = self.laser_pose(robot_pose)
+        return self.caster.cast(
+            (lp.x, lp.y),
+            self._fan,
+            self.params.max_range_m,
+            heading=lp.theta,
+            extra_segments=extra_segments,
+        )
+
+    def scan(
+        self,
+        pose: Pose,
+        rng: np.random.Generator,
+        *,
+        timestamp: float = 0.0,
+        extra_segments: ArrayLike | None = None,
+    ) -> Scan:
+        """One noisy sweep from a robot at world ``pose``; see the module docstring."""
+        p, nz = self.params, self.noise
+        lp = self.laser_pose(pose)
+        fan = self._fan
+        if nz.angle_jitter_deg > 0.0:
+            jitter = rng.normal(0.0, math.radians(nz.angle_jitter_deg), self.n_beams)
+            fan = BeamFan.from_angles(self.angles + jitter)
+        r = self.caster.cast(
+            (lp.x, lp.y), fan, p.max_range_m, heading=lp.theta, extra_segments=extra_segments
+        )
+        hit = np.isfinite(r)
+        if nz.mixed_pixel_prob > 0.0:
+            r = _mixed_pixels(r, hit, nz, rng)
+        if nz.range_sigma_m > 0.0 or nz.range_sigma_per_m > 0.0:
+            sigma = nz.range_sigma_m + nz.range_sigma_per_m * np.where(hit, r, 0.0)
+            r = r + rng.standard_normal(self.n_beams) * sigma
+        if nz.range_resolution_m > 0.0:
+            r = np.round(r / nz.range_resolution_m) * nz.range_resolution_m
+        valid = hit & (r >= p.min_range_m) & (r < p.max_range_m)
+        if nz.dropout_prob > 0.0:
+            valid &= rng.random(self.n_beams) >= nz.dropout_prob
+        ranges = np.where(valid, r, p.max_range_m)
+        return Scan(
+            ranges=ranges,
+            angles=self.angles,
+            valid=valid,
+            max_range_m=p.max_range_m,
+            timestamp=float(timestamp),
+            laser_pose=self._mount,
+        )
+
+
+def _mixed_pixels(
+    r: FloatArray, hit: NDArray[np.bool_], nz: LaserNoise, rng: np.random.Generator
+) -> FloatArray:
+    """Blend one beam at each depth jump between the foreground and background range."""
+    n = len(r) - 1
+    happens = rng.random(n) < nz.mixed_pixel_prob
+    pick_right = rng.random(n) < 0.5
+    fraction = rng.random(n)
+    both = hit[:-1] & hit[1:]
+    left, right = np.where(both, r[:-1], 0.0), np.where(both, r[1:], 0.0)
+    jump = np.flatnonzero(both & (np.abs(right - left) > nz.mixed_pixel_min_jump_m) & happens)
+    if len(jump) == 0:
+        return r
+    near = np.minimum(left[jump], right[jump])
+    far = np.maximum(left[jump], right[jump])
+    out = r.copy()
+    out[jump + pick_right[jump]] = near + fraction[jump] * (far - near)
+    return out

@@ -1,0 +1,66 @@
+"""Reference ranges and worlds for the raycaster and laser tests.
+
+``shapely_ranges`` is the exact reference: each beam is a shapely LineString out to
+``max_range`` intersected with every segment; the range is the distance from the origin
+to the nearest intersection point (overlaps count by their nearest point). Segments the
+raycaster treats as zero-length are left out here too.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+
+from albot2d.sim.raycast import MIN_SEGMENT_LENGTH_M
+
+__all__ = ["box_segments", "office_segments", "ring_segments", "shapely_ranges"]
+
+
+def shapely_ranges(
+    segments: np.ndarray, origin: tuple[float, float], angles: np.ndarray, max_range: float
+) -> np.ndarray:
+    """Exact reference ranges (``inf`` where nothing is within ``max_range``)."""
+    segs = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    keep = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1]) >= MIN_SEGMENT_LENGTH_M
+    lines = shapely.linestrings(segs[keep].reshape(-1, 2, 2))
+    ox, oy = origin
+    out = np.full(len(angles), np.inf)
+    for k, a in enumerate(np.asarray(angles, dtype=np.float64)):
+        end = (ox + max_range * math.cos(a), oy + max_range * math.sin(a))
+        ray = shapely.LineString([(ox, oy), end])
+        hits = shapely.intersection(ray, lines)
+        hits = hits[~shapely.is_empty(hits)]
+        if len(hits) == 0:
+            continue
+        pts = shapely.get_coordinates(hits)
+        out[k] = float(np.hypot(pts[:, 0] - ox, pts[:, 1] - oy).min())
+    return out
+
+
+def box_segments(xmin: float, ymin: float, xmax: float, ymax: float) -> np.ndarray:
+    """The four walls of an axis-aligned rectangle, sharing their corner vertices."""
+    c = np.array([[xmin, ymin], [xmax, ymin], [xmax, ymax], [xmin, ymax]])
+    return np.hstack([c, np.roll(c, -1, axis=0)])
+
+
+def ring_segments(points: np.ndarray) -> np.ndarray:
+    """Edges of the closed polygon through ``points`` (``(K, 2)``)."""
+    p = np.asarray(points, dtype=np.float64)
+    return np.hstack([p, np.roll(p, -1, axis=0)])
+
+
+def office_segments(n: int, room_m: float = 4.0, door_m: float = 1.0) -> np.ndarray:
+    """An ``n`` × ``n`` grid of square rooms, a door in the middle of every inner wall."""
+    side = (room_m - door_m) / 2.0
+    segs = []
+    for i in range(n + 1):
+        for j in range(n):
+            a, c = j * room_m, i * room_m
+            if i in (0, n):
+                segs += [[a, c, a + room_m, c], [c, a, c, a + room_m]]
+            else:
+                segs += [[a, c, a + side, c], [a + side + door_m, c, a + room_m, c]]
+                segs += [[c, a, c, a + side], [c, a + side + door_m, c, a + room_m]]
+    return np.asarray(segs, dtype=np.float64)

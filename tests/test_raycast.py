@@ -1,0 +1,281 @@
+"""Exact raycasting: shapely reference, hits on walls, rigid invariance, index = brute force."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import assume, example, given
+from hypothesis import strategies as st
+
+from albot2d.errors import InputError
+from albot2d.frames import beam_angles
+from albot2d.geometry import Pose, point_segment_distance, transform_segments
+from albot2d.sim.raycast import BeamFan, RayCaster, cast_brute_force
+from tests.raycast_helpers import box_segments, office_segments, ring_segments, shapely_ranges
+
+EXACT_M = 1e-9
+CONTACT_M = 1e-9
+FAN = beam_angles(181, math.pi)
+
+coord = st.floats(-50.0, 50.0, allow_nan=False, allow_subnormal=False)
+heading = st.floats(-math.pi, math.pi, allow_nan=False)
+
+
+@st.composite
+def segment_sets(draw: st.DrawFn, max_size: int = 25) -> np.ndarray:
+    n = draw(st.integers(1, max_size))
+    values = draw(st.lists(coord, min_size=4 * n, max_size=4 * n))
+    segs = np.asarray(values, dtype=np.float64).reshape(n, 4)
+    # Some axis-aligned walls sharing vertices, like real worlds.
+    if draw(st.booleans()):
+        x0, y0 = draw(coord), draw(coord)
+        w, h = draw(st.floats(0.5, 20.0)), draw(st.floats(0.5, 20.0))
+        segs = np.vstack([segs, box_segments(x0, y0, x0 + w, y0 + h)])
+    return segs
+
+
+def assume_not_touching(segs: np.ndarray, ox: float, oy: float) -> None:
+    """Within the contact tolerance of a wall (but not on it) the laser is inside the wall by
+    design (all ranges 0) while the references still see past it: skip those origins."""
+    d = point_segment_distance(np.array([[ox, oy]]), segs)
+    assume(not np.any((d > 0.0) & (d <= 2 * CONTACT_M)))
+
+
+def grazing(segs: np.ndarray, origin: tuple[float, float], angles: np.ndarray) -> np.ndarray:
+    """Beams passing within EXACT_M of a segment end: a hit or a miss there are both right."""
+    ends = np.asarray(segs, dtype=np.float64).reshape(-1, 2) - np.asarray(origin)
+    d = np.column_stack([np.cos(angles), np.sin(angles)])
+    along = d @ ends.T
+    across = np.abs(d[:, 0:1] * ends[:, 1] - d[:, 1:2] * ends[:, 0])
+    return np.any((across < EXACT_M) & (along > -EXACT_M), axis=1)
+
+
+def assert_same_ranges(
+    got: np.ndarray,
+    want: np.ndarray,
+    max_range: float,
+    segs: np.ndarray | None = None,
+    origin: tuple[float, float] = (0.0, 0.0),
+    angles: np.ndarray | None = None,
+) -> None:
+    """Equal to EXACT_M; a reference hit within EXACT_M of max_range may fall either side, and
+    so may a beam grazing a segment end (when ``segs`` and ``angles`` are given)."""
+    ok = np.zeros(len(got), dtype=bool)
+    if segs is not None and angles is not None:
+        ok = grazing(segs, origin, angles)
+    both = np.isfinite(got) & np.isfinite(want) & ~ok
+    np.testing.assert_allclose(got[both], want[both], rtol=0.0, atol=EXACT_M)
+    only = (np.isfinite(got) != np.isfinite(want)) & ~ok
+    edge = np.where(np.isfinite(got), got, want)[only]
+    assert np.all(np.abs(edge - max_range) < EXACT_M), (np.flatnonzero(only), edge)
+
+
+def test_box_room_matches_closed_form() -> None:
+    segs = box_segments(-2.0, -1.0, 3.0, 4.0)
+    o = (0.5, 0.25)
+    angles = np.linspace(-math.pi, math.pi, 721)
+    got = RayCaster(segs).cast(o, angles, 100.0)
+    c, s = np.cos(angles), np.sin(angles)
+    with np.errstate(divide="ignore"):
+        tx = np.where(c > 0, (3.0 - o[0]) / c, (-2.0 - o[0]) / c)
+        ty = np.where(s > 0, (4.0 - o[1]) / s, (-1.0 - o[1]) / s)
+    want = np.minimum(np.where(c != 0, tx, np.inf), np.where(s != 0, ty, np.inf))
+    np.testing.assert_allclose(got, want, rtol=0.0, atol=EXACT_M)
+
+
+def test_hand_made_world_matches_shapely() -> None:
+    segs = np.vstack(
+        [box_segments(0, 0, 10, 8), box_segments(3, 3, 4, 4), [[6, 1, 9, 6], [1, 6, 2, 7.5]]]
+    )
+    for o, th in [((1.0, 1.0), 0.3), ((7.5, 2.0), 2.0), ((5.0, 6.0), -1.2)]:
+        angles = FAN + th
+        got = RayCaster(segs).cast(o, angles, 30.0)
+        assert_same_ranges(got, shapely_ranges(segs, o, angles, 30.0), 30.0)
+
+
+@given(segs=segment_sets(), ox=coord, oy=coord, th=heading, r_max=st.floats(1.0, 80.0))
+def test_random_segments_match_shapely(
+    segs: np.ndarray, ox: float, oy: float, th: float, r_max: float
+) -> None:
+    assume_not_touching(segs, ox, oy)
+    angles = beam_angles(37, math.pi) + th
+    got = RayCaster(segs).cast((ox, oy), angles, r_max)
+    want = shapely_ranges(segs, (ox, oy), angles, r_max)
+    assert_same_ranges(got, want, r_max, segs, (ox, oy), angles)
+
+
+@given(
+    segs=segment_sets(),
+    ox=coord,
+    oy=coord,
+    th=heading,
+    cell=st.one_of(st.none(), st.floats(0.3, 30.0)),
+)
+def test_index_equals_brute_force_and_hits_lie_on_walls(
+    segs: np.ndarray, ox: float, oy: float, th: float, cell: float | None
+) -> None:
+    assume_not_touching(segs, ox, oy)
+    r_max = 60.0
+    caster = RayCaster(segs, cell_size_m=cell)
+    angles = FAN + th
+    got = caster.cast((ox, oy), angles, r_max)
+    want = cast_brute_force(segs, (ox, oy), angles, r_max)
+    assert_same_ranges(got, want, r_max, segs, (ox, oy), angles)
+    hit = np.isfinite(got)
+    assert np.all(got[hit] <= r_max * (1 + 1e-12))
+    pts = np.column_stack([ox + got * np.cos(angles), oy + got * np.sin(angles)])[hit]
+    if len(pts):
+        assert point_segment_distance(pts, segs).min(axis=1).max() < EXACT_M
+
+
+@given(
+    segs=segment_sets(),
+    ox=coord,
+    oy=coord,
+    th=heading,
+    move=st.tuples(coord, coord, heading),
+)
+def test_rigid_motion_of_world_and_laser_leaves_scan_unchanged(
+    segs: np.ndarray, ox: float, oy: float, th: float, move: tuple[float, float, float]
+) -> None:
+    r_max = 40.0
+    before = RayCaster(segs).cast((ox, oy), FAN + th, r_max)
+    m = Pose(*move)
+    moved_origin = m.transform_points(np.array([[ox, oy]]))[0]
+    after = RayCaster(transform_segments(m.as_array(), segs)).cast(
+        moved_origin, FAN + th + m.theta, r_max
+    )
+    both = np.isfinite(before) & np.isfinite(after)
+    np.testing.assert_allclose(after[both], before[both], rtol=1e-9, atol=1e-9)
+    differ = np.isfinite(before) != np.isfinite(after)
+    assert np.all(np.abs(np.where(np.isfinite(before), before, after)[differ] - r_max) < 1e-7)
+
+
+@given(
+    n=st.integers(3, 40),
+    radii=st.lists(st.floats(0.5, 20.0), min_size=40, max_size=40),
+    spin=heading,
+    cell=st.one_of(st.none(), st.floats(0.2, 5.0)),
+)
+@example(n=4, radii=[1.0] * 40, spin=math.pi / 4, cell=None)
+def test_closed_polygon_around_origin_leaks_no_ray(
+    n: int, radii: list[float], spin: float, cell: float | None
+) -> None:
+    """Rays aimed exactly at shared vertices (and everywhere else) always hit."""
+    phi = spin + np.arange(n) * (2 * math.pi / n)
+    pts = np.column_stack([np.cos(phi), np.sin(phi)]) * np.asarray(radii[:n])[:, None]
+    segs = ring_segments(pts)
+    caster = RayCaster(segs, cell_size_m=cell)
+    at_vertices = np.arctan2(pts[:, 1], pts[:, 0])
+    angles = np.concatenate([at_vertices, np.linspace(-math.pi, math.pi, 360, endpoint=False)])
+    got = caster.cast((0.0, 0.0), angles, 100.0)
+    assert np.isfinite(got).all()
+    np.testing.assert_allclose(got[:n], np.asarray(radii[:n]), rtol=1e-12)
+
+
+def test_ray_through_box_corners() -> None:
+    caster = RayCaster(box_segments(-1.0, -1.0, 1.0, 1.0))
+    corners = np.array([1, 3, 5, 7]) * (math.pi / 4)
+    np.testing.assert_allclose(caster.cast((0.0, 0.0), corners, 5.0), math.sqrt(2), rtol=1e-12)
+
+
+def test_ray_parallel_to_wall_misses_it() -> None:
+    caster = RayCaster([[0.0, 1.0, 5.0, 1.0]])
+    assert caster.cast((0.0, 0.0), [0.0], 10.0)[0] == np.inf
+
+
+def test_wall_seen_edge_on_is_hit_at_its_near_end() -> None:
+    caster = RayCaster([[2.0, 0.0, 5.0, 0.0], [0.0, -3.0, 0.0, -7.0]])
+    got = caster.cast((0.0, 0.0), [0.0, 1e-3, -math.pi / 2, math.pi], 10.0)
+    np.testing.assert_allclose(got[[0, 2]], [2.0, 3.0], rtol=1e-12)
+    assert np.isinf(got[[1, 3]]).all()
+
+
+@pytest.mark.parametrize("origin", [(0.0, 0.0), (1.0, 0.0), (-0.3, 0.0), (0.5, 1e-12)])
+def test_origin_on_a_wall_gives_zero_ranges(origin: tuple[float, float]) -> None:
+    caster = RayCaster(np.vstack([[[-1.0, 0.0, 1.0, 0.0]], box_segments(-5, -5, 5, 5)]))
+    got = caster.cast(origin, FAN, 30.0)
+    assert np.all(got == 0.0)
+
+
+def test_zero_length_segments_are_ignored() -> None:
+    walls = box_segments(-3.0, -2.0, 4.0, 5.0)
+    dots = np.array([[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0]])
+    with_dots = RayCaster(np.vstack([walls, dots])).cast((0.0, 0.0), FAN, 30.0)
+    np.testing.assert_array_equal(with_dots, RayCaster(walls).cast((0.0, 0.0), FAN, 30.0))
+
+
+def test_no_segments_and_out_of_range_give_inf() -> None:
+    assert np.isinf(RayCaster(np.zeros((0, 4))).cast((0.0, 0.0), FAN, 30.0)).all()
+    far = RayCaster(box_segments(-50.0, -50.0, 50.0, 50.0))
+    assert np.isinf(far.cast((0.0, 0.0), FAN, 30.0)).all()
+    assert np.isfinite(far.cast((0.0, 0.0), FAN, 80.0)).all()
+
+
+def test_extra_segments_are_seen_with_the_static_walls() -> None:
+    walls = box_segments(-10.0, -10.0, 10.0, 10.0)
+    caster = RayCaster(walls)
+    mover = box_segments(2.0, -0.5, 3.0, 0.5)
+    alone = caster.cast((0.0, 0.0), FAN, 30.0)
+    seen = caster.cast((0.0, 0.0), FAN, 30.0, extra_segments=mover)
+    want = shapely_ranges(np.vstack([walls, mover]), (0.0, 0.0), FAN, 30.0)
+    assert_same_ranges(seen, want, 30.0)
+    assert seen[90] == pytest.approx(2.0) and alone[90] == pytest.approx(10.0)
+    only_extra = RayCaster(np.zeros((0, 4))).cast((0.0, 0.0), FAN, 30.0, extra_segments=mover)
+    assert np.isfinite(only_extra).sum() > 0
+
+
+def test_unsorted_angles_and_prepared_fans_agree() -> None:
+    segs = office_segments(4)
+    caster = RayCaster(segs)
+    rng = np.random.default_rng(3)
+    angles = rng.uniform(-math.pi, math.pi, 200)
+    got = caster.cast((6.0, 5.5), angles, 30.0)
+    order = np.argsort(angles)
+    np.testing.assert_array_equal(got[order], caster.cast((6.0, 5.5), angles[order], 30.0))
+    fan = BeamFan.from_angles(FAN)
+    np.testing.assert_allclose(
+        caster.cast((6.0, 5.5), fan, 30.0, heading=0.7),
+        caster.cast((6.0, 5.5), FAN + 0.7, 30.0),
+        rtol=1e-12,
+    )
+
+
+def test_office_grid_full_circle_matches_brute_force() -> None:
+    segs = office_segments(6)
+    caster = RayCaster(segs)
+    angles = np.linspace(-math.pi, math.pi, 720, endpoint=False)
+    for o in [(2.0, 2.0), (13.1, 9.7), (4.0, 6.0), (23.5, 0.5)]:
+        got = caster.cast(o, angles, 30.0)
+        want = cast_brute_force(segs, o, angles, 30.0)
+        assert_same_ranges(got, want, 30.0, segs, o, angles)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"segments": [[0, 0, np.nan, 1]]}, "segments[0]"),
+        ({"segments": [[0, 0, 1]]}, "segments"),
+        ({"segments": [[0, 0, 1, 1]], "cell_size_m": 0.0}, "cell_size_m"),
+        ({"segments": [[0, 0, 1, 1]], "contact_tolerance_m": -1.0}, "contact_tolerance_m"),
+    ],
+)
+def test_bad_construction_names_the_input(kwargs: dict, field: str) -> None:
+    with pytest.raises(InputError, match=field.replace("[", r"\[")):
+        RayCaster(**kwargs)
+
+
+def test_bad_cast_arguments_name_the_input() -> None:
+    caster = RayCaster(box_segments(0, 0, 1, 1))
+    with pytest.raises(InputError, match="max_range"):
+        caster.cast((0.5, 0.5), FAN, 0.0)
+    with pytest.raises(InputError, match="origin"):
+        caster.cast((0.5, np.nan), FAN, 5.0)
+    with pytest.raises(InputError, match="origin"):
+        caster.cast((0.5,), FAN, 5.0)
+    with pytest.raises(InputError, match="angles"):
+        caster.cast((0.5, 0.5), [], 5.0)
+    with pytest.raises(InputError, match=r"extra_segments\[1\]"):
+        caster.cast((0.5, 0.5), FAN, 5.0, extra_segments=[[0, 0, 1, 1], [0, np.inf, 1, 1]])
