@@ -1,0 +1,202 @@
+"""``albot2d world``: generate (or import) a world, save it as JSON, optionally draw it.
+
+Everything is built in memory first; the JSON and the PNG are then written atomically
+together, so a failure (bad parameter, unplottable world, unwritable path) leaves no
+output file at all. Prints a one-line summary.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+from pathlib import Path
+from typing import Any
+
+from albot2d.atomic import atomic_path
+from albot2d.errors import InputError
+from albot2d.seeding import spawn_rngs
+
+__all__ = ["TOUR_KINDS", "parse_param", "register", "run", "summary"]
+
+TOUR_KINDS = ("loop", "out_and_back", "backtracking")
+DEFAULT_TOUR_LENGTH_M = 100.0
+HOUSEEXPO_PARAMS = ("robot_radius_m", "clearance_margin_m")
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser(
+        "world",
+        help="generate a world (or import a HouseExpo plan) and save it as JSON",
+        description=__doc__,
+    )
+    source = p.add_argument_group("what to build (give --kind or --from-houseexpo)")
+    source.add_argument("--kind", help="world kind, e.g. corridors, rooms, open, office, mixed")
+    source.add_argument("--from-houseexpo", metavar="PLAN.json", help="import a HouseExpo plan")
+    p.add_argument(
+        "--seed", metavar="N",
+        help="non-negative integer seed (default 0; for --from-houseexpo it picks the start)",
+    )  # fmt: skip
+    p.add_argument("--width", metavar="W", help="world width in metres (param width_m)")
+    p.add_argument("--height", metavar="H", help="world height in metres (param height_m)")
+    p.add_argument(
+        "--param", action="append", default=[], metavar="NAME=VALUE",
+        help="set a generator parameter, e.g. --param door_width_min_m=0.9 (repeatable)",
+    )  # fmt: skip
+    p.add_argument("--out", required=True, metavar="world.json", help="output world file")
+    p.add_argument("--png", metavar="world.png", help="also draw the world to this PNG")
+    p.add_argument("--tour-kind", default="loop", help=f"tour to plan: {', '.join(TOUR_KINDS)}")
+    p.add_argument(
+        "--tour-length", default=str(DEFAULT_TOUR_LENGTH_M), metavar="METRES",
+        help=f"minimum tour length in metres (default {DEFAULT_TOUR_LENGTH_M:g})",
+    )  # fmt: skip
+    p.add_argument("--no-tour", action="store_true", help="do not plan a tour")
+    p.set_defaults(handler=run)
+
+
+def parse_param(text: str) -> tuple[str, Any]:
+    """``NAME=VALUE`` → (name, value); the value becomes an int, float, bool or string."""
+    name, sep, raw = text.partition("=")
+    name = name.strip()
+    if not sep or not name.isidentifier():
+        raise InputError(f"--param expects NAME=VALUE, got {text!r}")
+    raw = raw.strip()
+    for convert in (int, float):
+        try:
+            return name, convert(raw)
+        except ValueError:
+            pass
+    if raw.lower() in ("true", "false"):
+        return name, raw.lower() == "true"
+    return name, raw
+
+
+def _positive_number(text: str | None, option: str) -> float | None:
+    if text is None:
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0.0):
+        raise InputError(f"{option} must be a positive number of metres, got {text!r}")
+    return value
+
+
+def _seed(text: str | None) -> int | None:
+    if text is None:
+        return None
+    try:
+        seed = int(text)
+    except ValueError:
+        seed = -1
+    if seed < 0:
+        raise InputError(f"--seed must be a non-negative integer, got {text!r}")
+    return seed
+
+
+def _params(args: argparse.Namespace) -> dict[str, Any]:
+    params: dict[str, Any] = {}
+    for text in args.param:
+        name, value = parse_param(text)
+        if name in params:
+            raise InputError(f"--param {name} given twice")
+        params[name] = value
+    for option, name in (("--width", "width_m"), ("--height", "height_m")):
+        value = _positive_number(getattr(args, option[2:]), option)
+        if value is not None:
+            if name in params:
+                raise InputError(f"give {option} or --param {name}, not both")
+            params[name] = value
+    return params
+
+
+def _build_world(args: argparse.Namespace, seed: int, params: dict[str, Any]) -> Any:
+    import worldgen
+
+    if args.from_houseexpo is not None:
+        if args.kind is not None:
+            raise InputError("give --kind or --from-houseexpo, not both")
+        unknown = sorted(set(params) - set(HOUSEEXPO_PARAMS))
+        if unknown:
+            raise InputError(
+                f"--from-houseexpo takes only {', '.join(HOUSEEXPO_PARAMS)}; "
+                f"got {', '.join(unknown)} (size comes from the plan)"
+            )
+        return worldgen.from_houseexpo(args.from_houseexpo, seed=seed, **params)
+    if args.kind is None:
+        raise InputError("give --kind KIND or --from-houseexpo PLAN.json")
+    from worldgen.generate import generate
+
+    # generate() rejects an unknown kind with the list of valid kinds, and bad
+    # parameters with the field name and value.
+    return generate(args.kind, seed=0 if seed is None else seed, **params)
+
+
+def _tour_options(args: argparse.Namespace) -> tuple[str, float] | None:
+    """Checked (kind, minimum length) of the tour to plan, or None for ``--no-tour``."""
+    if args.tour_kind not in TOUR_KINDS:
+        raise InputError(f"unknown --tour-kind {args.tour_kind!r}; valid: {', '.join(TOUR_KINDS)}")
+    length = _positive_number(args.tour_length, "--tour-length")
+    if args.no_tour:
+        return None
+    return args.tour_kind, float(length or DEFAULT_TOUR_LENGTH_M)
+
+
+def _plan_tour(world: Any, options: tuple[str, float] | None) -> Any:
+    if options is None:
+        return None
+    kind, length = options
+    # The tour gets its own stream so it never shifts the world's random numbers.
+    rng = spawn_rngs(world.seed or 0, 2)[1]
+    return world.tour(rng, kind=kind, min_length_m=length)
+
+
+def _write_together(outputs: dict[Path, bytes]) -> None:
+    """Write every file atomically; if any write fails, none of them appears."""
+    with contextlib.ExitStack() as stack:
+        temps = {}
+        for path in outputs:
+            try:
+                temps[path] = stack.enter_context(atomic_path(path))
+            except OSError as exc:  # name the requested file, not the temporary one
+                raise OSError(exc.errno, exc.strerror, str(path)) from exc
+        for path, tmp in temps.items():
+            tmp.write_bytes(outputs[path])
+
+
+def summary(world: Any, tour: Any, out: Path) -> str:
+    seed = "-" if world.seed is None else world.seed
+    line = (
+        f"{world.kind} seed {seed}: {world.width_m:.1f} x {world.height_m:.1f} m, "
+        f"{len(world.walls)} walls, {len(world.clutter)} clutter, "
+        f"{len(world.roadmap.nodes)} roadmap nodes"
+    )
+    if tour is not None:
+        line += f", {tour.kind} tour {tour.length_m:.1f} m"
+    return f"{line} -> {out}"
+
+
+def run(args: argparse.Namespace) -> int:
+    from worldgen.io import world_to_json
+
+    out = Path(args.out)
+    png = None if args.png is None else Path(args.png)
+    if png is not None and png.resolve() == out.resolve():
+        raise InputError(f"--out and --png are the same file: {out}")
+    seed = _seed(args.seed)
+    params = _params(args)
+    tour_options = _tour_options(args)
+    world = _build_world(args, seed, params)
+    tour = _plan_tour(world, tour_options)
+    outputs = {out: world_to_json(world).encode("utf-8")}
+    if png is not None:
+        try:
+            from albot2d.plots import render_world_png
+
+            outputs[png] = render_world_png(world, tour=tour)
+        except ImportError as exc:
+            raise InputError(f"--png needs matplotlib ({exc}); pip install 'albot2d[viz]'") from exc
+    _write_together(outputs)
+    print(summary(world, tour, out))
+    return 0
