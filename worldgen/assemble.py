@@ -18,7 +18,13 @@ from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, polygon_ring_segments
-from worldgen.roadmap import RoadmapParams, build_roadmap, count_loops, safe_regions
+from worldgen.roadmap import (
+    ClearanceChecker,
+    RoadmapParams,
+    build_roadmap,
+    count_loops,
+    roadmap_from_links,
+)
 from worldgen.world import DynamicObstacle, Roadmap, World
 
 __all__ = ["largest_polygon", "make_world", "polygon_walls"]
@@ -27,7 +33,9 @@ _MIN_PART_AREA_M2 = 1e-6  # slivers left by clipping clutter are not obstacles
 
 
 def _polygons(geom: shapely.Geometry) -> list[shapely.Polygon]:
-    parts = shapely.get_parts(shapely.make_valid(geom)) if not geom.is_empty else []
+    if geom.is_empty:
+        return []
+    parts = shapely.get_parts(geom if geom.is_valid else shapely.make_valid(geom))
     out: list[shapely.Polygon] = []
     for part in parts:
         if isinstance(part, shapely.Polygon):
@@ -58,24 +66,54 @@ def polygon_walls(poly: shapely.Polygon) -> NDArray[np.float64]:
 def _clip_clutter(
     clutter: Iterable[shapely.Geometry], structure: shapely.Polygon
 ) -> tuple[shapely.Polygon, ...]:
-    items = list(clutter)
-    if not items:
+    """Clutter clipped to the structural free space; items already inside are kept as is."""
+    items = np.asarray(list(clutter), dtype=object)
+    if len(items) == 0:
         return ()
-    clipped = shapely.intersection(np.asarray(items, dtype=object), structure)
+    shapely.prepare(structure)
+    inside = shapely.covers(structure, items) & shapely.is_valid(items)
+    inside &= shapely.get_type_id(items) == shapely.GeometryType.POLYGON
     out: list[shapely.Polygon] = []
-    for geom in clipped:
-        out.extend(shapely.normalize(p) for p in _polygons(geom))
-    return tuple(out)
+    clipped = iter(shapely.intersection(items[~inside], structure))
+    for item, ok in zip(items, inside, strict=True):
+        if ok:
+            out.append(item)
+        else:
+            out.extend(_polygons(next(clipped)))
+    return tuple(shapely.normalize(np.asarray(out, dtype=object))) if out else ()
 
 
-def _check_start(start: Pose, nodes_ok: shapely.Geometry, clearance_m: float) -> None:
+_START_LINKS = 3  # a given start is linked to this many nearest roadmap nodes
+
+
+def _check_start(start: Pose, checker: ClearanceChecker, clearance_m: float) -> None:
     if not (np.isfinite(start.x) and np.isfinite(start.y) and np.isfinite(start.theta)):
         raise InputError(f"start pose must be finite, got {start}")
-    if not shapely.contains_xy(nodes_ok, start.x, start.y):
+    if not checker.points_ok([[start.x, start.y]], clearance_m)[0]:
         raise InputError(
             f"start pose ({start.x:.3f}, {start.y:.3f}) is not in free space with "
             f"clearance {clearance_m:.2f} m"
         )
+
+
+def _attach_start(
+    roadmap: Roadmap, start: Pose, checker: ClearanceChecker, radius_m: float
+) -> Roadmap:
+    """The roadmap with the start as a node linked to its nearest safely reachable nodes."""
+    xy = np.array([start.x, start.y])
+    nodes, edges = roadmap.nodes, roadmap.edges
+    hit = np.flatnonzero((nodes == xy).all(axis=1))
+    if len(hit):
+        return roadmap
+    d = np.hypot(*(nodes - xy).T)
+    near = np.argsort(d, kind="stable")[:_START_LINKS]
+    ok = checker.segments_ok(np.column_stack([np.tile(xy, (len(near), 1)), nodes[near]]), radius_m)
+    if not ok.any():
+        raise InputError(
+            f"start pose ({start.x:.3f}, {start.y:.3f}) cannot be linked to the roadmap"
+        )
+    new = np.column_stack([near[ok], np.full(int(ok.sum()), len(nodes))])
+    return Roadmap(np.vstack([nodes, xy]), np.vstack([edges, new]).astype(np.int64))
 
 
 def _pick_start(roadmap: Roadmap, rng: np.random.Generator | None) -> Pose:
@@ -110,6 +148,7 @@ def make_world(
     seed_points: NDArray[np.float64] | None = None,
     keep_largest: bool = True,
     roadmap_params: RoadmapParams | None = None,
+    links: NDArray[np.float64] | None = None,
     bounds: tuple[float, float, float, float] | None = None,
 ) -> World:
     """Build a World from the structural free space (walls as its boundary) and clutter.
@@ -119,7 +158,9 @@ def make_world(
     result is kept; otherwise a disconnected free space is an InputError. ``start``, when
     given, must have clearance ``robot_radius_m + clearance_margin_m`` and is linked into
     the roadmap; otherwise a start is drawn on the roadmap (deterministically without
-    ``rng``). ``features`` gets ``loops`` (independent roadmap cycles) added. ``bounds``
+    ``rng``). ``links`` (``(M, 4)`` planned straight roadmap edges, as generators know
+    their corridors and doors) replaces the generic medial-axis roadmap; unsafe links are
+    dropped either way. ``features`` gets ``loops`` (independent roadmap cycles) added. ``bounds``
     defaults to the bounding box of the free space (pass it to include outer walls).
     """
     if not (np.isfinite(robot_radius_m) and robot_radius_m > 0):
@@ -146,29 +187,32 @@ def make_world(
         open_floor = shapely.normalize(largest_polygon(open_floor))
 
     clearance_m = robot_radius_m + clearance_margin_m
-    seeds = np.zeros((0, 2)) if seed_points is None else np.asarray(seed_points, float)
+    checker = ClearanceChecker(open_floor)
     if start is not None:
-        nodes_ok, _ = safe_regions(open_floor, clearance_m, robot_radius_m)
-        _check_start(start, nodes_ok, clearance_m)
-        seeds = np.vstack([[start.x, start.y], seeds.reshape(-1, 2)])
-    roadmap = build_roadmap(
-        open_floor,
-        clearance_m=clearance_m,
-        robot_radius_m=robot_radius_m,
-        seed_points=seeds if len(seeds) else None,
-        params=roadmap_params,
-    )
+        _check_start(start, checker, clearance_m)
+    if links is not None:
+        roadmap = roadmap_from_links(
+            open_floor,
+            links,
+            clearance_m=clearance_m,
+            robot_radius_m=robot_radius_m,
+            checker=checker,
+        )
+    else:
+        roadmap = build_roadmap(
+            open_floor,
+            clearance_m=clearance_m,
+            robot_radius_m=robot_radius_m,
+            seed_points=seed_points,
+            params=roadmap_params,
+        )
     if len(roadmap.nodes) == 0:
         raise InputError(
             f"free space has no place with clearance {clearance_m:.2f} m for the robot "
             f"(robot_radius_m={robot_radius_m}, clearance_margin_m={clearance_margin_m})"
         )
     if start is not None:
-        hit = np.flatnonzero((roadmap.nodes == [start.x, start.y]).all(axis=1))
-        if len(hit) == 0:
-            raise InputError(
-                f"start pose ({start.x:.3f}, {start.y:.3f}) cannot be linked to the roadmap"
-            )
+        roadmap = _attach_start(roadmap, start, checker, robot_radius_m)
     else:
         start = _pick_start(roadmap, rng)
 

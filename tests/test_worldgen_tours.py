@@ -1,0 +1,93 @@
+"""Tours: start at the start, long enough, every straight leg safe for the robot's disc."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given
+from hypothesis import strategies as st
+
+from albot2d.errors import InputError
+from albot2d.seeding import make_rng
+from worldgen import TOUR_KINDS, generate, make_world
+from worldgen.strategies import worlds
+
+
+def assert_legs_safe(world, tour):
+    legs = shapely.linestrings(tour.legs.reshape(-1, 2, 2))
+    assert shapely.covers(world.free_space, legs).all()
+    gap = shapely.distance(legs, world.free_space.boundary)
+    assert gap.min() >= world.robot_radius_m - 1e-9
+
+
+def reversals(waypoints: np.ndarray) -> int:
+    d = np.diff(waypoints, axis=0)
+    d /= np.hypot(*d.T)[:, None]
+    return int((np.einsum("ij,ij->i", d[:-1], d[1:]) < -0.95).sum())
+
+
+@given(
+    world=worlds(max_size_m=35.0),
+    kind=st.sampled_from(TOUR_KINDS),
+    length=st.sampled_from([0.0, 30.0, 120.0]),
+    seed=st.integers(0, 1000),
+)
+def test_every_tour_leg_is_collision_free(world, kind, length, seed):
+    tour = world.tour(make_rng(seed), kind=kind, min_length_m=length)
+    assert tour.kind == kind
+    assert np.array_equal(tour.waypoints[0], [world.start.x, world.start.y])
+    assert tour.length_m >= length
+    assert len(tour.waypoints) >= 2
+    assert (np.hypot(*np.diff(tour.waypoints, axis=0).T) > 0).all()  # no zero-length legs
+    assert_legs_safe(world, tour)
+    if kind in ("loop", "out_and_back"):
+        assert np.array_equal(tour.waypoints[-1], tour.waypoints[0])
+    if kind == "out_and_back":
+        assert tour.node_ids == tour.node_ids[::-1]  # back exactly the way it came
+
+
+@given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(["rooms", "office", "corridors"]))
+def test_backtracking_turns_back_and_revisits(seed, kind):
+    world = generate(kind, seed=seed, width_m=30.0, height_m=30.0)
+    tour = world.tour(make_rng(seed), kind="backtracking", min_length_m=120.0)
+    assert reversals(tour.waypoints) >= 2
+    ids = np.asarray(tour.node_ids)
+    assert len(np.unique(ids)) < len(ids)  # some places are visited again
+
+
+def test_loop_visits_far_apart_places_around_the_office():
+    world = generate("office", seed=5)
+    tour = world.tour(make_rng(0), kind="loop", min_length_m=100.0)
+    wp = tour.waypoints
+    # it goes round: the route spans most of the building in both directions
+    assert np.ptp(wp[:, 0]) > 0.5 * world.width_m and np.ptp(wp[:, 1]) > 0.5 * world.height_m
+
+
+def test_short_roadmaps_repeat_to_reach_the_length():
+    world = generate("rooms", seed=3, width_m=7.0, height_m=7.0)
+    for kind in TOUR_KINDS:
+        tour = world.tour(make_rng(1), kind=kind, min_length_m=150.0)
+        assert tour.length_m >= 150.0
+        assert_legs_safe(world, tour)
+
+
+def test_same_rng_seed_same_tour():
+    world = generate("mixed", seed=2)
+    for kind in TOUR_KINDS:
+        a = world.tour(make_rng(9), kind=kind, min_length_m=80.0)
+        b = world.tour(make_rng(9), kind=kind, min_length_m=80.0)
+        assert a.waypoints.tobytes() == b.waypoints.tobytes()
+
+
+def test_tour_errors():
+    world = generate("rooms", seed=1, width_m=10.0, height_m=10.0)
+    with pytest.raises(InputError, match=r"unknown tour kind 'spiral'.*loop, out_and_back"):
+        world.tour(make_rng(0), kind="spiral")
+    with pytest.raises(InputError, match="min_length_m"):
+        world.tour(make_rng(0), min_length_m=float("nan"))
+    with pytest.raises(InputError, match="min_length_m"):
+        world.tour(make_rng(0), min_length_m=-1.0)
+    tiny = make_world(shapely.box(0, 0, 1.0, 1.0))  # room for one node only
+    with pytest.raises(InputError, match="roadmap too small for a tour: 1 nodes"):
+        tiny.tour(make_rng(0))

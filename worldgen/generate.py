@@ -1,0 +1,95 @@
+"""``generate(kind, seed=..., **params)``: the one entry point for procedural worlds.
+
+Validates the kind and its parameters, draws everything from one Generator made from the
+seed, lays the kind out, assembles the World (walls, roadmap, start) and adds moving
+obstacles. Same kind, seed and parameters → bit-identical World in any process.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from albot2d.errors import InputError
+from albot2d.seeding import make_rng
+from albot2d.validation import params_from_mapping
+from worldgen.assemble import make_world
+from worldgen.kinds import LAYOUTS
+from worldgen.kinds._dynamic import add_dynamic_obstacles
+from worldgen.params import PARAMS_BY_KIND, CommonParams
+from worldgen.world import World
+
+__all__ = ["KINDS", "generate", "make_params"]
+
+KINDS: tuple[str, ...] = tuple(PARAMS_BY_KIND)
+
+
+def _jsonable(value: Any) -> Any:
+    """Features as plain lists, floats, ints and strings (another module saves them as JSON)."""
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    if isinstance(value, int | np.integer):
+        return int(value)
+    if isinstance(value, float | np.floating):
+        return float(value)
+    return value
+
+
+def make_params(kind: str, **params: Any) -> CommonParams:
+    """The validated parameter dataclass of ``kind`` (InputError on unknown kind or names)."""
+    if kind not in PARAMS_BY_KIND:
+        raise InputError(f"unknown world kind {kind!r}; valid kinds: {', '.join(KINDS)}")
+    given = {k: v for k, v in params.items() if v is not None or k not in {"width_m", "height_m"}}
+    return params_from_mapping(PARAMS_BY_KIND[kind], given, where=f"world kind {kind!r}")
+
+
+def generate(
+    kind: str,
+    *,
+    seed: int,
+    width_m: float | None = None,
+    height_m: float | None = None,
+    **params: Any,
+) -> World:
+    """A procedural World of ``kind`` (one of ``KINDS``) from ``seed``.
+
+    ``width_m``/``height_m`` default per kind (40x40 m; office and mixed 60x40 m); other
+    keyword parameters are the fields of the kind's dataclass in ``worldgen.params``.
+    """
+    p = make_params(kind, width_m=width_m, height_m=height_m, **params)
+    rng = make_rng(seed)
+    rect = np.array([0.0, 0.0, p.width_m, p.height_m])
+    layout = LAYOUTS[kind](rect, p, rng)
+    doorways = layout.doorway_array()
+    features: dict[str, Any] = dict(layout.features)
+    if len(doorways) or kind in {"rooms", "office", "mixed"}:
+        widths = np.hypot(doorways[:, 2] - doorways[:, 0], doorways[:, 3] - doorways[:, 1])
+        features["doorways"] = doorways.tolist()
+        features["door_widths_m"] = widths.tolist()
+    world = make_world(
+        layout.floor_geometry(),
+        clutter=layout.clutter,
+        kind=kind,
+        seed=int(seed),
+        params=dataclasses.asdict(p),
+        features=_jsonable(features),
+        robot_radius_m=p.robot_radius_m,
+        clearance_margin_m=p.clearance_margin_m,
+        rng=rng,
+        seed_points=layout.seeds(),
+        links=layout.link_array(),
+        bounds=(0.0, 0.0, p.width_m, p.height_m),
+    )
+    if p.dynamic_obstacles:
+        movers = add_dynamic_obstacles(world, p.dynamic_obstacles, rng)
+        feats = dict(world.features, dynamic_obstacles=len(movers))
+        world = dataclasses.replace(world, dynamic_obstacles=movers, features=feats)
+    return world
