@@ -12,6 +12,7 @@ from albot2d.errors import InputError
 from albot2d.geometry import Pose
 from worldgen.assemble import make_world
 from worldgen.roadmap import build_roadmap, count_loops
+from worldgen.roadmap_links import roadmap_from_links
 
 RADIUS = 0.25
 MARGIN = 0.10
@@ -124,4 +125,31 @@ def test_roadmap_safe_on_random_rectangles_with_pillars(w, h, holes):
         assert "clearance" in str(err) or "no polygon" in str(err)
         return
     assert world.free_space.geom_type == "Polygon"
+    assert_roadmap_safe(world)
+
+
+def test_planned_links_keep_only_what_is_safe():
+    # a U: two 2 m wide arms joined at the bottom, a wall between the arms
+    u = shapely.box(0, 0, 6, 8).difference(shapely.box(2, 2, 4, 8))
+    links = np.array(
+        [
+            [1, 1, 1, 7],  # up the left arm: safe, split into <= 3 m pieces
+            [1, 1, 5, 1],  # along the bottom: safe
+            [5, 1, 5, 7],  # up the right arm: safe
+            [1, 7, 5, 7],  # straight through the wall between the arms: dropped
+            [1, 4, 1.2, 4],  # a short spur inside the left arm: kept
+            [5, 4, 5.8, 4],  # ends 0.2 m from the outer wall: node unsafe, dropped
+        ],
+        dtype=float,
+    )
+    roadmap = roadmap_from_links(u, links, clearance_m=0.35, robot_radius_m=0.25)
+    nodes = roadmap.nodes
+    assert not (nodes[:, 0] > 5.5).any()
+    seg = nodes[roadmap.edges]
+    crosses = (seg[:, 0, 1] > 2) & (seg[:, 1, 1] > 2) & (seg[:, 0, 0] < 2) & (seg[:, 1, 0] > 4)
+    assert not crosses.any()
+    length = np.hypot(*(seg[:, 1] - seg[:, 0]).T)
+    assert length.max() <= 3.0 + 1e-9
+    assert np.isclose(length.sum(), 6 + 4 + 6 + 0.2)
+    world = make_world(u, links=links)
     assert_roadmap_safe(world)

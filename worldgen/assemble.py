@@ -18,13 +18,8 @@ from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, polygon_ring_segments
-from worldgen.roadmap import (
-    ClearanceChecker,
-    RoadmapParams,
-    build_roadmap,
-    count_loops,
-    roadmap_from_links,
-)
+from worldgen.roadmap import RoadmapParams, build_roadmap, count_loops
+from worldgen.roadmap_links import ClearanceChecker, roadmap_from_links
 from worldgen.world import DynamicObstacle, Roadmap, World
 
 __all__ = ["largest_polygon", "make_world", "polygon_walls"]
@@ -48,11 +43,13 @@ def _polygons(geom: shapely.Geometry) -> list[shapely.Polygon]:
 
 def largest_polygon(geom: shapely.Geometry, *, what: str = "free space") -> shapely.Polygon:
     """The largest-area polygon of ``geom`` (repaired if invalid); InputError if none."""
-    polys = _polygons(geom)
+    return _largest(_polygons(geom), what)
+
+
+def _largest(polys: list[shapely.Polygon], what: str) -> shapely.Polygon:
     if not polys:
         raise InputError(f"{what}: no polygon with positive area")
-    areas = np.array([p.area for p in polys])
-    return polys[int(np.argmax(areas))]
+    return polys[int(np.argmax(shapely.area(np.asarray(polys, dtype=object))))]
 
 
 def polygon_walls(poly: shapely.Polygon) -> NDArray[np.float64]:
@@ -172,7 +169,7 @@ def make_world(
         raise InputError("free space: no polygon with positive area")
     if len(polys) > 1 and not keep_largest:
         raise InputError(f"free space has {len(polys)} disconnected parts, expected one")
-    structure = largest_polygon(shapely.MultiPolygon(polys) if len(polys) > 1 else polys[0])
+    structure = _largest(polys, "free space")
     structure = shapely.normalize(structure)
 
     items = _clip_clutter(clutter, structure)
@@ -184,7 +181,7 @@ def make_world(
             raise InputError(
                 f"clutter splits free space into {len(open_parts)} parts, expected one"
             )
-        open_floor = shapely.normalize(largest_polygon(open_floor))
+        open_floor = shapely.normalize(_largest(open_parts, "free space"))
 
     clearance_m = robot_radius_m + clearance_margin_m
     checker = ClearanceChecker(open_floor)

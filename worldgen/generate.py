@@ -3,6 +3,24 @@
 Validates the kind and its parameters, draws everything from one Generator made from the
 seed, lays the kind out, assembles the World (walls, roadmap, start) and adds moving
 obstacles. Same kind, seed and parameters → bit-identical World in any process.
+
+``world.features`` (JSON-ready lists and numbers) holds what each kind promises:
+
+- every kind: ``loops`` (independent cycles of the roadmap); ``dynamic_obstacles`` (count)
+  when asked for.
+- ``rooms``/``office``/``mixed``: ``doorways`` ``(K, 4)`` segments across each door on the
+  wall centre line, ``door_widths_m``, ``wall_thickness_m``.
+- ``rooms``: ``rooms``, ``room_rects`` (interiors), ``room_area_m2`` [min, max].
+- ``corridors``: ``corridor_segments`` (centre lines), ``corridor_widths_m``,
+  ``corridor_width_m`` [min, max], ``dead_ends`` as ``[x, y, ux, uy, reach_m]`` (end of
+  the centre line, outward direction, how far the corridor goes on), ``junctions``,
+  ``corners``, ``corridor_loops``.
+- ``open``: ``hall_area_m2``, ``hall_fill_ratio`` (area / bounding box), ``boundary_vertices``,
+  ``pillars``, ``partition_walls``.
+- ``office``: ``rooms``, ``corridor_width_m``, ``corridor_ring`` (closed centre line),
+  ``ring_length_m``, ``cross_corridors``, ``open_areas`` (hall rectangles), ``openings``.
+- ``mixed``: ``parts`` (kind, bounds, connections to the spine, the part's own features),
+  ``part_kinds``, ``spine_width_m``.
 """
 
 from __future__ import annotations

@@ -24,18 +24,18 @@ from worldgen.world import Roadmap
 
 __all__ = [
     "BUFFER_SLACK_M",
-    "ClearanceChecker",
     "RoadmapParams",
     "build_roadmap",
+    "compact_graph",
     "count_loops",
-    "roadmap_from_links",
+    "largest_component",
     "safe_regions",
 ]
 
 # shapely approximates the arcs of a negative buffer by chords that sit a few millimetres
 # closer to reflex corners than the true arc; eroding this much further keeps the promise.
 BUFFER_SLACK_M = 0.01
-_KEY_DECIMALS = 7  # coordinate rounding used to merge coincident Voronoi vertices
+KEY_DECIMALS = 7  # coordinate rounding used to merge coincident Voronoi vertices
 
 
 @dataclass(frozen=True)
@@ -62,89 +62,6 @@ def safe_regions(
     shapely.prepare(nodes_ok)
     shapely.prepare(edges_ok)
     return nodes_ok, edges_ok
-
-
-class ClearanceChecker:
-    """Exact clearance tests against one polygon's boundary, vectorised through an STRtree.
-
-    A point is safe if it is inside the polygon and farther than ``clearance_m`` from every
-    boundary segment; a straight segment is safe if both ends are inside and no boundary
-    segment comes within ``radius_m`` of it (so it cannot cross the boundary either).
-    """
-
-    def __init__(self, polygon: shapely.Polygon) -> None:
-        rings = [polygon.exterior, *polygon.interiors]
-        segs = np.vstack([_ring_segments(r) for r in rings])
-        self.polygon = polygon
-        shapely.prepare(polygon)
-        self.tree = shapely.STRtree(shapely.linestrings(segs.reshape(-1, 2, 2)))
-
-    def points_ok(self, pts: ArrayLike, clearance_m: float) -> NDArray[np.bool_]:
-        p = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
-        ok = shapely.contains_xy(self.polygon, p[:, 0], p[:, 1])
-        hits = self.tree.query(shapely.points(p), predicate="dwithin", distance=clearance_m)
-        ok[hits[0]] = False
-        return ok
-
-    def segments_ok(self, segs: ArrayLike, radius_m: float) -> NDArray[np.bool_]:
-        s = np.asarray(segs, dtype=np.float64).reshape(-1, 4)
-        ok = shapely.contains_xy(self.polygon, s[:, 0], s[:, 1])
-        ok &= shapely.contains_xy(self.polygon, s[:, 2], s[:, 3])
-        lines = shapely.linestrings(s.reshape(-1, 2, 2))
-        hits = self.tree.query(lines, predicate="dwithin", distance=radius_m)
-        ok[hits[0]] = False
-        return ok
-
-
-def _ring_segments(ring: shapely.LinearRing) -> NDArray[np.float64]:
-    c = np.asarray(ring.coords)
-    return np.hstack([c[:-1], c[1:]])
-
-
-def _subdivide(links: NDArray[np.float64], max_len_m: float) -> NDArray[np.float64]:
-    """Split each segment into equal pieces no longer than ``max_len_m`` (vectorised)."""
-    length = np.hypot(links[:, 2] - links[:, 0], links[:, 3] - links[:, 1])
-    pieces = np.maximum(1, np.ceil(length / max_len_m - 1e-9)).astype(np.int64)
-    owner = np.repeat(np.arange(len(links)), pieces)
-    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-    k = np.arange(len(owner)) - first
-    t0 = k / pieces[owner]
-    t1 = (k + 1) / pieces[owner]
-    a, d = links[owner, :2], links[owner, 2:] - links[owner, :2]
-    return np.hstack([a + t0[:, None] * d, a + t1[:, None] * d])
-
-
-def roadmap_from_links(
-    free_space: shapely.Polygon,
-    links: ArrayLike,
-    *,
-    clearance_m: float,
-    robot_radius_m: float,
-    node_spacing_m: float = 3.0,
-    checker: ClearanceChecker | None = None,
-) -> Roadmap:
-    """A roadmap from planned straight links ``(M, 4)`` (corridor centre lines, door
-    crossings, lanes in rooms): long links are split, endpoints closer than a micrometre
-    are merged, unsafe nodes and links are dropped and the largest component is kept."""
-    segs = np.asarray(links, dtype=np.float64).reshape(-1, 4)
-    if len(segs) == 0:
-        return Roadmap(np.zeros((0, 2)), np.zeros((0, 2), dtype=np.int64))
-    segs = _subdivide(segs, node_spacing_m)
-    keys = np.round(segs.reshape(-1, 2), _KEY_DECIMALS - 1)
-    pts, inverse = np.unique(keys, axis=0, return_inverse=True)
-    edges = np.sort(inverse.reshape(-1, 2), axis=1)
-    edges = np.unique(edges[edges[:, 0] != edges[:, 1]], axis=0).astype(np.int64)
-    check = checker or ClearanceChecker(free_space)
-    node_ok = check.points_ok(pts, clearance_m)
-    edges = edges[node_ok[edges[:, 0]] & node_ok[edges[:, 1]]]
-    edge_ok = check.segments_ok(np.hstack([pts[edges[:, 0]], pts[edges[:, 1]]]), robot_radius_m)
-    edges = edges[edge_ok]
-    if len(edges) == 0:
-        good = np.flatnonzero(node_ok)
-        return Roadmap(pts[good[:1]], np.zeros((0, 2), dtype=np.int64))
-    pts, edges = _compact(pts, edges)
-    pts, edges = _largest_component(pts, edges)
-    return Roadmap(pts, edges)
 
 
 def count_loops(roadmap: Roadmap) -> int:
@@ -189,7 +106,7 @@ def build_roadmap(
         edges = np.zeros((0, 2), dtype=np.int64)
     if seed_points is not None:
         pts, edges = _link_seeds(pts, edges, seed_points, nodes_ok, edges_ok, p)
-    pts, edges = _largest_component(pts, edges)
+    pts, edges = largest_component(pts, edges)
     return Roadmap(pts, edges)
 
 
@@ -201,7 +118,7 @@ def _skeleton(
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Voronoi edges of boundary sites that keep the clearance: a dense medial skeleton."""
     sites = shapely.get_coordinates(shapely.segmentize(free_space.boundary, site_spacing_m))
-    sites = np.unique(np.round(sites, _KEY_DECIMALS), axis=0)
+    sites = np.unique(np.round(sites, KEY_DECIMALS), axis=0)
     if len(sites) < 3:
         return np.zeros((0, 2)), np.zeros((0, 2), dtype=np.int64)
     vor = shapely.voronoi_polygons(shapely.multipoints(sites), only_edges=True)
@@ -211,7 +128,7 @@ def _skeleton(
     coords = coords[a_in & b_in]
     lines = shapely.linestrings(coords.reshape(-1, 2, 2))
     coords = coords[shapely.covers(edges_ok, lines)]
-    keys = np.round(coords.reshape(-1, 2), _KEY_DECIMALS)
+    keys = np.round(coords.reshape(-1, 2), KEY_DECIMALS)
     pts, inverse = np.unique(keys, axis=0, return_inverse=True)
     edges = np.sort(inverse.reshape(-1, 2), axis=1)
     edges = np.unique(edges[edges[:, 0] != edges[:, 1]], axis=0)
@@ -285,10 +202,10 @@ def _prune_spurs(
     if not keep_edges:
         return pts, edges
     kept = np.sort(np.vstack(keep_edges), axis=1)
-    return _compact(pts, np.unique(kept, axis=0))
+    return compact_graph(pts, np.unique(kept, axis=0))
 
 
-def _compact(
+def compact_graph(
     pts: NDArray[np.float64], edges: NDArray[np.int64]
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Drop nodes no edge uses and renumber."""
@@ -395,7 +312,7 @@ def _component_labels(n: int, edges: NDArray[np.int64]) -> NDArray[np.int64]:
         labels = new
 
 
-def _largest_component(
+def largest_component(
     pts: NDArray[np.float64], edges: NDArray[np.int64]
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     if len(pts) <= 1:

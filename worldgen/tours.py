@@ -36,6 +36,7 @@ _FAR_CHOICES = 5  # pick among this many farthest places, for variety
 _MAX_TOUR_M = 1.0e6
 _BACK_P = 0.4  # backtracking: chance to head back to an earlier place
 _TURN_P = 0.6  # backtracking: chance to turn back part-way after reaching a new place
+_NEAR_FACTOR = 6.0  # backtracking: new places lie within this many _PLACE_MIN_M by road
 _LOOP_PLACES = 6  # far-apart places a loop passes through
 _LOOP_RADIUS_FRACTION = 0.5  # loop places lie within this fraction of the length (by road)
 _LOOP_RADIUS_MIN_M = 10.0
@@ -166,10 +167,13 @@ def _backtracking(
             walk += [int(v) for v in nx.shortest_path(graph, here, target, weight="weight")[1:]]
             places.append(target)
             continue
-        dist = nx.single_source_dijkstra_path_length(graph, here, weight="weight")
+        # only nearby places matter, so the search stops at the farthest one wanted
+        dist = nx.single_source_dijkstra_path_length(
+            graph, here, cutoff=_NEAR_FACTOR * _PLACE_MIN_M, weight="weight"
+        )
         ids = np.array(sorted(dist), dtype=np.int64)
         d = np.array([dist[v] for v in ids])
-        near = ids[(d >= _PLACE_MIN_M) & (d <= 6.0 * _PLACE_MIN_M)]
+        near = ids[d >= _PLACE_MIN_M]
         if len(near) == 0:
             near = ids[d == d.max()]
         target = int(near[int(rng.integers(len(near)))])

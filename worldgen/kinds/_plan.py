@@ -181,36 +181,40 @@ class Adjacency:
         return Adjacency(*(np.concatenate([getattr(p, f) for p in parts]) for f in _ADJ_FIELDS))
 
 
+def _touching(a_vals: FloatArray, b_vals: FloatArray) -> tuple[NDArray[np.int64], ...]:
+    """All index pairs (i, j) with ``a_vals[i]`` equal to ``b_vals[j]`` (within 1e-7)."""
+    order = np.argsort(b_vals, kind="stable")
+    sorted_b = b_vals[order]
+    lo = np.searchsorted(sorted_b, a_vals - 1e-7, side="left")
+    hi = np.searchsorted(sorted_b, a_vals + 1e-7, side="right")
+    count = hi - lo
+    ii = np.repeat(np.arange(len(a_vals)), count)
+    k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+    jj = order[np.repeat(lo, count) + k]
+    return ii.astype(np.int64), jj.astype(np.int64)
+
+
 def adjacency(
     a: FloatArray, b: FloatArray | None = None, *, min_overlap_m: float = 0.0
 ) -> Adjacency:
     """All pairs of rectangles (from ``a`` and ``b``, or within ``a``) that share a wall
-    stretch at least ``min_overlap_m`` long. Vectorised over all pairs."""
+    stretch at least ``min_overlap_m`` long. Matches edges by sorting, not all pairs."""
     same = b is None
     A = np.asarray(a, float).reshape(-1, 4)
     B = A if same else np.asarray(b, float).reshape(-1, 4)
     parts = []
     for axis in (0, 1):
         o = 1 - axis
-        lo = np.maximum(A[:, None, o], B[None, :, o])
-        hi = np.minimum(A[:, None, 2 + o], B[None, :, 2 + o])
         for (a_side, b_side), sign in (((2 + axis, axis), 1.0), ((axis, 2 + axis), -1.0)):
-            touch = np.abs(A[:, None, a_side] - B[None, :, b_side]) < 1e-7
-            ok = touch & (hi - lo >= min_overlap_m)
+            ii, jj = _touching(A[:, a_side], B[:, b_side])
+            lo = np.maximum(A[ii, o], B[jj, o])
+            hi = np.minimum(A[ii, 2 + o], B[jj, 2 + o])
+            ok = hi - lo >= min_overlap_m
             if same:
-                ok &= np.arange(len(A))[:, None] < np.arange(len(B))[None, :]
-            ii, jj = np.nonzero(ok)
-            coord = A[ii, a_side]
+                ok &= ii < jj
+            ii, jj, lo, hi = ii[ok], jj[ok], lo[ok], hi[ok]
             parts.append(
-                (
-                    ii,
-                    jj,
-                    np.full(len(ii), axis),
-                    coord,
-                    lo[ii, jj],
-                    hi[ii, jj],
-                    np.full(len(ii), sign),
-                )
+                (ii, jj, np.full(len(ii), axis), A[ii, a_side], lo, hi, np.full(len(ii), sign))
             )
     cat = [np.concatenate([p[k] for p in parts]) for k in range(7)]
     order = np.lexsort((cat[1], cat[0]))
