@@ -214,6 +214,23 @@ def test_laser_sees_moving_obstacles_and_run_stays_collision_free() -> None:
     assert off_static > 0  # some beams hit the person or the box
 
 
+@pytest.mark.parametrize(("kind", "seed"), [("corridors", 5), ("office", 2)])
+def test_follows_a_generated_loop_tour_back_to_its_start(kind: str, seed: int) -> None:
+    from worldgen.generate import generate
+
+    world = generate(kind, seed=seed)
+    tour = world.tour(make_rng(0), kind="loop", min_length_m=30.0)
+    sim = Simulator(world, seed=1, laser_noise=LaserNoise.zero())
+    frames = list(sim.drive(tour, "dataset1"))
+    assert not any(f.collided for f in frames)
+    assert frames[-1].true_pose.distance_to(world.start) < 0.03
+    xy = np.array([[f.true_pose.x, f.true_pose.y] for f in frames])
+    clearance = point_segment_distance(xy, world.obstacle_segments).min()
+    assert clearance >= world.robot_radius_m - 1e-9
+    travelled = sum(a.true_pose.distance_to(b.true_pose) for a, b in itertools.pairwise(frames))
+    assert travelled == pytest.approx(tour.length_m, rel=1e-6)
+
+
 def test_person_starts_at_its_pose_on_the_path_and_faces_its_way() -> None:
     walk = np.array([[2.0, 7.0], [4.0, 7.0], [4.0, 5.0]])
     mover = dataclasses.replace(person(walk), pose=Pose(3.0, 7.2, 0.0))

@@ -1,0 +1,69 @@
+"""Speed of the simulator on a generated office world.
+
+- one full step (move + scan + odometry), the unit of every simulated run;
+- the robot's swept-disc move alone, and one laser scan alone, to split the step;
+- frames per second driving a dataset1 tour (with moving obstacles too).
+
+Run: ``python -m pytest benchmarks/test_simulator.py --benchmark-only``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import pytest
+
+from albot2d.seeding import make_rng
+from albot2d.sim.laser import Laser
+from albot2d.sim.odometry import NOISE_PRESETS
+from albot2d.sim.robot import KinematicRobot
+from albot2d.sim.simulator import Simulator
+from worldgen.generate import generate
+from worldgen.space import build_space
+
+
+@pytest.fixture(scope="module")
+def office():
+    world = generate("office", seed=11)
+    return dataclasses.replace(world, dynamic_obstacles=())
+
+
+@pytest.fixture(scope="module")
+def long_tour(office):
+    return office.tour(make_rng(1), kind="loop", min_length_m=400.0)
+
+
+def test_simulator_step(benchmark, office, long_tour) -> None:
+    """One dataset1 step: a 10 cm move or 1° turn, odometry noise, a 181-beam noisy scan."""
+    sim = Simulator(office, seed=3, odometry=NOISE_PRESETS["typical"])
+    frames = sim.drive(long_tour, "dataset1")
+    next(frames)
+    frame = benchmark.pedantic(lambda: next(frames), rounds=3000, iterations=1, warmup_rounds=50)
+    assert frame.index > 3000
+
+
+def test_robot_move_10cm(benchmark, office) -> None:
+    robot = KinematicRobot(build_space(office), pose=office.start)
+    steps = itertools.cycle([0.1] * 10 + [-0.1] * 10)
+    result = benchmark(lambda: robot.move(next(steps)))
+    assert result.distance_m > 0.0 or result.collided
+
+
+def test_laser_scan_181(benchmark, office) -> None:
+    laser = Laser(office.obstacle_segments)
+    rng = make_rng(0)
+    scan = benchmark(laser.scan, office.start, rng)
+    assert scan.valid.any()
+
+
+@pytest.mark.parametrize("with_obstacles", [False, True])
+def test_dataset1_frames_per_second(benchmark, office, with_obstacles: bool) -> None:
+    world = generate("office", seed=11, dynamic_obstacles=6) if with_obstacles else office
+    tour = world.tour(make_rng(1), kind="loop", min_length_m=100.0)
+    sim = Simulator(world, seed=3, odometry=NOISE_PRESETS["typical"])
+    count = benchmark.pedantic(lambda: sum(1 for _ in sim.drive(tour, "dataset1")), rounds=3,
+                               iterations=1)
+    benchmark.extra_info["frames"] = count
+    benchmark.extra_info["frames_per_s"] = count / benchmark.stats.stats.mean
+    assert count > 1000
