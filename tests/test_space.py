@@ -8,7 +8,7 @@ import numpy as np
 import pymunk
 import pytest
 import shapely
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.test_worldgen_io import sample_world
@@ -21,6 +21,7 @@ from worldgen.space import (
     convex_parts,
     obstacle_bodies,
 )
+from worldgen.strategies import worlds as generated_worlds
 
 ALL = pymunk.ShapeFilter()
 RAY_LENGTH_M = 100.0
@@ -37,7 +38,7 @@ def _ray_distance(origin: np.ndarray, angle: float, segments: np.ndarray) -> flo
     e = b - a
     denom = d[0] * e[:, 1] - d[1] * e[:, 0]
     w = a - origin
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         t = (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / denom
         s = (w[:, 0] * d[1] - w[:, 1] * d[0]) / denom
     hit = (np.abs(denom) > 1e-12) & (t >= 0) & (s >= 0) & (s <= 1)
@@ -118,3 +119,19 @@ def test_convex_parts_cover_a_polygon_with_a_hole() -> None:
     assert sum(shapely.Polygon(p).area for p in parts) == pytest.approx(ring.area)
     assert shapely.union_all([shapely.Polygon(p) for p in parts]).equals(ring)
     assert convex_parts(shapely.Polygon()) == []
+
+
+@settings(max_examples=10)
+@given(generated_worlds(max_size_m=30.0, dynamic=True), st.floats(-math.pi, math.pi))
+def test_generated_worlds_give_matching_spaces(world, angle: float) -> None:
+    space = build_space(world)
+    assert len(_shapes(space, COLLISION_WALL)) == len(world.walls)
+    clutter_area = sum(s.area for s in _shapes(space, COLLISION_CLUTTER))
+    assert clutter_area == pytest.approx(sum(p.area for p in world.clutter), rel=1e-9, abs=1e-9)
+    assert len(obstacle_bodies(space)) == len(world.dynamic_obstacles)
+    static = build_space(world, include_dynamic=False)
+    origin = world.start.position
+    end = origin + RAY_LENGTH_M * np.array([math.cos(angle), math.sin(angle)])
+    hit = static.segment_query_first(tuple(origin), tuple(end), 0.0, ALL)
+    expected = _ray_distance(origin, angle, world.obstacle_segments)
+    assert hit is not None and math.dist(origin, hit.point) == pytest.approx(expected, abs=1e-9)

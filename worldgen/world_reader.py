@@ -23,17 +23,41 @@ FORMAT_NAME = "albot2d-world"
 FORMAT_VERSION = 1
 TYPE_TAG = "__type__"
 _WORLD_KEYS = frozenset(
-    {
-        "format", "version", "kind", "seed", "robot_radius_m", "bounds", "start", "walls",
-        "clutter", "free_space", "roadmap", "dynamic_obstacles", "params", "features",
-    }
-)  # fmt: skip
+    [
+        "format",
+        "version",
+        "kind",
+        "seed",
+        "robot_radius_m",
+        "bounds",
+        "start",
+        "walls",
+        "clutter",
+        "free_space",
+        "roadmap",
+        "dynamic_obstacles",
+        "params",
+        "features",
+    ]
+)
 _OBSTACLE_KEYS = frozenset({"kind", "shape", "pose", "path", "speed_m_s", "mass_kg"})
 _OBSTACLE_KINDS = ("box", "person")
 ARRAY_DTYPES = frozenset(
-    {"bool", "int8", "int16", "int32", "int64", "uint8", "uint16", "uint32", "uint64",
-     "float16", "float32", "float64"}
-)  # fmt: skip
+    [
+        "bool",
+        "int8",
+        "int16",
+        "int32",
+        "int64",
+        "uint8",
+        "uint16",
+        "uint32",
+        "uint64",
+        "float16",
+        "float32",
+        "float64",
+    ]
+)
 
 
 def _type_name(value: Any) -> str:
@@ -100,7 +124,7 @@ class WorldReader:
 
     def ring(self, value: Any, field: str) -> np.ndarray:
         arr = self.rows(value, field, 2, "[x, y]")
-        if len(np.unique(arr, axis=0)) < 3:
+        if len({(x, y) for x, y in arr.tolist()}) < 3:
             raise self.fail(f"{field} needs at least 3 distinct points, got {len(arr)} points")
         return arr
 
