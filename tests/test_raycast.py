@@ -125,6 +125,8 @@ def test_index_equals_brute_force_and_hits_lie_on_walls(
     assert_same_ranges(got, want, r_max, segs, (ox, oy), angles)
     hit = np.isfinite(got)
     assert np.all(got[hit] <= r_max * (1 + 1e-12))
+    # A ray grazing a segment end meets the line at a float-precision angle: exempt.
+    hit &= ~grazing(segs, (ox, oy), angles)
     pts = np.column_stack([ox + got * np.cos(angles), oy + got * np.sin(angles)])[hit]
     if len(pts):
         assert point_segment_distance(pts, segs).min(axis=1).max() < EXACT_M
@@ -147,9 +149,10 @@ def test_rigid_motion_of_world_and_laser_leaves_scan_unchanged(
     after = RayCaster(transform_segments(m.as_array(), segs)).cast(
         moved_origin, FAN + th + m.theta, r_max
     )
-    both = np.isfinite(before) & np.isfinite(after)
+    ok = grazing(segs, (ox, oy), FAN + th)
+    both = np.isfinite(before) & np.isfinite(after) & ~ok
     np.testing.assert_allclose(after[both], before[both], rtol=1e-9, atol=1e-9)
-    differ = np.isfinite(before) != np.isfinite(after)
+    differ = (np.isfinite(before) != np.isfinite(after)) & ~ok
     assert np.all(np.abs(np.where(np.isfinite(before), before, after)[differ] - r_max) < 1e-7)
 
 

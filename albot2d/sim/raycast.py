@@ -18,8 +18,8 @@ the size of the world. Results are exact segment intersections, not grid approxi
 
 Numerical conventions (all tested):
 
-- A ray through a vertex shared by two walls is never lost: each wall's direction interval
-  is closed and both walls compare the ray against the very same computed vertex angle.
+- A ray through a vertex shared by two walls is never lost: direction intervals are
+  half-open and both walls compare the ray against the very same computed vertex angle.
 - A ray parallel to a wall never hits it, except a wall seen exactly edge-on (the origin on
   its line, within ``contact_tolerance_m``) whose near end is hit by the ray pointing at it.
 - An origin within ``contact_tolerance_m`` of a wall is inside it: every range is 0.
@@ -45,7 +45,7 @@ FloatArray = NDArray[np.float64]
 _TWO_PI = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
 #: Aim for about this many pieces per grid cell when the cell size is chosen automatically.
-_AUTO_PIECES_PER_CELL = 2.0
+_AUTO_PIECES_PER_CELL = 8.0
 #: Never allocate more grid cells than this many per segment (sparse, sprawling worlds).
 _MAX_CELLS_PER_SEGMENT = 16
 #: Segments shorter than this are numerically zero-length and dropped.
@@ -53,6 +53,8 @@ MIN_SEGMENT_LENGTH_M = 1e-12
 #: Cuts closer than this to an end or to the previous cut are skipped, so no piece is a
 #: sliver; a piece then pokes at most this far into a neighbouring cell (queries pad more).
 _MIN_PIECE_M = 1e-10
+#: Up to this many grid rows, a query copies row runs by slicing instead of fancy indexing.
+_MAX_SLICED_ROWS = 64
 
 
 def _readonly(arr: np.ndarray) -> np.ndarray:
@@ -72,8 +74,8 @@ class BeamFan:
     order: NDArray[np.intp] | None  # sorting permutation, None when already sorted
     mid_rad: float  # centre of the fan
     half_span_rad: float  # half the angular width covered
-    ext_rel: FloatArray  # (2B,) sorted centred angles, then the same + 2 pi
-    ext_dir: NDArray[np.complex128]  # (2B,) unit directions e^{i angle} matching ext_rel
+    ext_rel: FloatArray  # (3B,) sorted centred angles - 2 pi, the same, the same + 2 pi
+    ext_dir: NDArray[np.complex128]  # (3B,) unit directions e^{i angle} matching ext_rel
 
     @classmethod
     def from_angles(cls, angles: ArrayLike) -> BeamFan:
@@ -97,8 +99,8 @@ class BeamFan:
             order=order,
             mid_rad=mid,
             half_span_rad=half,
-            ext_rel=_readonly(np.concatenate([centred, centred + _TWO_PI])),
-            ext_dir=_readonly(np.concatenate([directions, directions])),
+            ext_rel=_readonly(np.concatenate([centred - _TWO_PI, centred, centred + _TWO_PI])),
+            ext_dir=_readonly(np.concatenate([directions, directions, directions])),
         )
 
     @property
@@ -119,13 +121,16 @@ def _clean_segments(segments: ArrayLike, what: str = "segments") -> FloatArray:
 
 
 def _piece_table(segs: FloatArray) -> NDArray[np.complex128]:
-    """``(N, 3)`` complex rows ``[a, b, conj(n)]``: endpoints and conjugated unit normal."""
+    """``(3, N)`` complex rows: endpoints a, b and the conjugated unit normal.
+
+    Field-major so a query's pieces are three contiguous rows. With n = -i e / |e|,
+    Re(z * conj(n)) is the dot product z · n.
+    """
     a = segs[:, 0] + 1j * segs[:, 1]
     b = segs[:, 2] + 1j * segs[:, 3]
     e = b - a
-    # n = -i e / |e| is a unit normal; conj(n) makes Re(z * conj(n)) the dot product z · n.
     conj_n = np.conj(-1j * e / np.abs(e))
-    return np.column_stack([a, b, conj_n])
+    return np.ascontiguousarray(np.vstack([a, b, conj_n]))
 
 
 def _split_at_grid(
@@ -177,7 +182,7 @@ class RayCaster:
     """Exact raycasting against fixed segments (``(N, 4)`` ``[x1, y1, x2, y2]``, metres).
 
     ``cell_size_m`` is the grid pitch of the spatial index (default: chosen from the
-    segment density, about two pieces per cell). ``contact_tolerance_m`` is how close the
+    segment density, about eight pieces per cell). ``contact_tolerance_m`` is how close the
     origin must be to a wall's line to count as on it (see the module docstring).
     A RayCaster is immutable after construction and safe to share between threads.
     """
@@ -220,7 +225,7 @@ class RayCaster:
         cell_id = np.clip(iy, 0, self._ny - 1) * self._nx + np.clip(ix, 0, self._nx - 1)
         order = np.argsort(cell_id, kind="stable")
         self.n_pieces = len(pieces)
-        self._table = _readonly(_piece_table(pieces[order]))
+        self._table = _readonly(_piece_table(pieces[order]))  # (3, n_pieces)
         counts = np.bincount(cell_id, minlength=self._nx * self._ny)
         self._cell_start = _readonly(np.concatenate([[0], np.cumsum(counts)]).astype(np.intp))
 
@@ -229,23 +234,26 @@ class RayCaster:
         return len(self.segments)
 
     def pieces_in_box(self, xmin: float, ymin: float, xmax: float, ymax: float) -> np.ndarray:
-        """Table rows of every piece in a grid cell that the box touches (row-major runs)."""
+        """Table columns ``(3, K)`` of every piece in a grid cell the box touches."""
         c, nx = self.cell_size_m, self._nx
         ix0 = max(math.floor((xmin - self._x0) / c), 0)
         iy0 = max(math.floor((ymin - self._y0) / c), 0)
         ix1 = min(math.floor((xmax - self._x0) / c), nx - 1)
         iy1 = min(math.floor((ymax - self._y0) / c), self._ny - 1)
         if ix1 < ix0 or iy1 < iy0:
-            return self._table[:0]
+            return self._table[:, :0]
         starts = self._cell_start[iy0 * nx + ix0 : iy1 * nx + ix0 + 1 : nx]
         ends = self._cell_start[iy0 * nx + ix1 + 1 : iy1 * nx + ix1 + 2 : nx]
-        if len(starts) == 1:
-            return self._table[starts[0] : ends[0]]
+        table = self._table
+        if len(starts) <= _MAX_SLICED_ROWS:
+            # A few contiguous copies beat building and applying a fancy index.
+            runs = [table[:, a:b] for a, b in zip(starts.tolist(), ends.tolist(), strict=True)]
+            return runs[0] if len(runs) == 1 else np.concatenate(runs, axis=1)
         counts = ends - starts
         cum = np.cumsum(counts)
         total = int(cum[-1])
         rows = np.arange(total) + np.repeat(starts - cum + counts, counts)
-        return self._table[rows]
+        return table[:, rows]
 
     def cast(
         self,
@@ -280,7 +288,7 @@ class RayCaster:
         if extra_segments is not None:
             extra = _clean_segments(extra_segments, "extra_segments")
             if len(extra):
-                table = np.concatenate([table, _piece_table(extra)])
+                table = np.concatenate([table, _piece_table(extra)], axis=1)
         return _cast_pieces(table, ox, oy, mid, heading, fan, r_max, self.contact_tolerance_m)
 
 
@@ -310,6 +318,17 @@ def _fan_box(
     return min(xs) - pad, min(ys) - pad, max(xs) + pad, max(ys) + pad
 
 
+_ARANGE = np.arange(1 << 12)
+
+
+def _arange(n: int) -> NDArray[np.intp]:
+    """``np.arange(n)`` as a view of a cached, grow-only array (saves an allocation a scan)."""
+    global _ARANGE
+    if n > len(_ARANGE):
+        _ARANGE = np.arange(max(n, 2 * len(_ARANGE)))
+    return _ARANGE[:n]
+
+
 def _cast_pieces(
     table: np.ndarray,
     ox: float,
@@ -320,46 +339,56 @@ def _cast_pieces(
     r_max: float,
     tol: float,
 ) -> FloatArray:
-    """The vectorised kernel: ranges of every beam of ``fan`` against the pieces ``table``."""
+    """The vectorised kernel: ranges of every beam of ``fan`` against the pieces ``table``.
+
+    ``table`` is ``(3, K)`` complex: rows endpoint a, endpoint b, conj(unit normal). The
+    calls are ufuncs and array methods on purpose: at a few hundred pieces a scan is
+    dominated by per-call overhead, not arithmetic.
+    """
     n_beams = fan.n_beams
-    if len(table) == 0:
+    if table.shape[1] == 0:
         return np.full(n_beams, np.inf)
-    origin = complex(ox, oy)
-    rel = table[:, :2] - origin  # endpoints relative to the origin, (K, 2)
-    s = (rel[:, 0] * table[:, 2]).real  # signed distance from the origin to each line
-    w = None
-    if np.abs(s).min() <= tol:
-        rel, s, w, inside = _degenerate(rel, s, table[:, 2], tol)
+    conj_n = table[2]
+    x = table[0:2].real - ox  # (2, K) endpoint coordinates relative to the origin
+    y = table[0:2].imag - oy
+    s = x[0] * conj_n.real - y[0] * conj_n.imag  # signed distance origin → line
+    # w = 1 / (foot of the perpendicular), so a beam of world direction d meets the line at
+    # 1 / Re(d * w). Turning w by the heading lets the fan's own directions stand in for d.
+    turn = complex(math.cos(heading), math.sin(heading))
+    edge_on = None
+    if abs(s).min() <= tol:
+        inside, w, edge_on = _degenerate(x, y, s, conj_n, tol)
         if inside:
             return np.zeros(n_beams)
-    if w is None:
-        w = table[:, 2] / s  # = 1 / (foot of the perpendicular), so d·n/s = Re(d * w)
-    # Directions of both endpoints, relative to the fan centre, in [-pi, pi].
-    turned = rel * complex(math.cos(mid), -math.sin(mid))
-    ang = np.arctan2(turned.imag, turned.real)
-    amin = np.minimum(ang[:, 0], ang[:, 1])
-    amax = np.maximum(ang[:, 0], ang[:, 1])
-    # A piece subtends less than pi; a larger gap means its interval wraps through ±pi.
-    wrap = (amax - amin) > math.pi
-    lo = np.where(wrap, amax, amin)
-    hi = np.where(wrap, amin + _TWO_PI, amax)
-    first = np.searchsorted(fan.ext_rel, lo, side="left")
-    last = np.searchsorted(fan.ext_rel, hi, side="right")
-    counts = last - first
-    cum = np.cumsum(counts)
+        w *= turn
+    else:
+        w = (conj_n * turn) * (1.0 / s)
+    ang = np.arctan2(y, x)  # endpoint directions...
+    ang -= mid  # ...relative to the fan centre, in (-2 pi, 2 pi)
+    # Beams from each endpoint's direction on; ext_rel repeats the fan at ±2 pi, so moving
+    # a direction by 2 pi moves its index by exactly n_beams. Intervals are half-open,
+    # [first, last): of two walls meeting at a vertex, exactly one owns a ray through it.
+    idx = fan.ext_rel.searchsorted(ang)
+    if edge_on is not None:  # a point-like target: close its interval to catch the ray
+        idx[1, edge_on] = fan.ext_rel.searchsorted(ang[1, edge_on], side="right")
+    first = np.minimum(idx[0], idx[1])
+    span = abs(idx[1] - idx[0])
+    # A piece subtends less than pi; a larger gap means it spans the ±pi seam, and its
+    # beams run from the larger index to the smaller one one turn later.
+    wrap = abs(ang[1] - ang[0]) > math.pi
+    first += wrap * span
+    counts = span + wrap * (n_beams - 2 * span)
+    cum = counts.cumsum()
     n_pairs = int(cum[-1])
-    den_ext = np.zeros(2 * n_beams)
+    # 1 / range per beam; no pair leaves 2 * r_max, beyond range like any hit past r_max.
+    den = np.empty(3 * n_beams)
+    den.fill(0.5 / r_max)
     if n_pairs:
-        pos = np.repeat(first - cum + counts, counts)
-        pos += np.arange(n_pairs)
-        ext_dir = fan.ext_dir
-        if heading != 0.0:
-            ext_dir = ext_dir * complex(math.cos(heading), math.sin(heading))
-        den = (ext_dir[pos] * np.repeat(w, counts)).real
-        np.maximum.at(den_ext, pos, den)
-    den_b = np.maximum(den_ext[:n_beams], den_ext[n_beams:])
-    ranges = np.full(n_beams, np.inf)
-    np.divide(1.0, den_b, out=ranges, where=den_b * r_max >= 1.0)
+        pos = (first + counts - cum).repeat(counts)
+        pos += _arange(n_pairs)
+        np.maximum.at(den, pos, (fan.ext_dir[pos] * w.repeat(counts)).real)
+    ranges = 1.0 / den.reshape(3, n_beams).max(axis=0)
+    ranges[ranges > r_max] = np.inf
     if fan.order is not None:
         unsorted = np.empty_like(ranges)
         unsorted[fan.order] = ranges
@@ -368,29 +397,28 @@ def _cast_pieces(
 
 
 def _degenerate(
-    rel: np.ndarray, s: FloatArray, conj_n: np.ndarray, tol: float
-) -> tuple[np.ndarray, FloatArray, np.ndarray, bool]:
-    """Handle pieces whose line passes within ``tol`` of the origin.
+    x: FloatArray, y: FloatArray, s: FloatArray, conj_n: np.ndarray, tol: float
+) -> tuple[bool, np.ndarray, NDArray[np.bool_]]:
+    """Pieces whose line passes within ``tol`` of the origin; returns (inside, w, edge_on).
 
-    Returns adjusted (rel, s, w, inside): ``inside`` when the origin is on a piece; pieces
-    seen edge-on collapse to their near endpoint, hit only by the ray that points at it.
+    ``inside`` when the origin is on a piece. A piece seen edge-on collapses (in place, in
+    ``x`` and ``y``) to its near endpoint, hit only by the ray that points straight at it.
     """
-    deg = np.abs(s) <= tol
-    za, zb = rel[deg, 0], rel[deg, 1]
+    deg = abs(s) <= tol
+    za = x[0, deg] + 1j * y[0, deg]
+    zb = x[1, deg] + 1j * y[1, deg]
     e = zb - za
     length = np.abs(e)
     t = -(za * np.conj(e)).real / (length * length)
     slack = tol / length
     if ((t >= -slack) & (t <= 1.0 + slack)).any():
-        return rel, s, conj_n, True
+        return True, conj_n, deg
     near = np.where(np.abs(za) <= np.abs(zb), za, zb)
-    rel = rel.copy()
-    rel[deg, 0] = near
-    rel[deg, 1] = near
-    s = np.where(deg, 1.0, s)
-    w = conj_n / s
+    x[:, deg] = near.real
+    y[:, deg] = near.imag
+    w = conj_n / np.where(deg, 1.0, s)
     w[deg] = 1.0 / near
-    return rel, s, w, False
+    return False, w, deg
 
 
 def cast_brute_force(

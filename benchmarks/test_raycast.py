@@ -1,0 +1,136 @@
+"""Speed of the laser's raycasting: ours against a per-beam pymunk ``segment_query_first`` loop.
+
+Worlds are office grids of 4 m rooms with a 1 m door in every inner wall (much more to see
+than rooms on a corridor): 12 × 12 rooms ≈ 576 walls and 112 × 112 rooms ≈ 50,000 walls.
+The robot stands at random poses inside rooms; each call is one 181-beam, 180°, 30 m scan.
+Both casters see the same segments (pymunk: static ``Segment`` shapes of radius 0).
+
+Run: ``python -m pytest benchmarks/test_raycast.py --benchmark-only``; compare the groups'
+mean times, and ``extra_info['Mrays_per_s']``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pymunk
+import pytest
+
+from albot2d.frames import beam_angles
+from albot2d.geometry import Pose
+from albot2d.sim.laser import Laser, LaserNoise
+from albot2d.sim.raycast import BeamFan, RayCaster
+from tests.raycast_helpers import office_segments
+
+MAX_RANGE_M = 30.0
+ROOM_M = 4.0
+N_POSES = 64
+SIZES = {"500walls": 12, "50kwalls": 112}
+
+
+def room_poses(n_rooms: int, seed: int = 0) -> list[tuple[float, float, float]]:
+    rng = np.random.default_rng(seed)
+    centre = (rng.integers(0, n_rooms, (N_POSES, 2)) + 0.5) * ROOM_M
+    xy = centre + rng.uniform(-1.3, 1.3, (N_POSES, 2))
+    th = rng.uniform(-math.pi, math.pi, N_POSES)
+    return [(float(x), float(y), float(t)) for (x, y), t in zip(xy, th, strict=True)]
+
+
+def pymunk_space(segments: np.ndarray) -> pymunk.Space:
+    space = pymunk.Space()
+    shapes = [pymunk.Segment(space.static_body, (a, b), (c, d), 0.0) for a, b, c, d in segments]
+    space.add(*shapes)
+    return space
+
+
+def pymunk_scan(space: pymunk.Space, pose: tuple[float, float, float], angles: np.ndarray):
+    x, y, th = pose
+    ends = np.column_stack(
+        [x + MAX_RANGE_M * np.cos(angles + th), y + MAX_RANGE_M * np.sin(angles + th)]
+    ).tolist()
+    query, everything = space.segment_query_first, pymunk.ShapeFilter()
+    out = []
+    for end in ends:
+        hit = query((x, y), end, 0.0, everything)
+        out.append(hit.alpha * MAX_RANGE_M if hit is not None else math.inf)
+    return out
+
+
+@pytest.fixture(scope="module", params=list(SIZES))
+def world(request):
+    n = SIZES[request.param]
+    segs = office_segments(n, ROOM_M)
+    return request.param, segs, room_poses(n)
+
+
+def rays_per_s(benchmark, n_rays: int) -> None:
+    benchmark.extra_info["Mrays_per_s"] = round(n_rays / benchmark.stats.stats.mean / 1e6, 3)
+
+
+def test_ours_181(benchmark, world) -> None:
+    name, segs, poses = world
+    benchmark.group = f"raycast-{name}"
+    caster = RayCaster(segs)
+    fan = BeamFan.from_angles(beam_angles(181))
+    cycle = itertools.cycle(poses)
+
+    def one_scan():
+        x, y, th = next(cycle)
+        return caster.cast((x, y), fan, MAX_RANGE_M, heading=th)
+
+    ranges = benchmark(one_scan)
+    assert ranges.shape == (181,)
+    benchmark.extra_info["walls"] = len(segs)
+    rays_per_s(benchmark, 181)
+
+
+def test_pymunk_181(benchmark, world) -> None:
+    name, segs, poses = world
+    benchmark.group = f"raycast-{name}"
+    space = pymunk_space(segs)
+    angles = beam_angles(181)
+    # Same answers as ours (pymunk reports hits as a float fraction of the query length).
+    caster = RayCaster(segs)
+    for pose in poses[:8]:
+        ours = caster.cast(pose[:2], angles + pose[2], MAX_RANGE_M)
+        theirs = np.array(pymunk_scan(space, pose, angles))
+        np.testing.assert_allclose(ours, theirs, atol=1e-6)
+    cycle = itertools.cycle(poses)
+    benchmark(lambda: pymunk_scan(space, next(cycle), angles))
+    benchmark.extra_info["walls"] = len(segs)
+    rays_per_s(benchmark, 181)
+
+
+def test_ours_361(benchmark, world) -> None:
+    name, segs, poses = world
+    benchmark.group = f"raycast-{name}"
+    caster = RayCaster(segs)
+    fan = BeamFan.from_angles(beam_angles(361))
+    cycle = itertools.cycle(poses)
+
+    def one_scan():
+        x, y, th = next(cycle)
+        return caster.cast((x, y), fan, MAX_RANGE_M, heading=th)
+
+    benchmark(one_scan)
+    rays_per_s(benchmark, 361)
+
+
+def test_laser_scan_sick_noise(benchmark, world) -> None:
+    """A whole noisy ``Laser.scan`` (jitter, mixed pixels, noise, quantisation, dropouts)."""
+    name, segs, poses = world
+    benchmark.group = f"raycast-{name}"
+    laser = Laser(segs, noise=LaserNoise.sick_lms200())
+    rng = np.random.default_rng(0)
+    cycle = itertools.cycle([Pose(*p) for p in poses])
+    benchmark(lambda: laser.scan(next(cycle), rng))
+    rays_per_s(benchmark, 181)
+
+
+def test_index_build(benchmark, world) -> None:
+    _, segs, _ = world
+    benchmark.group = "raycast-index-build"
+    benchmark.extra_info["walls"] = len(segs)
+    benchmark.pedantic(RayCaster, args=(segs,), rounds=3, iterations=1)
