@@ -42,6 +42,7 @@ DEFAULT_DPI = 120
 FIGURE_LONG_SIDE_IN = 9.0
 FIGURE_SHORT_SIDE_MIN_IN = 3.5
 PLOT_MARGIN_FRACTION = 0.02
+DETAIL_SIZE_M = 80.0  # worlds larger than this get proportionally thinner lines
 
 
 def _new_axes(world: World) -> Axes:
@@ -133,15 +134,19 @@ def plot_world(
                 facecolors=CLUTTER_COLOR, edgecolors="#555555", linewidths=0.5, zorder=2,
             )
         )  # fmt: skip
+    # Thinner lines and smaller dots in big worlds, so detail does not drown in ink.
+    thin = min(1.0, DETAIL_SIZE_M / max(world.width_m, world.height_m))
     walls = world.walls.reshape(-1, 2, 2)
-    ax.add_collection(LineCollection(walls, colors=WALL_COLOR, linewidths=1.2, zorder=3))
+    ax.add_collection(
+        LineCollection(walls, colors=WALL_COLOR, linewidths=max(0.4, 1.2 * thin), zorder=3)
+    )
     if show_roadmap and len(world.roadmap.nodes):
         nodes = world.roadmap.nodes
         edges = nodes[world.roadmap.edges]
         ax.add_collection(
-            LineCollection(edges, colors=ROADMAP_COLOR, linewidths=0.6, alpha=0.7, zorder=1)
+            LineCollection(edges, colors=ROADMAP_COLOR, linewidths=0.6 * thin, alpha=0.7, zorder=1)
         )
-        ax.plot(*nodes.T, ".", color=ROADMAP_COLOR, ms=2.5, zorder=1)
+        ax.plot(*nodes.T, ".", color=ROADMAP_COLOR, ms=2.5 * thin, zorder=1)
     _draw_obstacles(ax, world)
     if tour is not None and len(tour.waypoints):
         ax.plot(*tour.waypoints.T, "-", color=TOUR_COLOR, lw=1.6, zorder=5, label="tour")
@@ -267,8 +272,9 @@ def plot_paths(
         hits = true_xy[np.asarray(collided, dtype=bool)]
         if len(hits):
             ax.plot(*hits.T, "x", color=COLLISION_COLOR, ms=5, zorder=8)
-            handles.append(Line2D([], [], color=COLLISION_COLOR, marker="x", ls="",
-                                  label="collision"))
+            handles.append(
+                Line2D([], [], color=COLLISION_COLOR, marker="x", ls="", label="collision")
+            )
     # Odometry may drift outside the world: widen the view to keep it in the picture.
     both = np.vstack([true_xy, odom_xy]) if len(true_xy) + len(odom_xy) else np.zeros((0, 2))
     if len(both):
