@@ -123,7 +123,8 @@ def test_unknown_profile_lists_valid_names() -> None:
 @pytest.mark.parametrize(
     ("field", "value"),
     [("move_step_m", 0.0), ("turn_step_deg", -1.0), ("speed_m_s", math.nan),
-     ("max_blocked_steps", 0), ("view_after_turn", "yes"), ("stop_pause_s", -1.0)],
+     ("max_blocked_steps", 0), ("view_after_turn", "yes"), ("stop_pause_s", -1.0),
+     ("induced_along_motion", 1)],
 )
 def test_profile_validated(field: str, value: object) -> None:
     with pytest.raises(InputError, match=field):

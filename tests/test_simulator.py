@@ -21,6 +21,7 @@ from albot2d.errors import InputError
 from albot2d.frames import Frame
 from albot2d.geometry import Pose, point_segment_distance, polygon_ring_segments
 from albot2d.seeding import make_rng
+from albot2d.sim.driving import PROFILES
 from albot2d.sim.dynamics import Dynamics, PhysicsParams
 from albot2d.sim.laser import LaserNoise
 from albot2d.sim.odometry import NOISE_PRESETS, OdometryNoise
@@ -87,9 +88,17 @@ def test_zero_noise_odometry_equals_truth_and_tour_closes() -> None:
     assert len(frames) == 1 + 280 + 3 * 90
 
 
-def test_dataset2_adds_exactly_10cm_or_1deg_per_step_and_keeps_the_true_motion() -> None:
-    d1, d2 = drive("dataset1"), drive("dataset2")
+@pytest.mark.parametrize("along_motion", [False, True])
+def test_dataset2_adds_exactly_10cm_or_1deg_per_step_and_keeps_the_true_motion(
+    along_motion: bool,
+) -> None:
+    # The loop driven both ways round: left turns, then (reversed) right turns.
+    tour = Tour(np.vstack([LOOP, LOOP[::-1][1:]]), "loop")
+    d2_profile = dataclasses.replace(PROFILES["dataset2"], induced_along_motion=along_motion)
+    d1 = list(Simulator(room_world(), seed=7).drive(tour, "dataset1"))
+    d2 = list(Simulator(room_world(), seed=7).drive(tour, d2_profile))
     assert [f.true_pose for f in d1] == [f.true_pose for f in d2]
+    turns = set()
     for prev, f in itertools.pairwise(d2):
         inc = f.odom_increment
         true_inc = prev.true_pose.between(f.true_pose)
@@ -98,7 +107,12 @@ def test_dataset2_adds_exactly_10cm_or_1deg_per_step_and_keeps_the_true_motion()
             assert inc.x - true_inc.x == pytest.approx(0.10, abs=1e-9)
         else:  # a turn step
             assert inc.x == 0.0 and inc.y == 0.0
-            assert inc.theta - true_inc.theta == pytest.approx(math.radians(1.0), abs=1e-9)
+            extra = math.radians(1.0)
+            if along_motion and true_inc.theta < 0.0:
+                extra = -extra
+            assert inc.theta - true_inc.theta == pytest.approx(extra, abs=1e-9)
+            turns.add(true_inc.theta > 0.0)
+    assert turns == {False, True}
     assert d2[-1].odom_pose.distance_to(d2[-1].true_pose) > 1.0
 
 

@@ -41,7 +41,9 @@ class DrivingProfile:
 
     - ``move_step_m`` / ``turn_step_deg``: the largest move / turn between two steps.
     - ``view_after_turn``: record a view after turn steps too (else only after moves).
-    - ``induced_step_m`` / ``induced_step_deg``: odometry error added per move / turn step.
+    - ``induced_step_m`` / ``induced_step_deg``: odometry error added per move / turn step;
+      ``induced_along_motion``: add it in the step's direction (right turns get -1°)
+      instead of literally (+1°, counter-clockwise, on every turn step).
     - ``speed_m_s`` / ``turn_rate_deg_s``: nominal speeds, which set the timestamps.
     - ``stop_pause_s``: time the robot stands still at each view.
     - ``heading_tolerance_deg`` / ``waypoint_tolerance_m``: smaller turns are skipped;
@@ -56,6 +58,7 @@ class DrivingProfile:
     view_after_turn: bool = True
     induced_step_m: float = 0.0
     induced_step_deg: float = 0.0
+    induced_along_motion: bool = False
     speed_m_s: float = 0.3
     turn_rate_deg_s: float = 30.0
     stop_pause_s: float = 0.0
@@ -70,11 +73,11 @@ class DrivingProfile:
         check_finite(self, "induced_step_m")
         check_finite(self, "induced_step_deg")
         check_positive_int(self, "max_blocked_steps")
-        if not isinstance(self.view_after_turn, bool):
-            raise InputError(
-                "DrivingProfile.view_after_turn must be true or false, "
-                f"got {self.view_after_turn!r}"
-            )
+        for name in ("view_after_turn", "induced_along_motion"):
+            if not isinstance(getattr(self, name), bool):
+                raise InputError(
+                    f"DrivingProfile.{name} must be true or false, got {getattr(self, name)!r}"
+                )
 
     def step_duration_s(self, kind: StepKind, amount: float) -> float:
         """Seconds a step of ``amount`` (m or rad) takes at the nominal speeds."""

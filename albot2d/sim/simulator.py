@@ -105,6 +105,9 @@ class Simulator:
             self.odometry_noise,
             induced_step_m=self.odometry_noise.induced_step_m + profile.induced_step_m,
             induced_step_deg=self.odometry_noise.induced_step_deg + profile.induced_step_deg,
+            induced_along_motion=(
+                self.odometry_noise.induced_along_motion or profile.induced_along_motion
+            ),
         )
         odometry = Odometry(noise, odometry_rng, start=start)
 
