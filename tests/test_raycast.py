@@ -246,6 +246,19 @@ def test_unsorted_angles_and_prepared_fans_agree() -> None:
     )
 
 
+@pytest.mark.parametrize("sigma_deg", [0.01, 0.3, 5.0])
+def test_jittered_fan_equals_a_fan_built_from_the_turned_angles(sigma_deg: float) -> None:
+    """Small jitter takes the cheap path, large jitter (beams out of order) a rebuild."""
+    caster = RayCaster(office_segments(4))
+    fan = BeamFan.from_angles(FAN)
+    offsets = np.random.default_rng(1).normal(0.0, math.radians(sigma_deg), len(FAN))
+    turned = fan.jittered(offsets)
+    np.testing.assert_array_equal(turned.angles, FAN + offsets)
+    want = caster.cast((6.0, 5.5), FAN + offsets + 0.4, 30.0)
+    got = caster.cast((6.0, 5.5), turned, 30.0, heading=0.4)
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+
+
 def test_office_grid_full_circle_matches_brute_force() -> None:
     segs = office_segments(6)
     caster = RayCaster(segs)

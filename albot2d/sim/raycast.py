@@ -73,7 +73,7 @@ class BeamFan:
     angles: FloatArray  # (B,) as given, radians
     order: NDArray[np.intp] | None  # sorting permutation, None when already sorted
     mid_rad: float  # centre of the fan
-    half_span_rad: float  # half the angular width covered
+    half_span_rad: float  # covers every beam: |angle - mid_rad| <= half_span_rad < pi
     ext_rel: FloatArray  # (3B,) sorted centred angles - 2 pi, the same, the same + 2 pi
     ext_dir: NDArray[np.complex128]  # (3B,) unit directions e^{i angle} matching ext_rel
 
@@ -102,6 +102,27 @@ class BeamFan:
             ext_rel=_readonly(np.concatenate([centred - _TWO_PI, centred, centred + _TWO_PI])),
             ext_dir=_readonly(np.concatenate([directions, directions, directions])),
         )
+
+    def jittered(self, offsets: FloatArray) -> BeamFan:
+        """This fan with beam ``k`` turned by ``offsets[k]`` radians (e.g. angular jitter).
+
+        Cheap while the turned beams keep their order, otherwise rebuilt from scratch.
+        """
+        n = self.n_beams
+        if self.order is None:
+            ext_rel = (self.ext_rel.reshape(3, n) + offsets).ravel()
+            widest = self.half_span_rad + float(abs(offsets).max())
+            if widest < math.pi and (ext_rel[1:] >= ext_rel[:-1]).all():
+                ext_dir = (self.ext_dir.reshape(3, n) * np.exp(1j * offsets)).ravel()
+                return BeamFan(
+                    angles=_readonly(self.angles + offsets),
+                    order=None,
+                    mid_rad=self.mid_rad,
+                    half_span_rad=widest,
+                    ext_rel=_readonly(ext_rel),
+                    ext_dir=_readonly(ext_dir),
+                )
+        return BeamFan.from_angles(self.angles + offsets)
 
     @property
     def n_beams(self) -> int:
