@@ -140,7 +140,7 @@ def _out_and_back(
     ids = np.array(sorted(dist), dtype=np.int64)
     reach = np.array([dist[v] for v in ids])
     half = 0.5 * min_length_m
-    band = ids[(reach >= half) & (reach <= _OUT_BAND * half + _PLACE_MIN_M)]
+    band = ids[(reach >= half) & (reach <= _OUT_BAND * half + _PLACE_MIN_M) & (reach > 0.0)]
     if len(band):
         out = _path(graph, s, int(band[int(rng.integers(len(band)))]))
     else:

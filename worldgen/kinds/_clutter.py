@@ -162,28 +162,28 @@ def furnish_rects(
     passage_m: float,
     zones: FloatArray,
     wall_share: float = 0.55,
-    long_sides_only: bool = False,
+    walls_along_x: NDArray[np.bool_] | None = None,
     max_wall_depth_m: FloatArray | None = None,
 ) -> list[shapely.Polygon]:
     """Furnish rectangular rooms: wall items flush to walls and free-standing groups.
 
-    ``long_sides_only`` puts wall items only on the two long walls (for corridor stretches,
-    whose short ends are open); ``max_wall_depth_m`` (one per room) caps how far wall
-    items reach into the room, e.g. to keep a corridor's centre line clear."""
+    ``walls_along_x`` (one per room) puts wall items only on the two walls running along x
+    (True) or along y (False), for corridor stretches whose ends are open;
+    ``max_wall_depth_m`` (one per room) caps how far wall items reach into the room, e.g.
+    to keep a corridor's centre line clear."""
     rooms = np.asarray(interiors, float).reshape(-1, 4)
     zones = np.asarray(zones, float).reshape(-1, 4)
     area = (rooms[:, 2] - rooms[:, 0]) * (rooms[:, 3] - rooms[:, 1])
     counts = rng.poisson(per_10m2 * area / 10.0)
     coords: list[FloatArray] = []
     depth_cap = np.full(len(rooms), np.inf) if max_wall_depth_m is None else max_wall_depth_m
-    for room, n, cap in zip(rooms, counts, depth_cap, strict=True):
+    along = [None] * len(rooms) if walls_along_x is None else [bool(v) for v in walls_along_x]
+    for room, n, cap, along_x in zip(rooms, counts, depth_cap, along, strict=True):
         if n == 0:
             continue
         m = _TRIES_PER_ITEM * int(n)
         near = zones[_overlaps(room, zones)] if len(zones) else zones
-        cands, makers = _room_candidates(
-            room, m, rng, passage_m, wall_share, long_sides_only, float(cap)
-        )
+        cands, makers = _room_candidates(room, m, rng, passage_m, wall_share, along_x, float(cap))
         idx = np.flatnonzero(~_overlaps_any(cands, near))
         kept = _accept(cands[idx], np.zeros((0, 4)), passage_m, int(n))
         for k in idx[kept]:
@@ -197,7 +197,7 @@ def _room_candidates(
     rng: np.random.Generator,
     passage_m: float,
     wall_share: float,
-    long_sides_only: bool,
+    along_x: bool | None,
     depth_cap: float,
 ) -> tuple[FloatArray, list]:
     x0, y0, x1, y1 = room
@@ -205,9 +205,9 @@ def _room_candidates(
     is_wall = rng.random(m) < wall_share
     wall_kind = rng.choice(len(_WALL), size=m, p=_WALL_P)
     side = rng.integers(0, 4, m)
-    if long_sides_only:
-        # sides 0/2 are the horizontal walls, 1/3 the vertical ones
-        side = 2 * (side % 2) + (0 if (x1 - x0) >= (y1 - y0) else 1)
+    if along_x is not None:
+        # sides 0/2 are the walls along x, 1/3 the walls along y
+        side = 2 * (side % 2) + (0 if along_x else 1)
     u = rng.random((m, 3))
     cands = np.full((m, 4), np.nan)
     makers: list = [None] * m

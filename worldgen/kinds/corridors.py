@@ -174,7 +174,7 @@ def layout_corridors(rect: np.ndarray, p: CorridorsParams, rng: np.random.Genera
         passage_m=p.passage_m,
         zones=np.zeros((0, 4)),
         wall_share=1.0,
-        long_sides_only=True,
+        walls_along_x=horizontal[real],
         max_wall_depth_m=cap,
     )
     nodes_used = int((deg > 0).sum())

@@ -34,6 +34,7 @@ _PART_KINDS = ("rooms", "open", "corridors")
 _RAY_STEP_M = 0.4
 _FLAT_TOL_M = 0.05
 _CONTACT_OVERLAP_M = 0.02
+_END_CLEARANCE_EXTRA_M = 0.1
 _HALL_OPENING_MIN_M = 2.5
 _HALL_OPENING_MAX_M = 5.0
 
@@ -94,9 +95,13 @@ def _bridge(
     side: int,
     width: float,
     rng: np.random.Generator,
+    *,
+    inward_m: float,
+    clearance_m: float,
 ) -> np.ndarray | None:
     """A rectangle from the spine's inner wall face to the region's floor, ``width`` wide,
-    where the floor is near and flat across the whole width (None if there is no such place).
+    where the floor is near and flat across the whole width and the point ``inward_m``
+    past the bridge's end has ``clearance_m`` (None if there is no such place).
     """
     x0, y0, x1, y1 = region
     vertical = side in (0, 2)  # bridge runs along y
@@ -128,6 +133,14 @@ def _bridge(
     far, near = depth.max(axis=1), depth.min(axis=1)
     ok = np.isfinite(far)
     ok[ok] = far[ok] - near[ok] < _FLAT_TOL_M
+    if not ok.any():
+        return None
+    # the bridge's roadmap node just inside the region must be clear of walls
+    depth_in = start + sign * (np.where(ok, far, 0.0) + inward_m)
+    ends = np.column_stack([centres, depth_in] if vertical else [depth_in, centres])
+    spots = shapely.points(ends)
+    ok &= shapely.contains(floor, spots)
+    ok &= shapely.distance(spots, floor.boundary) > clearance_m
     if not ok.any():
         return None
     best = far[ok].min()
@@ -200,7 +213,16 @@ def _join_part(
         inward = 0.5 * width
     bridges, feet, ends = [], [], []
     for spine_idx, side in contacts:
-        b = _bridge(floor, region, spine_in[spine_idx], side, width, rng)
+        b = _bridge(
+            floor,
+            region,
+            spine_in[spine_idx],
+            side,
+            width,
+            rng,
+            inward_m=inward,
+            clearance_m=p.node_clearance_m + _END_CLEARANCE_EXTRA_M,
+        )
         if b is not None:
             foot, end = _bridge_ends(b, side, spine_lines[spine_idx], inward)
             bridges.append(b)
@@ -210,7 +232,7 @@ def _join_part(
         return part, np.zeros((0, 2)), 0
     bridge_arr, feet_arr, ends_arr = np.array(bridges), np.array(feet), np.array(ends)
     # keep the bridge mouths clear: drop clutter standing in front of them
-    mouths = boxes(bridge_arr + p.passage_m * np.array([-1, -1, 1, 1]))
+    mouths = boxes(bridge_arr + (p.passage_m + inward) * np.array([-1, -1, 1, 1]))
     clutter = part.clutter
     if clutter:
         hit = shapely.intersects(np.asarray(clutter, object)[:, None], mouths[None, :])
