@@ -7,13 +7,21 @@ heuristics pick one affordance:
 
 1. drop affordances farther from the mean position than the "standard deviation" (here the
    RMS distance of the positions to their mean; at least the one nearest the mean survives);
-2. of the rest, take the one nearest the path-integration estimate, with its own heading.
+2. of the rest, take the one nearest the path-integration estimate.
+
+The paper localises by a point and does not say where the heading comes from. By default
+(``heading="inlier_mean"``) the heading is the mean of the headings afforded by the
+surfaces that survive heuristic 1 and agree with the chosen one within
+``heading_consensus_deg``: each is one line fit's direction, so averaging them cuts the
+noise of a single fit, while a mis-tracked surface (whose heading disagrees) is left out.
+The chosen surface's position is then recomputed with that heading.
+``heading="selected"`` keeps the chosen affordance's own heading.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,13 +44,40 @@ class TriangulationParams:
 
     use_outlier_heuristic: bool = True
     prefer_nearer_endpoint: bool = True
+    heading: Literal["inlier_mean", "selected"] = "inlier_mean"
+    heading_consensus_deg: float = 1.0
+
+    def __post_init__(self) -> None:
+        from albot2d.validation import check_non_negative
+
+        check_non_negative(self, "heading_consensus_deg")
+        if self.heading not in ("inlier_mean", "selected"):
+            from albot2d.errors import InputError
+
+            raise InputError(
+                f"TriangulationParams.heading must be inlier_mean or selected, got {self.heading!r}"
+            )
 
 
 class Affordances(NamedTuple):
-    """Per-surface pose affordances: ``poses (K, 3)`` in the local map, ``surface (K,)`` indices."""
+    """Per-surface pose affordances: ``poses (K, 3)`` in the local map, ``surface (K,)``
+    indices, and the endpoint each used: ``local_points``/``current_points`` ``(K, 2)``."""
 
     poses: NDArray[np.float64]
     surface: NDArray[np.int64]
+    local_points: NDArray[np.float64]
+    current_points: NDArray[np.float64]
+
+
+def _no_affordances() -> Affordances:
+    return Affordances(np.zeros((0, 3)), np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros((0, 2)))
+
+
+def _position_for(heading: float, local_pt: NDArray, current_pt: NDArray) -> NDArray:
+    c, s = np.cos(heading), np.sin(heading)
+    return local_pt - np.array(
+        [c * current_pt[0] - s * current_pt[1], s * current_pt[0] + c * current_pt[1]]
+    )
 
 
 def pose_affordances(
@@ -61,18 +96,18 @@ def pose_affordances(
     if n != len(current):
         raise ValueError(f"local has {n} surfaces but current has {len(current)}")
     if n == 0:
-        return Affordances(np.zeros((0, 3)), np.zeros(0, np.int64))
+        return _no_affordances()
     dtheta = wrap_angle(segment_angles(local.segments) - segment_angles(current.segments))
     flipped = np.abs(wrap_angle(dtheta - heading_hint_rad)) > np.pi / 2
     dtheta = np.where(flipped, wrap_angle(dtheta + np.pi), dtheta)
 
     cur_pts = current.segments.reshape(n, 2, 2)
     loc_pts = local.segments.reshape(n, 2, 2)
-    loc_occ = local.occluded
+    loc_ok = local.localisable
     # A flipped match pairs endpoint 0 of one observation with endpoint 1 of the other.
     loc_pts = np.where(flipped[:, None, None], loc_pts[:, ::-1, :], loc_pts)
-    loc_occ = np.where(flipped[:, None], loc_occ[:, ::-1], loc_occ)
-    usable = ~loc_occ & ~current.occluded  # (n, 2): endpoint is a real corner in both
+    loc_ok = np.where(flipped[:, None], loc_ok[:, ::-1], loc_ok)
+    usable = loc_ok & current.localisable  # (n, 2): a precisely located real end in both
 
     dist = np.hypot(cur_pts[..., 0], cur_pts[..., 1])
     if params.prefer_nearer_endpoint:
@@ -83,14 +118,14 @@ def pose_affordances(
     has = np.isfinite(score[np.arange(n), best])
     idx = np.flatnonzero(has)
     if len(idx) == 0:
-        return Affordances(np.zeros((0, 3)), np.zeros(0, np.int64))
+        return _no_affordances()
     th = dtheta[idx]
     c, s = np.cos(th), np.sin(th)
     pc = cur_pts[idx, best[idx]]
     pl = loc_pts[idx, best[idx]]
     x = pl[:, 0] - (c * pc[:, 0] - s * pc[:, 1])
     y = pl[:, 1] - (s * pc[:, 0] + c * pc[:, 1])
-    return Affordances(np.column_stack([x, y, th]), idx.astype(np.int64))
+    return Affordances(np.column_stack([x, y, th]), idx.astype(np.int64), pl, pc)
 
 
 def triangulate(
@@ -104,6 +139,7 @@ def triangulate(
     poses = aff.poses
     if len(poses) == 0:
         return None
+    keep = np.ones(len(poses), bool)
     if params.use_outlier_heuristic and len(poses) > 2:
         mean = poses[:, :2].mean(axis=0)
         d = np.hypot(*(poses[:, :2] - mean).T)
@@ -111,6 +147,14 @@ def triangulate(
         keep = d <= sigma
         if not keep.any():
             keep = d == d.min()
-        poses = poses[keep]
-    d_pi = np.hypot(poses[:, 0] - path_integration.x, poses[:, 1] - path_integration.y)
-    return Pose.from_array(poses[int(np.argmin(d_pi))])
+    kept = np.flatnonzero(keep)
+    d_pi = np.hypot(poses[kept, 0] - path_integration.x, poses[kept, 1] - path_integration.y)
+    best = int(kept[np.argmin(d_pi)])
+    if params.heading == "selected" or len(kept) == 1:
+        return Pose.from_array(poses[best])
+    # Mean heading of the inliers, as deviations from the chosen one (no wrap-around).
+    dev = np.asarray(wrap_angle(poses[kept, 2] - poses[best, 2]))
+    dev = dev[np.abs(dev) <= np.radians(params.heading_consensus_deg)]
+    heading = float(wrap_angle(poses[best, 2] + dev.mean()))
+    x, y = _position_for(heading, aff.local_points[best], aff.current_points[best])
+    return Pose(float(x), float(y), heading)

@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 from albot2d.errors import InputError
 from albot2d.frames import Scan
 from albot2d.geometry import transform_segments
+from albot2d.perception.endpoints import jump_end_gaps, refine_corners
 from albot2d.perception.surfaces import Surfaces
 from albot2d.validation import check_in_range, check_non_negative, check_positive
 
@@ -72,6 +73,13 @@ class ExtractionParams:
       within this distance of the surface's line is the surface thinning out at a grazing
       angle, not a corner, so it counts as occluded. ``0`` disables this (then only a
       nearer or missing neighbour, or the scan's edge, occludes).
+    - ``max_endpoint_gap_m``: an end at a range jump is known only to lie between the last
+      hit and where the next beam crosses the surface's line; when that is longer than
+      this, the end is flagged ``uncertain`` (not used to localise). ``inf`` disables it.
+    - ``corner_min_angle_deg`` / ``corner_max_shift_m``: a corner shared by two adjacent
+      surfaces meeting at least this sharply is placed at their lines' intersection, if
+      that moves neither endpoint farther than the shift. ``corner_max_shift_m=0``
+      disables it. See ``albot2d.perception.endpoints``.
     """
 
     breakpoint_lambda_deg: float = 10.0
@@ -82,6 +90,9 @@ class ExtractionParams:
     min_points: int = 5
     max_range_m: float = math.inf
     continuation_distance_m: float = 0.05
+    max_endpoint_gap_m: float = 0.10
+    corner_min_angle_deg: float = 30.0
+    corner_max_shift_m: float = 0.15
 
     def __post_init__(self) -> None:
         check_in_range(self, "breakpoint_lambda_deg", 0.0, 90.0)
@@ -92,7 +103,12 @@ class ExtractionParams:
             )
         check_non_negative(self, "range_sigma_m", "breakpoint_sigma_factor")
         check_positive(self, "split_distance_m", "merge_distance_m")
-        check_non_negative(self, "continuation_distance_m")
+        check_non_negative(self, "continuation_distance_m", "corner_max_shift_m")
+        check_in_range(self, "corner_min_angle_deg", 0.0, 90.0)
+        if not self.max_endpoint_gap_m > 0.0:  # also rejects NaN; inf disables the check
+            raise InputError(
+                f"ExtractionParams.max_endpoint_gap_m must be > 0, got {self.max_endpoint_gap_m!r}"
+            )
         if isinstance(self.min_points, bool) or not isinstance(self.min_points, int):
             raise InputError(
                 f"ExtractionParams.min_points must be an integer, got {self.min_points!r}"
@@ -369,7 +385,36 @@ def extract_surfaces(scan: Scan, params: ExtractionParams | None = None) -> Surf
     d0 = nx * x[a] + ny * y[a] - c
     d1 = nx * x[b] + ny * y[b] - c
     segs = np.column_stack([x[a] - d0 * nx, y[a] - d0 * ny, x[b] - d1 * nx, y[b] - d1 * ny])
-    segs = transform_segments(scan.laser_pose.as_array(), segs)
-
     occluded = _occlusion(hit, r, x, y, prev_joined, next_joined, a, b, (nx, ny, c), params)
-    return Surfaces(segs, occluded, ab)
+    if params.corner_max_shift_m > 0.0:
+        segs = refine_corners(
+            segs, a, b, (nx, ny, c), next_joined, scan.angles,
+            min_angle_deg=params.corner_min_angle_deg, max_shift_m=params.corner_max_shift_m,
+        )
+    uncertain = None
+    if math.isfinite(params.max_endpoint_gap_m):
+        uncertain = ~occluded & _uncertain_jump_ends(
+            scan, segs, a, b, next_joined, (nx, ny, c), prev_joined, params
+        )
+    segs = transform_segments(scan.laser_pose.as_array(), segs)
+    return Surfaces(segs, occluded, ab, uncertain)
+
+
+def _uncertain_jump_ends(
+    scan: Scan,
+    segs: FloatArray,
+    a: IntArray,
+    b: IntArray,
+    next_joined: NDArray[np.bool_],
+    lines: tuple[FloatArray, FloatArray, FloatArray],
+    prev_joined: NDArray[np.bool_],
+    params: ExtractionParams,
+) -> NDArray[np.bool_]:
+    """``(M, 2)``: ends at a range jump whose true position is too uncertain to use."""
+    n = scan.n_beams
+    out = []
+    for end, step, inside, cols in ((a, -1, prev_joined, (0, 1)), (b, 1, next_joined, (2, 3))):
+        nb = np.clip(end + step, 0, n - 1)
+        gap = jump_end_gaps(segs[:, list(cols)], scan.angles[nb], lines)
+        out.append(~inside[end] & (gap > params.max_endpoint_gap_m))
+    return np.column_stack(out)

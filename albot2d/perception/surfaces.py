@@ -53,18 +53,30 @@ class Surfaces:
     - ``occluded``: ``(N, 2)`` bool, per endpoint.
     - ``beams``: ``(N, 2)`` int, first and last beam index of the supporting points
       (``-1`` when the surfaces did not come from a scan, e.g. were transformed).
+    - ``uncertain``: ``(N, 2)`` bool, an unoccluded end whose position along the surface
+      is known only coarsely (a wall ending at a grazing angle): still a real end for
+      tracking, but not precise enough to localise from. ``None`` means all False.
     """
 
     segments: FloatArray
     occluded: NDArray[np.bool_]
     beams: NDArray[np.int64]
+    uncertain: NDArray[np.bool_] | None = None
 
     def __post_init__(self) -> None:
         segs = as_segments(self.segments)
         n = len(segs)
+        uncertain = np.zeros((n, 2), bool) if self.uncertain is None else self.uncertain
         object.__setattr__(self, "segments", _readonly(segs, np.float64, (n, 4)))
         object.__setattr__(self, "occluded", _readonly(self.occluded, np.bool_, (n, 2)))
         object.__setattr__(self, "beams", _readonly(self.beams, np.int64, (n, 2)))
+        object.__setattr__(self, "uncertain", _readonly(uncertain, np.bool_, (n, 2)))
+
+    @property
+    def localisable(self) -> NDArray[np.bool_]:
+        """``(N, 2)``: endpoints that are real, precisely located ends (usable to localise)."""
+        assert self.uncertain is not None  # set in __post_init__
+        return ~self.occluded & ~self.uncertain
 
     @classmethod
     def empty(cls) -> Surfaces:
@@ -91,11 +103,16 @@ class Surfaces:
     def select(self, index: ArrayLike) -> Surfaces:
         """A subset by boolean mask or integer indices (order of ``index`` kept)."""
         idx = np.asarray(index)
-        return Surfaces(self.segments[idx], self.occluded[idx], self.beams[idx])
+        assert self.uncertain is not None
+        return Surfaces(
+            self.segments[idx], self.occluded[idx], self.beams[idx], self.uncertain[idx]
+        )
 
     def transformed(self, pose: ArrayLike) -> Surfaces:
         """The same surfaces mapped from this view's frame by ``pose`` ([x, y, theta])."""
-        return Surfaces(transform_segments(pose, self.segments), self.occluded, self.beams)
+        return Surfaces(
+            transform_segments(pose, self.segments), self.occluded, self.beams, self.uncertain
+        )
 
     def surface(self, i: int) -> Surface:
         s = self.segments[i]
