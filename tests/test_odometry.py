@@ -145,3 +145,15 @@ def test_presets() -> None:
     assert noise_preset("typical").is_random and noise_preset("typical").is_biased
     with pytest.raises(InputError, match="valid: " + ", ".join(NOISE_PRESETS)):
         noise_preset("bogus")
+
+
+def test_turn_scale_error_scales_every_turn() -> None:
+    noise = OdometryNoise(turn_scale_error=0.02)
+    turn = perturb_increment(Pose(0.0, 0.0, math.radians(90.0)), noise, None)
+    assert math.degrees(turn.theta) == pytest.approx(91.8)
+    right = perturb_increment(Pose(0.0, 0.0, math.radians(-45.0)), noise, None)
+    assert math.degrees(right.theta) == pytest.approx(-45.9)
+    straight = perturb_increment(Pose(1.0, 0.0, 0.0), noise, None)
+    assert (straight.x, straight.y, straight.theta) == (1.0, 0.0, 0.0)
+    with pytest.raises(InputError, match="turn_scale_error"):
+        OdometryNoise(turn_scale_error=-1.5)

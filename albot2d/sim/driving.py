@@ -7,8 +7,10 @@ turns and moves into equal steps no larger than the profile's ``turn_step_deg`` 
 only after moves). Presets (Yeap et al.'s datasets):
 
 - ``dataset1``: a view every 10 cm or 1° (the paper's 1330-view run).
-- ``dataset2``: dataset1 with +10 cm / +1° added to each odometry step (the true motion
-  is unchanged; see ``albot2d.sim.odometry``).
+- ``dataset2``: dataset1 with an extra 10 cm / 1° added to each odometry step in the
+  step's own direction (the true motion is unchanged; see ``albot2d.sim.odometry``). The
+  literal "+1°" reading would report every 1° right-turn step as no turn at all, so a
+  right turn would vanish from the odometry; ``induced_along_motion=False`` selects it.
 - ``dataset3``: a view every 1 m or 10° (the 217-view run).
 - ``start_stop``: turn to the next waypoint, move up to ~3 m, view (Fig. 14: "each move
   is on average about 3 m").
@@ -91,7 +93,8 @@ _DATASET1 = DrivingProfile("dataset1", move_step_m=0.10, turn_step_deg=1.0)
 PROFILES: dict[str, DrivingProfile] = {
     "dataset1": _DATASET1,
     "dataset2": dataclasses.replace(
-        _DATASET1, name="dataset2", induced_step_m=0.10, induced_step_deg=1.0
+        _DATASET1, name="dataset2", induced_step_m=0.10, induced_step_deg=1.0,
+        induced_along_motion=True,
     ),
     "dataset3": DrivingProfile("dataset3", move_step_m=1.0, turn_step_deg=10.0),
     "start_stop": DrivingProfile(

@@ -9,8 +9,10 @@ Each true motion increment (in the previous robot frame) becomes a reported incr
    ``σ_rot1 = α1|rot1| + α2|trans|``, ``σ_trans = α3|trans| + α4(|rot1| + |rot2|)``,
    ``σ_rot2 = α1|rot2| + α2|trans|`` (the proportional form, as in gmapping's srr/srt/
    str/stt). Motion backwards is decomposed as reversing, as AMCL does.
-2. systematic error, as Stage's ``odom_error``: the distance is scaled by
-   ``1 + distance_scale_error`` and the heading drifts by ``heading_drift_deg_per_m``.
+2. systematic error, as Stage's ``odom_error`` (x/y and theta scale errors): the distance
+   is scaled by ``1 + distance_scale_error``, every turn by ``1 + turn_scale_error`` (a
+   wrong wheel base: the dominant error of differential-drive odometry), and the heading
+   drifts by ``heading_drift_deg_per_m`` (unequal wheel radii).
 3. the induced error of the paper's dataset 2: ``induced_step_m`` added to every move
    step's distance, ``induced_step_deg`` to every turn step's angle.
 
@@ -50,6 +52,7 @@ class OdometryNoise:
     - ``alpha1`` rad of rotation error per rad turned, ``alpha2`` rad per m driven,
       ``alpha3`` m of distance error per m driven, ``alpha4`` m per rad turned (std devs).
     - ``distance_scale_error``: reported distance = true × (1 + this), e.g. 0.02.
+    - ``turn_scale_error``: reported turn = true turn × (1 + this), e.g. 0.02.
     - ``heading_drift_deg_per_m``: reported heading gains this much per metre driven.
     - ``induced_step_m`` / ``induced_step_deg``: added to each move / turn step (dataset 2);
       positive: longer moves, counter-clockwise turns. ``induced_along_motion`` instead
@@ -62,6 +65,7 @@ class OdometryNoise:
     alpha4: float = 0.0
     distance_scale_error: float = 0.0
     heading_drift_deg_per_m: float = 0.0
+    turn_scale_error: float = 0.0
     induced_step_m: float = 0.0
     induced_step_deg: float = 0.0
     induced_along_motion: bool = False
@@ -71,6 +75,11 @@ class OdometryNoise:
         for name in ("distance_scale_error", "heading_drift_deg_per_m", "induced_step_m",
                      "induced_step_deg"):
             check_finite(self, name)
+        check_finite(self, "turn_scale_error")
+        if self.turn_scale_error <= -1.0:
+            raise InputError(
+                f"OdometryNoise.turn_scale_error must be > -1, got {self.turn_scale_error!r}"
+            )
         if self.distance_scale_error <= -1.0:
             raise InputError(
                 "OdometryNoise.distance_scale_error must be > -1, "
@@ -88,7 +97,9 @@ class OdometryNoise:
 
     @property
     def is_biased(self) -> bool:
-        return bool(self.distance_scale_error or self.heading_drift_deg_per_m)
+        return bool(
+            self.distance_scale_error or self.heading_drift_deg_per_m or self.turn_scale_error
+        )
 
     @property
     def is_zero(self) -> bool:
@@ -99,14 +110,15 @@ class OdometryNoise:
 NOISE_PRESETS: dict[str, OdometryNoise] = {
     "none": OdometryNoise(),
     "low": OdometryNoise(alpha1=0.01, alpha2=0.002, alpha3=0.01, alpha4=0.001),
-    # Roughly a Pioneer 3-DX on a smooth floor: a few percent, with a small steady drift.
+    # Roughly a Pioneer 3-DX on a smooth floor: a few percent of random error, a 2 % wheel
+    # base error on turns (3-5 % is commonly measured before calibration) and a small drift.
     "typical": OdometryNoise(
         alpha1=0.05, alpha2=0.01, alpha3=0.03, alpha4=0.005,
-        distance_scale_error=0.01, heading_drift_deg_per_m=0.1,
+        distance_scale_error=0.01, heading_drift_deg_per_m=0.1, turn_scale_error=0.02,
     ),
     "high": OdometryNoise(
         alpha1=0.1, alpha2=0.05, alpha3=0.1, alpha4=0.02,
-        distance_scale_error=0.03, heading_drift_deg_per_m=0.5,
+        distance_scale_error=0.03, heading_drift_deg_per_m=0.5, turn_scale_error=0.05,
     ),
 }
 
@@ -174,6 +186,8 @@ def perturb_increment(increment: Pose, noise: OdometryNoise, rng: np.random.Gene
         ])
         e_rot1, e_trans, e_rot2 = (rng.standard_normal(3) * std).tolist()
         rot1, trans, rot2 = rot1 + e_rot1, trans + e_trans, rot2 + e_rot2
+    rot1 *= 1.0 + noise.turn_scale_error
+    rot2 *= 1.0 + noise.turn_scale_error
     rot2 += math.radians(noise.heading_drift_deg_per_m) * abs(trans)
     trans *= 1.0 + noise.distance_scale_error
     if induced_m:
