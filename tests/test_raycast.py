@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from albot2d.errors import InputError
 from albot2d.frames import beam_angles
 from albot2d.geometry import Pose, point_segment_distance, transform_segments
-from albot2d.sim.raycast import BeamFan, RayCaster, cast_brute_force
+from albot2d.sim.raycast import NEAR_PASS_MIN_PIECES, BeamFan, RayCaster, cast_brute_force
 from tests.raycast_helpers import box_segments, office_segments, ring_segments, shapely_ranges
 
 EXACT_M = 1e-9
@@ -112,13 +112,16 @@ def test_random_segments_match_shapely(
     oy=coord,
     th=heading,
     cell=st.one_of(st.none(), st.floats(0.3, 30.0)),
+    near_pass=st.sampled_from([0, 2, 20, NEAR_PASS_MIN_PIECES]),
 )
 def test_index_equals_brute_force_and_hits_lie_on_walls(
-    segs: np.ndarray, ox: float, oy: float, th: float, cell: float | None
+    segs: np.ndarray, ox: float, oy: float, th: float, cell: float | None, near_pass: int
 ) -> None:
     assume_not_touching(segs, ox, oy)
     r_max = 60.0
-    caster = RayCaster(segs, cell_size_m=cell)
+    caster = RayCaster(
+        segs, cell_size_m=cell, near_pass_min_pieces=near_pass, near_pass_pieces=near_pass + 1
+    )
     angles = FAN + th
     got = caster.cast((ox, oy), angles, r_max)
     want = cast_brute_force(segs, (ox, oy), angles, r_max)
@@ -259,14 +262,29 @@ def test_jittered_fan_equals_a_fan_built_from_the_turned_angles(sigma_deg: float
     np.testing.assert_allclose(got, want, rtol=1e-12)
 
 
-def test_office_grid_full_circle_matches_brute_force() -> None:
+@pytest.mark.parametrize("near_pass", [0, NEAR_PASS_MIN_PIECES])
+def test_office_grid_full_circle_matches_brute_force(near_pass: int) -> None:
     segs = office_segments(6)
-    caster = RayCaster(segs)
+    caster = RayCaster(segs, near_pass_min_pieces=near_pass, near_pass_pieces=near_pass // 20 + 1)
     angles = np.linspace(-math.pi, math.pi, 720, endpoint=False)
     for o in [(2.0, 2.0), (13.1, 9.7), (4.0, 6.0), (23.5, 0.5)]:
         got = caster.cast(o, angles, 30.0)
         want = cast_brute_force(segs, o, angles, 30.0)
         assert_same_ranges(got, want, 30.0, segs, o, angles)
+
+
+def test_near_pass_at_long_range_matches_single_pass() -> None:
+    """In a dense world at 80 m the occlusion cut kicks in; it must not change a range."""
+    segs = office_segments(30)
+    cut = RayCaster(segs)
+    plain = RayCaster(segs, near_pass_min_pieces=10**9)
+    rng = np.random.default_rng(7)
+    for _ in range(12):
+        o = (float(rng.uniform(1, 119)), float(rng.uniform(1, 119)))
+        angles = FAN + rng.uniform(-math.pi, math.pi)
+        np.testing.assert_array_equal(cut.cast(o, angles, 80.0), plain.cast(o, angles, 80.0))
+    box = (0.0, 0.0, 120.0, 120.0)
+    assert cut.grid.count(*box) > NEAR_PASS_MIN_PIECES  # the cut really ran
 
 
 @pytest.mark.parametrize(
@@ -276,6 +294,8 @@ def test_office_grid_full_circle_matches_brute_force() -> None:
         ({"segments": [[0, 0, 1]]}, "segments"),
         ({"segments": [[0, 0, 1, 1]], "cell_size_m": 0.0}, "cell_size_m"),
         ({"segments": [[0, 0, 1, 1]], "contact_tolerance_m": -1.0}, "contact_tolerance_m"),
+        ({"segments": [[0, 0, 1, 1]], "near_pass_min_pieces": 1.5}, "near_pass_min_pieces"),
+        ({"segments": [[0, 0, 1, 1]], "near_pass_pieces": 0}, "near_pass_pieces"),
     ],
 )
 def test_bad_construction_names_the_input(kwargs: dict, field: str) -> None:

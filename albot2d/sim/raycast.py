@@ -1,17 +1,18 @@
-"""Exact, vectorised 2D raycasting against line segments, with a uniform-grid spatial index.
+"""Exact, vectorised 2D raycasting against line segments: ``RayCaster``.
 
-``RayCaster(segments)`` is built once per world. It cuts every segment at the boundaries of
-a uniform grid, so each piece lies in exactly one cell, and stores the pieces cell by cell
-(row-major), so the pieces under any axis-aligned box are one contiguous run per grid row.
-
-A cast of ``B`` beams from one origin then costs a fixed number of numpy calls:
+``RayCaster(segments)`` is built once per world: a uniform-grid index of the segments cut
+into one-cell pieces (``raycast_grid``). A cast of ``B`` beams from one origin then costs
+a fixed number of numpy calls (``raycast_kernel``):
 
 1. the pieces under the bounding box of the beams (the fan of rays out to ``max_range``),
-   found by slicing the per-cell offsets row by row (no per-cell Python loop);
-2. for each piece, the closed interval of directions it subtends from the origin; a binary
-   search over the sorted beam directions turns it into the run of beams that cross it;
+   copied row run by row run out of the index (no per-cell Python loop);
+2. for each piece, the run of beams whose directions lie between its endpoints' directions
+   (one binary search over the sorted beam directions);
 3. for each (beam, piece) pair in those runs the exact distance to the piece's line,
-   ``s / (d · n)``, reduced per beam with ``np.maximum.at`` on its reciprocal.
+   reduced per beam with ``np.maximum.at`` on its reciprocal.
+
+With long ranges in dense worlds an occlusion cut first casts against the pieces near the
+laser and looks further only along the beams that saw nothing (see ``RayCaster``).
 
 Only pieces in range are touched, so a scan's cost follows the walls near the laser, not
 the size of the world. Results are exact segment intersections, not grid approximations.
@@ -29,182 +30,56 @@ Numerical conventions (all tested):
 
 from __future__ import annotations
 
+import itertools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from albot2d.errors import InputError
-from albot2d.geometry import as_segments, point_segment_distance
+from albot2d.geometry import point_segment_distance
+from albot2d.sim.raycast_grid import (
+    MIN_SEGMENT_LENGTH_M,
+    SegmentGrid,
+    clean_segments,
+    piece_table,
+)
+from albot2d.sim.raycast_kernel import BeamFan, cast_pieces
 
-__all__ = ["MIN_SEGMENT_LENGTH_M", "BeamFan", "RayCaster", "cast_brute_force"]
+__all__ = [
+    "MIN_SEGMENT_LENGTH_M",
+    "NEAR_PASS_MIN_PIECES",
+    "NEAR_PASS_PIECES",
+    "BeamFan",
+    "RayCaster",
+    "cast_brute_force",
+]
 
 FloatArray = NDArray[np.float64]
 
-_TWO_PI = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
-#: Aim for about this many pieces per grid cell when the cell size is chosen automatically.
-_AUTO_PIECES_PER_CELL = 8.0
-#: Never allocate more grid cells than this many per segment (sparse, sprawling worlds).
-_MAX_CELLS_PER_SEGMENT = 16
-#: Segments shorter than this are numerically zero-length and dropped.
-MIN_SEGMENT_LENGTH_M = 1e-12
-#: Cuts closer than this to an end or to the previous cut are skipped, so no piece is a
-#: sliver; a piece then pokes at most this far into a neighbouring cell (queries pad more).
-_MIN_PIECE_M = 1e-10
-#: Up to this many grid rows, a query copies row runs by slicing instead of fancy indexing.
-_MAX_SLICED_ROWS = 64
 
 
-def _readonly(arr: np.ndarray) -> np.ndarray:
-    arr.flags.writeable = False
-    return arr
-
-
-@dataclass(frozen=True, eq=False)
-class BeamFan:
-    """Beam directions in the laser's own frame, prepared once for repeated casts.
-
-    The fan is centred: ``angles - mid_rad`` lies in ``[-pi, pi]`` and is sorted, so a cast
-    only rotates it by the laser's heading. Build it with ``BeamFan.from_angles``.
-    """
-
-    angles: FloatArray  # (B,) as given, radians
-    order: NDArray[np.intp] | None  # sorting permutation, None when already sorted
-    mid_rad: float  # centre of the fan
-    half_span_rad: float  # covers every beam: |angle - mid_rad| <= half_span_rad < pi
-    ext_rel: FloatArray  # (3B,) sorted centred angles - 2 pi, the same, the same + 2 pi
-    ext_dir: NDArray[np.complex128]  # (3B,) unit directions e^{i angle} matching ext_rel
-
-    @classmethod
-    def from_angles(cls, angles: ArrayLike) -> BeamFan:
-        a = np.asarray(angles, dtype=np.float64)
-        if a.ndim != 1 or len(a) == 0:
-            raise InputError(f"beam angles must be a non-empty 1-D array, got shape {a.shape}")
-        if not np.isfinite(a).all():
-            raise InputError("beam angles must be finite")
-        rel = (a - a[0]) % _TWO_PI
-        order = None
-        if len(a) > 1 and not (rel[1:] >= rel[:-1]).all():
-            order = np.argsort(rel, kind="stable")
-            rel = rel[order]
-        half = 0.5 * float(rel[-1])
-        mid = float(a[0]) + half
-        centred = rel - half
-        sorted_angles = a if order is None else a[order]
-        directions = np.exp(1j * sorted_angles)
-        return cls(
-            angles=_readonly(a.copy()),
-            order=order,
-            mid_rad=mid,
-            half_span_rad=half,
-            ext_rel=_readonly(np.concatenate([centred - _TWO_PI, centred, centred + _TWO_PI])),
-            ext_dir=_readonly(np.concatenate([directions, directions, directions])),
-        )
-
-    def jittered(self, offsets: FloatArray) -> BeamFan:
-        """This fan with beam ``k`` turned by ``offsets[k]`` radians (e.g. angular jitter).
-
-        Cheap while the turned beams keep their order, otherwise rebuilt from scratch.
-        """
-        n = self.n_beams
-        if self.order is None:
-            ext_rel = (self.ext_rel.reshape(3, n) + offsets).ravel()
-            widest = self.half_span_rad + float(abs(offsets).max())
-            if widest < math.pi and (ext_rel[1:] >= ext_rel[:-1]).all():
-                ext_dir = (self.ext_dir.reshape(3, n) * np.exp(1j * offsets)).ravel()
-                return BeamFan(
-                    angles=_readonly(self.angles + offsets),
-                    order=None,
-                    mid_rad=self.mid_rad,
-                    half_span_rad=widest,
-                    ext_rel=_readonly(ext_rel),
-                    ext_dir=_readonly(ext_dir),
-                )
-        return BeamFan.from_angles(self.angles + offsets)
-
-    @property
-    def n_beams(self) -> int:
-        return len(self.angles)
-
-
-def _clean_segments(segments: ArrayLike, what: str = "segments") -> FloatArray:
-    try:
-        segs = as_segments(segments)
-    except ValueError as exc:
-        raise InputError(f"{what}: {exc}") from None
-    if not np.isfinite(segs).all():
-        bad = int(np.flatnonzero(~np.isfinite(segs).all(axis=1))[0])
-        raise InputError(f"{what}[{bad}] is not finite: {segs[bad].tolist()}")
-    keep = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1]) >= MIN_SEGMENT_LENGTH_M
-    return np.ascontiguousarray(segs[keep])
-
-
-def _piece_table(segs: FloatArray) -> NDArray[np.complex128]:
-    """``(3, N)`` complex rows: endpoints a, b and the conjugated unit normal.
-
-    Field-major so a query's pieces are three contiguous rows. With n = -i e / |e|,
-    Re(z * conj(n)) is the dot product z · n.
-    """
-    a = segs[:, 0] + 1j * segs[:, 1]
-    b = segs[:, 2] + 1j * segs[:, 3]
-    e = b - a
-    conj_n = np.conj(-1j * e / np.abs(e))
-    return np.ascontiguousarray(np.vstack([a, b, conj_n]))
-
-
-def _split_at_grid(
-    segs: FloatArray, x0: float, y0: float, cell: float
-) -> tuple[FloatArray, NDArray[np.intp], NDArray[np.intp]]:
-    """Cut segments where they cross grid lines: pieces ``(P, 4)`` and their cell (ix, iy).
-
-    Original endpoints are kept bit-exact and a cut point is shared by the two pieces it
-    joins, so no ray can slip between pieces.
-    """
-    n = len(segs)
-    gx1, gy1 = (segs[:, 0] - x0) / cell, (segs[:, 1] - y0) / cell
-    gx2, gy2 = (segs[:, 2] - x0) / cell, (segs[:, 3] - y0) / cell
-    cuts_t = [np.zeros(n), np.ones(n)]
-    cuts_id = [np.arange(n), np.arange(n)]
-    for g1, g2 in ((gx1, gx2), (gy1, gy2)):
-        lo, hi = np.minimum(g1, g2), np.maximum(g1, g2)
-        first = np.floor(lo).astype(np.int64) + 1
-        count = np.maximum(np.ceil(hi).astype(np.int64) - first, 0)
-        ids = np.repeat(np.arange(n), count)
-        k = first[ids] + (np.arange(len(ids)) - np.repeat(np.cumsum(count) - count, count))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            t = (k - g1[ids]) / (g2[ids] - g1[ids])
-        cuts_t.append(np.clip(t, 0.0, 1.0))
-        cuts_id.append(ids)
-    t_all, id_all = np.concatenate(cuts_t), np.concatenate(cuts_id)
-    order = np.lexsort((t_all, id_all))
-    t_all, id_all = t_all[order], id_all[order]
-    # Drop interior cuts too close (in metres) to the previous point or to the segment end.
-    length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])[id_all]
-    gap_prev = np.diff(t_all, prepend=-1.0) * length
-    end_gap = (1.0 - t_all) * length
-    interior = (t_all > 0.0) & (t_all < 1.0)
-    skip = interior & ((gap_prev < _MIN_PIECE_M) | (end_gap < _MIN_PIECE_M))
-    t_all, id_all = t_all[~skip], id_all[~skip]
-    start = np.flatnonzero((id_all[:-1] == id_all[1:]) & (t_all[:-1] < t_all[1:]))
-    sid, t0, t1 = id_all[start], t_all[start], t_all[start + 1]
-    a, b = segs[sid, :2], segs[sid, 2:]
-    p0 = np.where((t0 == 0.0)[:, None], a, a + t0[:, None] * (b - a))
-    p1 = np.where((t1 == 1.0)[:, None], b, a + t1[:, None] * (b - a))
-    pieces = np.hstack([p0, p1])
-    mid = 0.5 * (pieces[:, :2] + pieces[:, 2:])
-    ix = np.floor((mid[:, 0] - x0) / cell).astype(np.intp)
-    iy = np.floor((mid[:, 1] - y0) / cell).astype(np.intp)
-    return pieces, ix, iy
+#: With more pieces than this under the fan's box, cast a near pass first (see RayCaster).
+NEAR_PASS_MIN_PIECES = 2000
+#: The near pass reaches out to about this many pieces.
+NEAR_PASS_PIECES = 600
+#: Beams still open after the near pass are grouped into at most this many boxes.
+_MAX_FAR_BOXES = 3
 
 
 class RayCaster:
     """Exact raycasting against fixed segments (``(N, 4)`` ``[x1, y1, x2, y2]``, metres).
 
-    ``cell_size_m`` is the grid pitch of the spatial index (default: chosen from the
-    segment density, about eight pieces per cell). ``contact_tolerance_m`` is how close the
-    origin must be to a wall's line to count as on it (see the module docstring).
+    ``cell_size_m`` is the grid pitch of the spatial index (default: from the segment
+    density, about eight pieces per cell). ``contact_tolerance_m`` is how close the origin
+    must be to a wall's line to count as on it (see the module docstring).
+
+    Occlusion cut: when the box around the fan holds more than ``near_pass_min_pieces``
+    pieces (long ranges in dense worlds), the beams are first cast against the pieces
+    near the laser only (a range holding about ``near_pass_pieces``); the beams that hit
+    something there are done, and only the others are cast again against the pieces under
+    the bounding boxes of their own rays.
     A RayCaster is immutable after construction and safe to share between threads.
     """
 
@@ -214,67 +89,40 @@ class RayCaster:
         *,
         cell_size_m: float | None = None,
         contact_tolerance_m: float = 1e-9,
+        near_pass_min_pieces: int = NEAR_PASS_MIN_PIECES,
+        near_pass_pieces: int = NEAR_PASS_PIECES,
     ) -> None:
-        segs = _clean_segments(segments)
         if not (math.isfinite(contact_tolerance_m) and contact_tolerance_m >= 0.0):
             raise InputError(f"contact_tolerance_m must be >= 0, got {contact_tolerance_m!r}")
-        self.segments: FloatArray = _readonly(segs)
+        for name, value, least in (
+            ("near_pass_min_pieces", near_pass_min_pieces, 0),
+            ("near_pass_pieces", near_pass_pieces, 1),
+        ):
+            if isinstance(value, bool) or not isinstance(value, int) or value < least:
+                raise InputError(f"{name} must be an integer >= {least}, got {value!r}")
+        self.grid = SegmentGrid(segments, cell_size_m)
         self.contact_tolerance_m = float(contact_tolerance_m)
-        if len(segs):
-            xmin = float(min(segs[:, 0].min(), segs[:, 2].min()))
-            ymin = float(min(segs[:, 1].min(), segs[:, 3].min()))
-            xmax = float(max(segs[:, 0].max(), segs[:, 2].max()))
-            ymax = float(max(segs[:, 1].max(), segs[:, 3].max()))
-        else:
-            xmin = ymin = 0.0
-            xmax = ymax = 1.0
-        width, height = max(xmax - xmin, 1e-6), max(ymax - ymin, 1e-6)
-        if cell_size_m is None:
-            cell = math.sqrt(_AUTO_PIECES_PER_CELL * width * height / max(len(segs), 1))
-        else:
-            if not (math.isfinite(cell_size_m) and cell_size_m > 0.0):
-                raise InputError(f"cell_size_m must be > 0, got {cell_size_m!r}")
-            cell = float(cell_size_m)
-        max_cells = _MAX_CELLS_PER_SEGMENT * max(len(segs), 1) + 1024
-        cell = max(cell, math.sqrt(width * height / max_cells), 1e-6 * max(width, height))
-        self.cell_size_m = cell
-        # One spare cell of margin on each side keeps every piece's cell index in range.
-        self._x0, self._y0 = xmin - cell, ymin - cell
-        self._nx = math.ceil((xmax - self._x0) / cell) + 2
-        self._ny = math.ceil((ymax - self._y0) / cell) + 2
-        pieces, ix, iy = _split_at_grid(segs, self._x0, self._y0, cell)
-        cell_id = np.clip(iy, 0, self._ny - 1) * self._nx + np.clip(ix, 0, self._nx - 1)
-        order = np.argsort(cell_id, kind="stable")
-        self.n_pieces = len(pieces)
-        self._table = _readonly(_piece_table(pieces[order]))  # (3, n_pieces)
-        counts = np.bincount(cell_id, minlength=self._nx * self._ny)
-        self._cell_start = _readonly(np.concatenate([[0], np.cumsum(counts)]).astype(np.intp))
+        self.near_pass_min_pieces = near_pass_min_pieces
+        self.near_pass_pieces = near_pass_pieces
+
+    @property
+    def segments(self) -> FloatArray:
+        return self.grid.segments
 
     @property
     def n_segments(self) -> int:
-        return len(self.segments)
+        return len(self.grid.segments)
+
+    @property
+    def n_pieces(self) -> int:
+        return self.grid.n_pieces
+
+    @property
+    def cell_size_m(self) -> float:
+        return self.grid.cell_size_m
 
     def pieces_in_box(self, xmin: float, ymin: float, xmax: float, ymax: float) -> np.ndarray:
-        """Table columns ``(3, K)`` of every piece in a grid cell the box touches."""
-        c, nx = self.cell_size_m, self._nx
-        ix0 = max(math.floor((xmin - self._x0) / c), 0)
-        iy0 = max(math.floor((ymin - self._y0) / c), 0)
-        ix1 = min(math.floor((xmax - self._x0) / c), nx - 1)
-        iy1 = min(math.floor((ymax - self._y0) / c), self._ny - 1)
-        if ix1 < ix0 or iy1 < iy0:
-            return self._table[:, :0]
-        starts = self._cell_start[iy0 * nx + ix0 : iy1 * nx + ix0 + 1 : nx]
-        ends = self._cell_start[iy0 * nx + ix1 + 1 : iy1 * nx + ix1 + 2 : nx]
-        table = self._table
-        if len(starts) <= _MAX_SLICED_ROWS:
-            # A few contiguous copies beat building and applying a fancy index.
-            runs = [table[:, a:b] for a, b in zip(starts.tolist(), ends.tolist(), strict=True)]
-            return runs[0] if len(runs) == 1 else np.concatenate(runs, axis=1)
-        counts = ends - starts
-        cum = np.cumsum(counts)
-        total = int(cum[-1])
-        rows = np.arange(total) + np.repeat(starts - cum + counts, counts)
-        return table[:, rows]
+        return self.grid.pieces_in_box(xmin, ymin, xmax, ymax)
 
     def cast(
         self,
@@ -303,14 +151,64 @@ class RayCaster:
             raise InputError(f"ray origin must be finite, got ({ox}, {oy})")
         if not r_max > 0.0:
             raise InputError(f"max_range must be > 0, got {max_range!r}")
+        extra = None
+        if extra_segments is not None:
+            cleaned = clean_segments(extra_segments, "extra_segments")
+            extra = piece_table(cleaned) if len(cleaned) else None
         mid = fan.mid_rad + float(heading)
         box = _fan_box(ox, oy, mid, fan.half_span_rad, r_max)
-        table = self.pieces_in_box(*box)
-        if extra_segments is not None:
-            extra = _clean_segments(extra_segments, "extra_segments")
-            if len(extra):
-                table = np.concatenate([table, _piece_table(extra)], axis=1)
-        return _cast_pieces(table, ox, oy, mid, heading, fan, r_max, self.contact_tolerance_m)
+        starts, ends = self.grid.runs(*box)
+        n_box = sum(ends) - sum(starts)
+        tol = self.contact_tolerance_m
+        # Occlusion cut: most beams stop near the laser; look further only along the rest.
+        r_near = r_max * math.sqrt(self.near_pass_pieces / max(n_box, 1))
+        if n_box <= self.near_pass_min_pieces or r_near >= r_max:
+            table = _with(self.grid.gather(starts, ends), extra)
+            return cast_pieces(table, ox, oy, mid, heading, fan, r_max, tol)
+        near_box = _fan_box(ox, oy, mid, fan.half_span_rad, r_near)
+        table = _with(self.grid.pieces_in_box(*near_box), extra)
+        ranges = cast_pieces(table, ox, oy, mid, heading, fan, r_near, tol)
+        still_open = np.isinf(ranges)
+        if not still_open.any():
+            return ranges
+        boxes = _ray_boxes(ox, oy, fan.angles[still_open] + heading, r_max)
+        far = [self.grid.pieces_in_box(*b) for b in boxes]
+        table = _with(far[0] if len(far) == 1 else np.concatenate(far, axis=1), extra)
+        far_ranges = cast_pieces(table, ox, oy, mid, heading, fan, r_max, tol)
+        ranges[still_open] = far_ranges[still_open]
+        return ranges
+
+
+def _with(table: np.ndarray, extra: np.ndarray | None) -> np.ndarray:
+    return table if extra is None else np.concatenate([table, extra], axis=1)
+
+
+def _ray_boxes(
+    ox: float, oy: float, angles: FloatArray, r: float
+) -> list[tuple[float, float, float, float]]:
+    """Bounding boxes of the rays ``origin + [0, r] e^{i a}``, their directions split into at
+    most ``_MAX_FAR_BOXES`` groups at the widest gaps around the circle."""
+    a = np.sort(np.mod(angles, 2.0 * math.pi))
+    m = len(a)
+    gaps = np.diff(a, append=a[0] + 2.0 * math.pi)  # gaps[i] follows a[i]; the last wraps
+    ends = np.sort(np.argsort(gaps)[m - min(_MAX_FAR_BOXES, m) :])  # last index of a group
+    start = (int(ends[-1]) + 1) % m
+    a = np.roll(a, -start)
+    bounds = [0, *np.sort((ends - start) % m + 1).tolist()]
+    xs, ys = ox + r * np.cos(a), oy + r * np.sin(a)
+    pad = 1e-9 * (1.0 + r + abs(ox) + abs(oy))
+    boxes = []
+    for lo, hi in itertools.pairwise(bounds):
+        gx, gy = xs[lo:hi], ys[lo:hi]
+        boxes.append(
+            (
+                min(float(gx.min()), ox) - pad,
+                min(float(gy.min()), oy) - pad,
+                max(float(gx.max()), ox) + pad,
+                max(float(gy.max()), oy) + pad,
+            )
+        )
+    return boxes
 
 
 def _fan_box(
@@ -339,109 +237,6 @@ def _fan_box(
     return min(xs) - pad, min(ys) - pad, max(xs) + pad, max(ys) + pad
 
 
-_ARANGE = np.arange(1 << 12)
-
-
-def _arange(n: int) -> NDArray[np.intp]:
-    """``np.arange(n)`` as a view of a cached, grow-only array (saves an allocation a scan)."""
-    global _ARANGE
-    if n > len(_ARANGE):
-        _ARANGE = np.arange(max(n, 2 * len(_ARANGE)))
-    return _ARANGE[:n]
-
-
-def _cast_pieces(
-    table: np.ndarray,
-    ox: float,
-    oy: float,
-    mid: float,
-    heading: float,
-    fan: BeamFan,
-    r_max: float,
-    tol: float,
-) -> FloatArray:
-    """The vectorised kernel: ranges of every beam of ``fan`` against the pieces ``table``.
-
-    ``table`` is ``(3, K)`` complex: rows endpoint a, endpoint b, conj(unit normal). The
-    calls are ufuncs and array methods on purpose: at a few hundred pieces a scan is
-    dominated by per-call overhead, not arithmetic.
-    """
-    n_beams = fan.n_beams
-    if table.shape[1] == 0:
-        return np.full(n_beams, np.inf)
-    conj_n = table[2]
-    x = table[0:2].real - ox  # (2, K) endpoint coordinates relative to the origin
-    y = table[0:2].imag - oy
-    s = x[0] * conj_n.real - y[0] * conj_n.imag  # signed distance origin → line
-    # w = 1 / (foot of the perpendicular), so a beam of world direction d meets the line at
-    # 1 / Re(d * w). Turning w by the heading lets the fan's own directions stand in for d.
-    turn = complex(math.cos(heading), math.sin(heading))
-    edge_on = None
-    if abs(s).min() <= tol:
-        inside, w, edge_on = _degenerate(x, y, s, conj_n, tol)
-        if inside:
-            return np.zeros(n_beams)
-        w *= turn
-    else:
-        w = (conj_n * turn) * (1.0 / s)
-    ang = np.arctan2(y, x)  # endpoint directions...
-    ang -= mid  # ...relative to the fan centre, in (-2 pi, 2 pi)
-    # Beams from each endpoint's direction on; ext_rel repeats the fan at ±2 pi, so moving
-    # a direction by 2 pi moves its index by exactly n_beams. Intervals are half-open,
-    # [first, last): of two walls meeting at a vertex, exactly one owns a ray through it.
-    idx = fan.ext_rel.searchsorted(ang)
-    if edge_on is not None:  # a point-like target: close its interval to catch the ray
-        idx[1, edge_on] = fan.ext_rel.searchsorted(ang[1, edge_on], side="right")
-    first = np.minimum(idx[0], idx[1])
-    span = abs(idx[1] - idx[0])
-    # A piece subtends less than pi; a larger gap means it spans the ±pi seam, and its
-    # beams run from the larger index to the smaller one one turn later.
-    wrap = abs(ang[1] - ang[0]) > math.pi
-    first += wrap * span
-    counts = span + wrap * (n_beams - 2 * span)
-    cum = counts.cumsum()
-    n_pairs = int(cum[-1])
-    # 1 / range per beam; no pair leaves 2 * r_max, beyond range like any hit past r_max.
-    den = np.empty(3 * n_beams)
-    den.fill(0.5 / r_max)
-    if n_pairs:
-        pos = (first + counts - cum).repeat(counts)
-        pos += _arange(n_pairs)
-        np.maximum.at(den, pos, (fan.ext_dir[pos] * w.repeat(counts)).real)
-    ranges = 1.0 / den.reshape(3, n_beams).max(axis=0)
-    ranges[ranges > r_max] = np.inf
-    if fan.order is not None:
-        unsorted = np.empty_like(ranges)
-        unsorted[fan.order] = ranges
-        return unsorted
-    return ranges
-
-
-def _degenerate(
-    x: FloatArray, y: FloatArray, s: FloatArray, conj_n: np.ndarray, tol: float
-) -> tuple[bool, np.ndarray, NDArray[np.bool_]]:
-    """Pieces whose line passes within ``tol`` of the origin; returns (inside, w, edge_on).
-
-    ``inside`` when the origin is on a piece. A piece seen edge-on collapses (in place, in
-    ``x`` and ``y``) to its near endpoint, hit only by the ray that points straight at it.
-    """
-    deg = abs(s) <= tol
-    za = x[0, deg] + 1j * y[0, deg]
-    zb = x[1, deg] + 1j * y[1, deg]
-    e = zb - za
-    length = np.abs(e)
-    t = -(za * np.conj(e)).real / (length * length)
-    slack = tol / length
-    if ((t >= -slack) & (t <= 1.0 + slack)).any():
-        return True, conj_n, deg
-    near = np.where(np.abs(za) <= np.abs(zb), za, zb)
-    x[:, deg] = near.real
-    y[:, deg] = near.imag
-    w = conj_n / np.where(deg, 1.0, s)
-    w[deg] = 1.0 / near
-    return False, w, deg
-
-
 def cast_brute_force(
     segments: ArrayLike,
     origin: ArrayLike,
@@ -456,7 +251,7 @@ def cast_brute_force(
     a segment seen exactly edge-on is hit at its near end, an origin within
     ``contact_tolerance_m`` of a segment gives all-zero ranges, ``inf`` means no hit.
     """
-    segs = _clean_segments(segments)
+    segs = clean_segments(segments)
     o = np.asarray(origin, dtype=np.float64).reshape(2)
     a = np.asarray(angles, dtype=np.float64).reshape(-1)
     if len(segs) == 0:
