@@ -2,8 +2,9 @@
 
 Worlds are office grids of 4 m rooms with a 1 m door in every inner wall (much more to see
 than rooms on a corridor): 12 × 12 rooms ≈ 576 walls and 112 × 112 rooms ≈ 50,000 walls.
-The robot stands at random poses inside rooms; each call is one 181-beam, 180°, 30 m scan.
-Both casters see the same segments (pymunk: static ``Segment`` shapes of radius 0).
+The robot stands at random poses inside rooms; each call is one 181-beam, 180° scan out to
+30 m (the default) or 80 m (SICK LMS200 long range). Both casters see the same segments
+(pymunk: static ``Segment`` shapes of radius 0) and give the same ranges (checked).
 
 Run: ``python -m pytest benchmarks/test_raycast.py --benchmark-only``; compare the groups'
 mean times, and ``extra_info['Mrays_per_s']``.
@@ -20,14 +21,14 @@ import pytest
 
 from albot2d.frames import beam_angles
 from albot2d.geometry import Pose
-from albot2d.sim.laser import Laser, LaserNoise
+from albot2d.sim.laser import Laser, LaserNoise, LaserParams
 from albot2d.sim.raycast import BeamFan, RayCaster
 from tests.raycast_helpers import office_segments
 
-MAX_RANGE_M = 30.0
 ROOM_M = 4.0
 N_POSES = 64
 SIZES = {"500walls": 12, "50kwalls": 112}
+RANGES_M = {"30m": 30.0, "80m": 80.0}
 
 
 def room_poses(n_rooms: int, seed: int = 0) -> list[tuple[float, float, float]]:
@@ -45,24 +46,29 @@ def pymunk_space(segments: np.ndarray) -> pymunk.Space:
     return space
 
 
-def pymunk_scan(space: pymunk.Space, pose: tuple[float, float, float], angles: np.ndarray):
+def pymunk_scan(
+    space: pymunk.Space, pose: tuple[float, float, float], angles: np.ndarray, r_max: float
+) -> list[float]:
     x, y, th = pose
-    ends = np.column_stack(
-        [x + MAX_RANGE_M * np.cos(angles + th), y + MAX_RANGE_M * np.sin(angles + th)]
-    ).tolist()
+    ends = np.column_stack([x + r_max * np.cos(angles + th), y + r_max * np.sin(angles + th)])
     query, everything = space.segment_query_first, pymunk.ShapeFilter()
     out = []
-    for end in ends:
+    for end in ends.tolist():
         hit = query((x, y), end, 0.0, everything)
-        out.append(hit.alpha * MAX_RANGE_M if hit is not None else math.inf)
+        out.append(hit.alpha * r_max if hit is not None else math.inf)
     return out
 
 
 @pytest.fixture(scope="module", params=list(SIZES))
-def world(request):
+def office(request):
     n = SIZES[request.param]
-    segs = office_segments(n, ROOM_M)
-    return request.param, segs, room_poses(n)
+    return request.param, office_segments(n, ROOM_M), room_poses(n)
+
+
+@pytest.fixture(params=list(RANGES_M))
+def world(request, office):
+    name, segs, poses = office
+    return f"{name}-{request.param}", segs, poses, RANGES_M[request.param]
 
 
 def rays_per_s(benchmark, n_rays: int) -> None:
@@ -70,7 +76,7 @@ def rays_per_s(benchmark, n_rays: int) -> None:
 
 
 def test_ours_181(benchmark, world) -> None:
-    name, segs, poses = world
+    name, segs, poses, r_max = world
     benchmark.group = f"raycast-{name}"
     caster = RayCaster(segs)
     fan = BeamFan.from_angles(beam_angles(181))
@@ -78,7 +84,7 @@ def test_ours_181(benchmark, world) -> None:
 
     def one_scan():
         x, y, th = next(cycle)
-        return caster.cast((x, y), fan, MAX_RANGE_M, heading=th)
+        return caster.cast((x, y), fan, r_max, heading=th)
 
     ranges = benchmark(one_scan)
     assert ranges.shape == (181,)
@@ -87,24 +93,24 @@ def test_ours_181(benchmark, world) -> None:
 
 
 def test_pymunk_181(benchmark, world) -> None:
-    name, segs, poses = world
+    name, segs, poses, r_max = world
     benchmark.group = f"raycast-{name}"
     space = pymunk_space(segs)
     angles = beam_angles(181)
     # Same answers as ours (pymunk reports hits as a float fraction of the query length).
     caster = RayCaster(segs)
     for pose in poses[:8]:
-        ours = caster.cast(pose[:2], angles + pose[2], MAX_RANGE_M)
-        theirs = np.array(pymunk_scan(space, pose, angles))
+        ours = caster.cast(pose[:2], angles + pose[2], r_max)
+        theirs = np.array(pymunk_scan(space, pose, angles, r_max))
         np.testing.assert_allclose(ours, theirs, atol=1e-6)
     cycle = itertools.cycle(poses)
-    benchmark(lambda: pymunk_scan(space, next(cycle), angles))
+    benchmark(lambda: pymunk_scan(space, next(cycle), angles, r_max))
     benchmark.extra_info["walls"] = len(segs)
     rays_per_s(benchmark, 181)
 
 
 def test_ours_361(benchmark, world) -> None:
-    name, segs, poses = world
+    name, segs, poses, r_max = world
     benchmark.group = f"raycast-{name}"
     caster = RayCaster(segs)
     fan = BeamFan.from_angles(beam_angles(361))
@@ -112,25 +118,25 @@ def test_ours_361(benchmark, world) -> None:
 
     def one_scan():
         x, y, th = next(cycle)
-        return caster.cast((x, y), fan, MAX_RANGE_M, heading=th)
+        return caster.cast((x, y), fan, r_max, heading=th)
 
     benchmark(one_scan)
     rays_per_s(benchmark, 361)
 
 
 def test_laser_scan_sick_noise(benchmark, world) -> None:
-    """A whole noisy ``Laser.scan`` (jitter, mixed pixels, noise, quantisation, dropouts)."""
-    name, segs, poses = world
+    """A whole ``Laser.scan`` with SICK-like noise (mixed pixels, noise, quantisation...)."""
+    name, segs, poses, r_max = world
     benchmark.group = f"raycast-{name}"
-    laser = Laser(segs, noise=LaserNoise.sick_lms200())
+    laser = Laser(segs, LaserParams(max_range_m=r_max), LaserNoise.sick_lms200())
     rng = np.random.default_rng(0)
     cycle = itertools.cycle([Pose(*p) for p in poses])
     benchmark(lambda: laser.scan(next(cycle), rng))
     rays_per_s(benchmark, 181)
 
 
-def test_index_build(benchmark, world) -> None:
-    _, segs, _ = world
+def test_index_build(benchmark, office) -> None:
+    _, segs, _ = office
     benchmark.group = "raycast-index-build"
     benchmark.extra_info["walls"] = len(segs)
     benchmark.pedantic(RayCaster, args=(segs,), rounds=3, iterations=1)

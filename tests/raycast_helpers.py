@@ -15,7 +15,17 @@ import shapely
 
 from albot2d.sim.raycast import MIN_SEGMENT_LENGTH_M
 
-__all__ = ["box_segments", "office_segments", "ring_segments", "shapely_ranges"]
+__all__ = [
+    "EXACT_M",
+    "box_segments",
+    "grazing",
+    "office_segments",
+    "ring_segments",
+    "shapely_ranges",
+]
+
+#: Exact means equal to this many metres.
+EXACT_M = 1e-9
 
 
 def shapely_ranges(
@@ -64,3 +74,12 @@ def office_segments(n: int, room_m: float = 4.0, door_m: float = 1.0) -> np.ndar
                 segs += [[a, c, a + side, c], [a + side + door_m, c, a + room_m, c]]
                 segs += [[c, a, c, a + side], [c, a + side + door_m, c, a + room_m]]
     return np.asarray(segs, dtype=np.float64)
+
+
+def grazing(segs: np.ndarray, origin: tuple[float, float], angles: np.ndarray) -> np.ndarray:
+    """Beams passing within EXACT_M of a segment end: a hit or a miss there are both right."""
+    ends = np.asarray(segs, dtype=np.float64).reshape(-1, 2) - np.asarray(origin)
+    d = np.column_stack([np.cos(angles), np.sin(angles)])
+    along = d @ ends.T
+    across = np.abs(d[:, 0:1] * ends[:, 1] - d[:, 1:2] * ends[:, 0])
+    return np.any((across < EXACT_M) & (along > -EXACT_M), axis=1)

@@ -7,13 +7,22 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from albot2d.errors import InputError
 from albot2d.frames import Scan
-from albot2d.geometry import Pose, point_segment_distance, transform_points
+from albot2d.geometry import (
+    Pose,
+    point_segment_distance,
+    polygon_ring_segments,
+    transform_points,
+    transform_segments,
+)
 from albot2d.sim.laser import Laser, LaserNoise, LaserParams
-from albot2d.sim.raycast import RayCaster
-from tests.raycast_helpers import box_segments, office_segments, shapely_ranges
+from albot2d.sim.raycast import RayCaster, cast_brute_force
+from tests.raycast_helpers import EXACT_M, box_segments, grazing, office_segments, shapely_ranges
+from worldgen.strategies import worlds
 
 ROOM = box_segments(-4.0, -3.0, 6.0, 5.0)
 ZERO = LaserNoise.zero()
@@ -178,6 +187,32 @@ def test_max_range_returns_are_invalid() -> None:
     assert np.all(scan.ranges <= 8.0)
     short = Laser([[5.0, -1.0, 5.0, 1.0]], LaserParams(max_range_m=4.0), ZERO)
     assert not short.scan(Pose(), np.random.default_rng(0)).valid.any()
+
+
+@settings(max_examples=8)
+@given(world=worlds(max_size_m=25.0, dynamic=True), heading=st.floats(-math.pi, math.pi))
+def test_generated_worlds_scan_exactly_with_moving_obstacles(world, heading: float) -> None:
+    """Zero-noise scans in generated worlds equal brute force over walls, clutter and the
+    moving obstacles' outlines, and every valid hit lies on one of them."""
+    laser = Laser.for_world(world, noise=ZERO)
+    movers = [
+        transform_segments(o.pose.as_array(), polygon_ring_segments(o.shape))
+        for o in world.dynamic_obstacles
+    ]
+    extra = np.vstack(movers) if movers else None
+    everything = np.vstack([world.obstacle_segments, *movers])
+    poses = [world.start] + [Pose(x, y, heading) for x, y in world.roadmap.nodes[:4]]
+    for pose in poses:
+        scan = laser.scan(pose, np.random.default_rng(0), extra_segments=extra)
+        world_angles = laser.angles + pose.theta
+        want = cast_brute_force(everything, (pose.x, pose.y), world_angles, 30.0)
+        clear = ~grazing(everything, (pose.x, pose.y), world_angles)  # float-precision ties
+        np.testing.assert_array_equal(scan.valid[clear], np.isfinite(want[clear]))
+        both = clear & scan.valid
+        np.testing.assert_allclose(scan.ranges[both], want[both], atol=EXACT_M)
+        if both.any():
+            pts = transform_points(pose.as_array(), scan.points(valid_only=False)[both])
+            assert point_segment_distance(pts, everything).min(axis=1).max() < EXACT_M
 
 
 def test_for_world_uses_obstacle_segments() -> None:

@@ -13,9 +13,15 @@ from albot2d.errors import InputError
 from albot2d.frames import beam_angles
 from albot2d.geometry import Pose, point_segment_distance, transform_segments
 from albot2d.sim.raycast import NEAR_PASS_MIN_PIECES, BeamFan, RayCaster, cast_brute_force
-from tests.raycast_helpers import box_segments, office_segments, ring_segments, shapely_ranges
+from tests.raycast_helpers import (
+    EXACT_M,
+    box_segments,
+    grazing,
+    office_segments,
+    ring_segments,
+    shapely_ranges,
+)
 
-EXACT_M = 1e-9
 CONTACT_M = 1e-9
 FAN = beam_angles(181, math.pi)
 
@@ -40,16 +46,7 @@ def assume_not_touching(segs: np.ndarray, ox: float, oy: float) -> None:
     """Within the contact tolerance of a wall (but not on it) the laser is inside the wall by
     design (all ranges 0) while the references still see past it: skip those origins."""
     d = point_segment_distance(np.array([[ox, oy]]), segs)
-    assume(not np.any((d > 0.0) & (d <= 2 * CONTACT_M)))
-
-
-def grazing(segs: np.ndarray, origin: tuple[float, float], angles: np.ndarray) -> np.ndarray:
-    """Beams passing within EXACT_M of a segment end: a hit or a miss there are both right."""
-    ends = np.asarray(segs, dtype=np.float64).reshape(-1, 2) - np.asarray(origin)
-    d = np.column_stack([np.cos(angles), np.sin(angles)])
-    along = d @ ends.T
-    across = np.abs(d[:, 0:1] * ends[:, 1] - d[:, 1:2] * ends[:, 0])
-    return np.any((across < EXACT_M) & (along > -EXACT_M), axis=1)
+    assume(not np.any((d > 0.0) & (d <= 4 * CONTACT_M)))
 
 
 def assert_same_ranges(
@@ -145,6 +142,7 @@ def test_index_equals_brute_force_and_hits_lie_on_walls(
 def test_rigid_motion_of_world_and_laser_leaves_scan_unchanged(
     segs: np.ndarray, ox: float, oy: float, th: float, move: tuple[float, float, float]
 ) -> None:
+    assume_not_touching(segs, ox, oy)  # the contact decision may flip under rounding
     r_max = 40.0
     before = RayCaster(segs).cast((ox, oy), FAN + th, r_max)
     m = Pose(*move)
