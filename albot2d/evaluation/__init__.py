@@ -1,3 +1,59 @@
-"""Evaluation: relative pose error, homing, map quality, experiments."""
+"""Evaluation: relative pose error, homing, map quality, and the experiments that use them.
 
-__all__: list[str] = []
+- ``experiment``: ``run_experiment(RunSpec)`` — world, tour, simulator, every mapper, report;
+- ``replay``: ``replay_log(path)`` — the same on a recorded CARMEN log and its relations;
+- ``trace`` / ``scoring``: stream frames through the mappers once, then score the trace;
+- ``report``: report.json's header, writing, reading and the printed tables;
+- ``rpe``, ``homing``, ``map_quality``: the metrics themselves.
+"""
+
+from albot2d.evaluation.experiment import (
+    DEFAULT_MAPPERS,
+    ExperimentResult,
+    RunSpec,
+    evaluation_params_from_report,
+    run_experiment,
+)
+from albot2d.evaluation.homing import HomingResult, homing, homing_to_start
+from albot2d.evaluation.map_quality import MapQuality, MapQualityParams, map_quality
+from albot2d.evaluation.replay import DEFAULT_REPLAY_MAPPERS, find_relations, replay_log
+from albot2d.evaluation.report import (
+    REPORT_NAME,
+    format_homing_table,
+    format_summary_table,
+    read_report,
+    write_report,
+)
+from albot2d.evaluation.rpe import RPEResult, RPEStats, relative_pose_error
+from albot2d.evaluation.scoring import EvaluationParams, score_mappers
+from albot2d.evaluation.trace import HomingParams, Trace, drive_mappers
+
+__all__ = [
+    "DEFAULT_MAPPERS",
+    "DEFAULT_REPLAY_MAPPERS",
+    "REPORT_NAME",
+    "EvaluationParams",
+    "ExperimentResult",
+    "HomingParams",
+    "HomingResult",
+    "MapQuality",
+    "MapQualityParams",
+    "RPEResult",
+    "RPEStats",
+    "RunSpec",
+    "Trace",
+    "drive_mappers",
+    "evaluation_params_from_report",
+    "find_relations",
+    "format_homing_table",
+    "format_summary_table",
+    "homing",
+    "homing_to_start",
+    "map_quality",
+    "read_report",
+    "relative_pose_error",
+    "replay_log",
+    "run_experiment",
+    "score_mappers",
+    "write_report",
+]

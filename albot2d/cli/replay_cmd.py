@@ -1,0 +1,92 @@
+"""``albot2d replay``: the mappers on a recorded CARMEN log, scored against its relations.
+
+Reads ``LOG.clf`` or ``LOG.clf.gz`` (FLASER or ROBOTLASER1 lines; see the shared data's
+SOURCES.md), runs every mapper (default albot1 and naive; ``truth`` needs ground truth and
+is refused) and writes ``DIR/report.json`` with each mapper's and raw odometry's relative
+pose error (overall, short < 2 s, long ≥ 2 s), process counts, timings and homing
+estimates (true values null), plus the map figures. The relations file is ``--relations``
+or, if not given, ``LOG.relations`` beside the log or ``../relations/LOG.relations``.
+A malformed log line stops the replay with its file and line; nothing is written then.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from albot2d.cli.run_cmd import (
+    add_scoring_options,
+    finish,
+    positive_int,
+    prepare_out_dir,
+    print_tables,
+    progress_bar,
+    scoring_params,
+)
+
+__all__ = ["register", "run"]
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser(
+        "replay", help="run the mappers on a CARMEN log and score them against its relations",
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
+    )  # fmt: skip
+    p.add_argument("log", metavar="LOG.clf[.gz]", help="a CARMEN log (plain or gzip)")
+    p.add_argument("--relations", metavar="FILE",
+                   help="Kümmerle relations file (default: found beside the log)")
+    p.add_argument("--mapper", nargs="+", action="extend", metavar="NAME",
+                   help="mappers: albot1, naive or module:Class (default: albot1 naive)")
+    p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")
+    add_scoring_options(p)
+    p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
+    p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from albot2d.errors import InputError
+    from albot2d.evaluation import DEFAULT_REPLAY_MAPPERS, find_relations, replay_log
+    from albot2d.evaluation.replay import check_replay_mappers
+    from albot2d.logs.relations import read_relations
+    from albot2d.mapping.registry import resolve_mappers
+
+    log = Path(args.log)
+    if not log.is_file():
+        raise InputError(f"{log}: no such log file")
+    mappers = tuple(args.mapper or DEFAULT_REPLAY_MAPPERS)
+    check_replay_mappers(mappers)
+    resolve_mappers(list(mappers))
+    max_frames = positive_int(args.max_frames, "--max-frames")
+    params = scoring_params(args)
+    relations = Path(args.relations) if args.relations is not None else find_relations(log)
+    if relations is not None:
+        read_relations(relations)  # a bad relations file fails before anything is created
+    out, created = prepare_out_dir(args.out)
+    bar = progress_bar(max_frames, " views", "replay")
+
+    def frame(f: Any, travelled: float) -> None:
+        bar.set_postfix_str(f"{travelled:.0f} m", refresh=False)
+        bar.update(1)
+
+    try:
+        result = finish(
+            out, created, "replay",
+            lambda: replay_log(log, relations_path=relations, mappers=mappers, params=params,
+                               max_frames=max_frames, on_frame=frame),
+            args.no_figures,
+        )  # fmt: skip
+    finally:
+        bar.close()
+    print_tables(result, out)
+    used = result.report["run"].get("relations_used")
+    if relations is None:
+        print(f"albot2d replay: note: no relations file for {log} (give --relations), "
+              "so no RPE", file=sys.stderr)
+    elif not used:
+        print(f"albot2d replay: warning: no relation of {relations} matches the log's "
+              "timestamps (is it the relations file of this log?)", file=sys.stderr)
+    return 0

@@ -1,0 +1,359 @@
+"""``albot2d run``: the main experiment — world, tour, every mapper, report.json and figures.
+
+Generates (``--kind``/``--seed``) or loads (``--world``) a world, drives a tour through it
+with a profile and an odometry noise preset, runs every mapper on the same frames and
+writes ``DIR/report.json`` (homing, relative pose error, map quality, process counts,
+timings, and every parameter needed to reproduce the run) plus PNGs: the paths, every
+mapper's map, Albot1's map history and route map, and homing. ``--reproduce report.json``
+re-runs a recorded run and says whether the new report matches it.
+
+Defaults (``albot2d run --out DIR``): office world seed 0, profile dataset1, odometry noise
+``typical``, a loop tour of at least 100 m, mappers albot1 naive truth. Every input is
+checked before the run; the figures are drawn in memory and report.json is written last,
+so a failure leaves no report and no figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import os
+import sys
+import tempfile
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from albot2d.atomic import atomic_path
+from albot2d.errors import InputError
+
+__all__ = [
+    "DEFAULT_KIND",
+    "DEFAULT_NOISE",
+    "add_scoring_options",
+    "finish",
+    "positive_int",
+    "positive_number",
+    "prepare_out_dir",
+    "register",
+    "run",
+    "scoring_params",
+]
+
+DEFAULT_KIND = "office"
+DEFAULT_PROFILE = "dataset1"
+DEFAULT_NOISE = "typical"
+DEFAULT_LASER_NOISE = "sick_lms200"
+DEFAULT_TOUR_KIND = "loop"
+DEFAULT_TOUR_LENGTH_M = 100.0
+# Options that describe the run itself; --reproduce takes them from the report instead.
+_RUN_OPTIONS = ("world", "kind", "seed", "width", "height", "param", "profile", "mapper",
+                "noise", "laser_noise", "tour_kind", "tour_length", "max_frames", "stop_every",
+                "min_start_distance", "last_k_views", "snapshots")
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser(
+        "run", help="run the main experiment: world → tour → every mapper → report + figures",
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
+    )  # fmt: skip
+    world = p.add_argument_group("world (default: --kind office --seed 0)")
+    world.add_argument("--world", metavar="world.json", help="a world file (albot2d world)")
+    world.add_argument("--kind", help="generate a world: corridors, rooms, open, office, mixed")
+    world.add_argument("--seed", metavar="N", help="world and run seed (default 0)")
+    world.add_argument("--width", metavar="W", help="generated world's width in metres")
+    world.add_argument("--height", metavar="H", help="generated world's height in metres")
+    world.add_argument("--param", action="append", metavar="NAME=VALUE",
+                       help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)")
+    drive = p.add_argument_group("driving")
+    drive.add_argument("--profile", help=f"dataset1, dataset2, dataset3, start_stop "
+                       f"(default {DEFAULT_PROFILE})")
+    drive.add_argument("--noise", help=f"odometry noise preset: none, low, typical, high "
+                       f"(default {DEFAULT_NOISE})")
+    drive.add_argument("--laser-noise", help=f"sick_lms200 or zero (default {DEFAULT_LASER_NOISE})")
+    drive.add_argument("--tour-kind", help="loop, out_and_back, backtracking (default loop)")
+    drive.add_argument("--tour-length", metavar="METRES",
+                       help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})")
+    drive.add_argument("--max-frames", metavar="N", help="stop after N views")
+    p.add_argument("--mapper", nargs="+", action="extend", metavar="NAME",
+                   help="mappers: albot1, naive, truth or module:Class (default: albot1 naive "
+                        "truth)")
+    add_scoring_options(p)
+    p.add_argument("--reproduce", metavar="report.json",
+                   help="re-run the run recorded in a report (give only --out with it)")
+    p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
+    p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    p.set_defaults(handler=run)
+
+
+def add_scoring_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("scoring")
+    g.add_argument("--stop-every", metavar="METRES",
+                   help="homing: stop every this many odometer metres (default 20)")
+    g.add_argument("--min-start-distance", metavar="METRES",
+                   help="homing: skip stops nearer the start than this (default 3)")
+    g.add_argument("--last-k-views", metavar="K",
+                   help="map completeness over the walls seen in the last K views (default 10)")
+    g.add_argument("--snapshots", metavar="N",
+                   help="moments of the map history to draw and report (default 4)")
+
+
+# -- checked conversions ----------------------------------------------------------------
+def positive_number(text: str | None, option: str, *, allow_zero: bool = False) -> float | None:
+    if text is None:
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and (value > 0 or (allow_zero and value == 0))):
+        kind = "non-negative" if allow_zero else "positive"
+        raise InputError(f"{option} must be a {kind} number, got {text!r}")
+    return value
+
+
+def positive_int(text: str | None, option: str, *, allow_zero: bool = False) -> int | None:
+    if text is None:
+        return None
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0 or (value == 0 and not allow_zero):
+        kind = "non-negative" if allow_zero else "positive"
+        raise InputError(f"{option} must be a {kind} integer, got {text!r}")
+    return value
+
+
+def scoring_params(args: argparse.Namespace, base: Any = None) -> Any:
+    """EvaluationParams from the scoring options (unset ones from ``base`` or defaults)."""
+    import dataclasses
+
+    from albot2d.evaluation import EvaluationParams
+
+    base = base or EvaluationParams()
+    homing = base.homing
+    every = positive_number(args.stop_every, "--stop-every")
+    near = positive_number(args.min_start_distance, "--min-start-distance", allow_zero=True)
+    if every is not None:
+        homing = dataclasses.replace(homing, stop_every_m=every)
+    if near is not None:
+        homing = dataclasses.replace(homing, min_start_distance_m=near)
+    quality = base.map_quality
+    k = positive_int(args.last_k_views, "--last-k-views")
+    if k is not None:
+        quality = dataclasses.replace(quality, last_k_views=k)
+    snapshots = positive_int(args.snapshots, "--snapshots") or base.snapshots
+    return dataclasses.replace(base, homing=homing, map_quality=quality, snapshots=snapshots)
+
+
+def _world_params(args: argparse.Namespace) -> dict[str, Any]:
+    from albot2d.cli.world_cmd import parse_param
+
+    params: dict[str, Any] = {}
+    for text in args.param or []:
+        name, value = parse_param(text)
+        if name in params:
+            raise InputError(f"--param {name} given twice")
+        params[name] = value
+    for option, name in (("--width", "width_m"), ("--height", "height_m")):
+        value = positive_number(getattr(args, option[2:]), option)
+        if value is not None:
+            if name in params:
+                raise InputError(f"give {option} or --param {name}, not both")
+            params[name] = value
+    return params
+
+
+def _spec(args: argparse.Namespace) -> Any:
+    from albot2d.evaluation import DEFAULT_MAPPERS, RunSpec
+
+    params = _world_params(args)
+    if args.world is not None and (args.kind is not None or params):
+        raise InputError("give --world, or --kind with its parameters, not both")
+    return RunSpec(
+        seed=positive_int(args.seed, "--seed", allow_zero=True) or 0,
+        kind=None if args.world is not None else (args.kind or DEFAULT_KIND),
+        world_file=args.world,
+        world_params=params,
+        profile=args.profile or DEFAULT_PROFILE,
+        noise=args.noise or DEFAULT_NOISE,
+        laser_noise=args.laser_noise or DEFAULT_LASER_NOISE,
+        tour_kind=args.tour_kind or DEFAULT_TOUR_KIND,
+        tour_length_m=positive_number(args.tour_length, "--tour-length") or DEFAULT_TOUR_LENGTH_M,
+        mappers=tuple(args.mapper or DEFAULT_MAPPERS),
+        max_frames=positive_int(args.max_frames, "--max-frames"),
+    )
+
+
+def _check_spec(spec: Any) -> None:
+    """Everything a run needs that can be checked without running it."""
+    from albot2d.mapping.registry import resolve_mappers
+    from albot2d.sim.driving import get_profile
+    from albot2d.sim.odometry import noise_preset
+
+    get_profile(spec.profile)
+    noise_preset(spec.noise)
+    resolve_mappers(list(spec.mappers))
+    if spec.world_file is not None and not Path(spec.world_file).is_file():
+        raise InputError(f"{spec.world_file}: no such world file")
+    if spec.kind is not None:
+        from worldgen.generate import make_params
+
+        make_params(spec.kind, **spec.world_params)
+
+
+# -- output -----------------------------------------------------------------------------
+def prepare_out_dir(text: str | None) -> tuple[Path, bool]:
+    """Create ``--out`` if needed and check it is writable; returns (dir, created)."""
+    if not text:
+        raise InputError("give --out DIR, the directory for report.json and the figures")
+    out = Path(text)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} exists and is not a directory")
+    created = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".albot2d-probe.", dir=out)
+    except OSError as exc:
+        _remove_if_empty(out, created)
+        raise OSError(exc.errno, f"cannot write there ({exc.strerror})", str(out)) from None
+    os.close(fd)
+    os.unlink(probe)
+    return out, created
+
+
+def _remove_if_empty(out: Path, created: bool) -> None:
+    if created:
+        with contextlib.suppress(OSError):
+            out.rmdir()  # only succeeds when nothing was left in it
+
+
+def _render(result: Any, no_figures: bool, command: str) -> dict[str, bytes]:
+    if no_figures:
+        return {}
+    try:
+        from albot2d.plots_maps import render_experiment_figures
+
+        return render_experiment_figures(result)
+    except ImportError as exc:
+        print(f"albot2d {command}: note: no figures ({exc}); pip install 'albot2d[viz]'",
+              file=sys.stderr)
+        return {}
+
+
+def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, bytes]) -> None:
+    """Write the figures and report.json atomically; report.json is renamed into place last."""
+    from albot2d.evaluation.report import REPORT_NAME, report_json
+
+    text = report_json(report).encode("utf-8")
+    with contextlib.ExitStack() as stack:
+        # ExitStack renames in reverse order: the report (entered first) appears last.
+        temps = {REPORT_NAME: stack.enter_context(atomic_path(out / REPORT_NAME))}
+        for name in figures:
+            temps[name] = stack.enter_context(atomic_path(out / name))
+        temps[REPORT_NAME].write_bytes(text)
+        for name, data in figures.items():
+            temps[name].write_bytes(data)
+
+
+def finish(
+    out: Path, created: bool, command: str, compute: Callable[[], Any], no_figures: bool
+) -> Any:
+    """Run ``compute`` (→ ExperimentResult), draw the figures, write everything; on any
+    failure remove the output directory again if this command created it."""
+    try:
+        result = compute()
+        figures = _render(result, no_figures, command)
+        result.report["figures"] = sorted(figures)
+        write_outputs(out, result.report, figures)
+    except BaseException:
+        _remove_if_empty(out, created)
+        raise
+    return result
+
+
+def progress_bar(total: float | None, unit: str, desc: str) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, leave=False,
+                disable=not sys.stderr.isatty(), dynamic_ncols=True)
+
+
+def print_tables(result: Any, out: Path) -> None:
+    from albot2d.evaluation.report import (
+        REPORT_NAME,
+        format_homing_table,
+        format_summary_table,
+    )
+
+    report = result.report
+    print(f"{result.title}  ({report['wall_time_s']:.1f} s)")
+    print(format_summary_table(report))
+    print(format_homing_table(report))
+    print(f"-> {out / REPORT_NAME} + {len(report['figures'])} figures")
+
+
+def _differences(a: Any, b: Any, path: str = "") -> list[str]:
+    if isinstance(a, dict) and isinstance(b, dict):
+        out: list[str] = []
+        for key in sorted(set(a) | set(b)):
+            out += _differences(a.get(key), b.get(key), f"{path}.{key}" if path else key)
+        return out
+    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        return [d for i, (x, y) in enumerate(zip(a, b, strict=True))
+                for d in _differences(x, y, f"{path}[{i}]")]
+    return [] if a == b else [path]
+
+
+def run(args: argparse.Namespace) -> int:
+    from albot2d.evaluation import RunSpec, evaluation_params_from_report, run_experiment
+    from albot2d.evaluation.report import read_report, without_timings
+
+    recorded = None
+    if args.reproduce is not None:
+        given = [name for name in _RUN_OPTIONS if getattr(args, name) is not None]
+        if given:
+            flags = ", ".join("--" + n.replace("_", "-") for n in given)
+            raise InputError(f"--reproduce takes the run's settings from the report; drop {flags}")
+        recorded = read_report(args.reproduce)
+        spec = RunSpec.from_report(recorded, where=args.reproduce)
+        params = evaluation_params_from_report(recorded)
+    else:
+        spec = _spec(args)
+        params = scoring_params(args)
+    _check_spec(spec)
+    out, created = prepare_out_dir(args.out)
+    bar = None
+
+    def start(world: Any, tour: Any) -> None:
+        nonlocal bar
+        bar = progress_bar(round(tour.length_m, 1), "m", "run")
+
+    def frame(f: Any, travelled: float) -> None:
+        if bar is not None:
+            bar.n = round(min(travelled, bar.total), 1)
+            bar.set_postfix_str(f"{f.index + 1} views", refresh=False)
+            bar.update(0)
+
+    try:
+        result = finish(out, created, "run",
+                        lambda: run_experiment(spec, params, on_start=start, on_frame=frame),
+                        args.no_figures)
+    finally:
+        if bar is not None:
+            bar.close()
+    print_tables(result, out)
+    if recorded is not None:
+        ignore = ("figures", "albot2d_version")
+        diff = _differences(
+            {k: v for k, v in without_timings(recorded).items() if k not in ignore},
+            {k: v for k, v in without_timings(result.report).items() if k not in ignore},
+        )
+        if diff:
+            shown = ", ".join(diff[:5]) + (f" and {len(diff) - 5} more" if len(diff) > 5 else "")
+            print(f"reproduce: differs from {args.reproduce} at {shown}")
+        else:
+            print(f"reproduce: identical to {args.reproduce} (apart from wall-clock timings)")
+    return 0

@@ -1,0 +1,182 @@
+"""report.json: the schema's header, plain-JSON conversion, atomic writing, reading back,
+and the short tables printed at the end of a run.
+
+Top level (see the README's "report.json" section): ``format``, ``format_version``,
+``albot2d_version``, ``command`` (run/replay), ``seed``, ``world``, ``profile``, ``params``,
+``run`` (what was driven or read), ``odometry`` (raw odometry's ``rpe``), ``mappers`` (name →
+``counts``, ``homing``, ``rpe``, ``map``, ``timing_ms``, …), ``figures`` and ``wall_time_s``.
+Missing values (anything needing the truth on a real log, NaN) are ``null``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from albot2d import __version__
+from albot2d.atomic import atomic_write_text
+from albot2d.errors import InputError
+
+__all__ = [
+    "NONDETERMINISTIC_KEYS",
+    "REPORT_FORMAT",
+    "REPORT_FORMAT_VERSION",
+    "REPORT_NAME",
+    "format_homing_table",
+    "format_summary_table",
+    "make_report",
+    "plain",
+    "read_report",
+    "report_json",
+    "without_timings",
+    "write_report",
+]
+
+REPORT_NAME = "report.json"
+REPORT_FORMAT = "albot2d-report"
+REPORT_FORMAT_VERSION = 1
+# Wall-clock measurements: the only fields that differ between two runs of the same report.
+NONDETERMINISTIC_KEYS = ("wall_time_s", "timing_ms")
+
+
+def plain(value: Any) -> Any:
+    """``value`` as JSON types: dataclasses, numpy values, tuples converted; NaN/inf → None."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        value = dataclasses.asdict(value)
+    if isinstance(value, Mapping):
+        return {str(k): plain(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return plain(value.tolist())
+    if isinstance(value, list | tuple):
+        return [plain(v) for v in value]
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    if isinstance(value, int | np.integer):
+        return int(value)
+    if isinstance(value, float | np.floating):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if value is None or isinstance(value, str):
+        return value
+    raise TypeError(f"cannot store a {type(value).__name__} in report.json")
+
+
+def make_report(command: str, **sections: Any) -> dict[str, Any]:
+    """A report dict: the header, then ``sections`` in the given order, as plain JSON."""
+    head = {
+        "format": REPORT_FORMAT,
+        "format_version": REPORT_FORMAT_VERSION,
+        "albot2d_version": __version__,
+        "command": command,
+    }
+    return plain(head | sections)  # type: ignore[no-any-return]
+
+
+def report_json(report: Mapping[str, Any]) -> str:
+    return json.dumps(plain(report), indent=2, allow_nan=False) + "\n"
+
+
+def write_report(path: str | os.PathLike[str], report: Mapping[str, Any]) -> None:
+    """Write ``report`` atomically: the file appears complete or not at all."""
+    atomic_write_text(path, report_json(report))
+
+
+def read_report(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Read a report.json written by ``albot2d run``/``replay`` (checks its format)."""
+    with open(path, encoding="utf-8") as handle:
+        try:
+            report = json.load(handle)
+        except json.JSONDecodeError as exc:
+            raise InputError(f"{path}:{exc.lineno}: invalid JSON ({exc.msg})") from None
+    if not isinstance(report, dict) or report.get("format") != REPORT_FORMAT:
+        raise InputError(f"{path}: not an albot2d report (format != {REPORT_FORMAT!r})")
+    version = report.get("format_version")
+    if version != REPORT_FORMAT_VERSION:
+        raise InputError(
+            f"{path}: report format_version {version!r}, this albot2d reads "
+            f"{REPORT_FORMAT_VERSION}"
+        )
+    return report
+
+
+def without_timings(value: Any) -> Any:
+    """A copy of a report without its wall-clock fields (to compare two runs)."""
+    if isinstance(value, dict):
+        return {k: without_timings(v) for k, v in value.items() if k not in NONDETERMINISTIC_KEYS}
+    if isinstance(value, list):
+        return [without_timings(v) for v in value]
+    return value
+
+
+# -- tables ---------------------------------------------------------------------------
+def _num(value: Any, fmt: str) -> str:
+    return "-" if value is None else format(value, fmt)
+
+
+def _pm(stats: Mapping[str, Any] | None, key: str, fmt: str) -> str:
+    if not stats or stats.get(f"{key}_mean") is None:
+        return "-"
+    return f"{stats[f'{key}_mean']:{fmt}}±{stats[f'{key}_std']:{fmt}}"
+
+
+def _rpe_cells(rpe: Mapping[str, Any] | None) -> list[str]:
+    short = rpe.get("short") if rpe else None
+    long = rpe.get("long") if rpe else None
+    return [_pm(rpe, "trans_m", ".3f"), _pm(rpe, "rot_deg", ".2f"),
+            _pm(short, "rot_deg", ".2f"), _pm(long, "trans_m", ".2f"), _pm(long, "rot_deg", ".1f")]
+
+
+def _table(header: list[str], rows: list[list[str]]) -> str:
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    lines = ["  ".join(c.ljust(w) if i == 0 else c.rjust(w)
+                       for i, (c, w) in enumerate(zip(r, widths, strict=True)))
+             for r in [header, *rows]]
+    return "\n".join(lines)
+
+
+def format_summary_table(report: Mapping[str, Any]) -> str:
+    """One row per mapper (and raw odometry): counts, RPE, homing worst case, map quality."""
+    header = ["", "views", "maps", "tri", "PI", "RPE m", "RPE deg", "short deg", "long m",
+              "long deg", "home |Δ°|max", "|Δm|max", "map acc m", "p95 m", "complete"]
+    rows = [["odometry", "", "", "", "", *_rpe_cells(report["odometry"].get("rpe")),
+             "", "", "", "", ""]]
+    for name, m in report["mappers"].items():
+        c, h, q = m["counts"], m.get("homing_summary") or {}, m["map"]
+        rows.append([
+            name, str(c["views"]), str(c["local_maps"]), str(c["triangulations"]),
+            str(c["path_integrations"]), *_rpe_cells(m.get("rpe")),
+            _num(h.get("bearing_abs_max_deg"), ".1f"), _num(h.get("distance_abs_max_m"), ".2f"),
+            _num(q.get("accuracy_m_mean"), ".3f"), _num(q.get("accuracy_m_p95"), ".3f"),
+            _num(q.get("completeness"), ".2f"),
+        ])  # fmt: skip
+    return _table(header, rows)
+
+
+def format_homing_table(report: Mapping[str, Any]) -> str:
+    """Per stop: distance travelled, true bearing/distance to the start, and each mapper's
+    estimate (errors in brackets when the truth is known)."""
+    mappers = report["mappers"]
+    names = list(mappers)
+    if not names or not mappers[names[0]]["homing"]:
+        return "homing: no stops (the run never got far enough from its start)"
+    header = ["stop", "view", "odo m", "true °/m"] + [f"{n} °/m (Δ)" for n in names]
+    rows = []
+    for k, first in enumerate(mappers[names[0]]["homing"]):
+        true = (f"{first['bearing_true_deg']:+.1f}/{first['distance_true_m']:.1f}"
+                if first["bearing_true_deg"] is not None else "-")
+        row = [str(k + 1), str(first["view"]), f"{first['travelled_m']:.1f}", true]
+        for name in names:
+            e = mappers[name]["homing"][k]
+            cell = f"{e['bearing_est_deg']:+.1f}/{e['distance_est_m']:.1f}"
+            if e["bearing_error_deg"] is not None:
+                cell += f" ({e['bearing_error_deg']:+.1f}/{e['distance_error_m']:+.1f})"
+            row.append(cell)
+        rows.append(row)
+    return _table(header, rows)

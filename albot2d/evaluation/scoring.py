@@ -1,0 +1,245 @@
+"""Score a :class:`~albot2d.evaluation.trace.Trace`: the per-mapper sections of report.json.
+
+For each mapper: process counts, homing at the trace's stops, relative pose error against
+the relations, map quality against the true walls, end-pose error, per-stage timings, and
+(for view-based mappers with a route map) the moments at which its map history is shown.
+Sections that need the truth (simulation) hold ``None`` on real logs.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from albot2d.errors import InputError
+from albot2d.evaluation.homing import homing
+from albot2d.evaluation.map_quality import MapQualityParams, map_quality
+from albot2d.evaluation.rpe import relative_pose_error
+from albot2d.evaluation.trace import HomingParams, Trace
+from albot2d.geometry import Pose, between_arrays, wrap_angle
+from albot2d.logs.relations import Relations, RelationsOptions
+from albot2d.mapping.protocol import Mapper
+from albot2d.mapping.route_map import RouteMap
+from albot2d.validation import check_positive, check_positive_int
+
+__all__ = [
+    "EvaluationParams",
+    "end_pose_error",
+    "homing_section",
+    "odometry_section",
+    "route_of",
+    "rpe_section",
+    "score_mappers",
+    "snapshot_rows",
+]
+
+FloatArray = NDArray[np.float64]
+_MAP_FIELDS = ("accuracy_m_mean", "accuracy_m_p95", "accuracy_m_max", "completeness")
+
+
+@dataclass(frozen=True, slots=True)
+class EvaluationParams:
+    """How a run is scored.
+
+    - ``rpe_split_s``: relations spanning less than this are "short" (Kümmerle: 2 s).
+    - ``snapshots``: moments (evenly spread, the last at the end) at which a view-based
+      mapper's global map is shown in the history figure and listed in the report.
+    """
+
+    homing: HomingParams = field(default_factory=HomingParams)
+    map_quality: MapQualityParams = field(default_factory=MapQualityParams)
+    relations: RelationsOptions = field(default_factory=RelationsOptions)
+    rpe_split_s: float = 2.0
+    snapshots: int = 4
+
+    def __post_init__(self) -> None:
+        check_positive(self, "rpe_split_s")
+        check_positive_int(self, "snapshots")
+
+
+def route_of(mapper: Mapper) -> RouteMap | None:
+    """The mapper's route map when it is view-based like Albot1, else None."""
+    route = getattr(mapper, "route", None)
+    return route if isinstance(route, RouteMap) else None
+
+
+def trajectory_of(name: str, mapper: Mapper, n_frames: int) -> FloatArray:
+    """The mapper's ``(F, 3)`` trajectory, checked to have one pose per observed frame."""
+    poses = np.asarray(mapper.trajectory(), dtype=np.float64)
+    if poses.shape != (n_frames, 3) or not np.all(np.isfinite(poses)):
+        raise InputError(
+            f"mapper {name!r}: trajectory() gave shape {poses.shape} (finite: "
+            f"{bool(np.all(np.isfinite(poses)))}), expected ({n_frames}, 3) finite poses"
+        )
+    return poses
+
+
+def rpe_section(
+    trace: Trace, poses: FloatArray, relations: Relations | None, split_s: float
+) -> dict[str, Any] | None:
+    """Kümmerle RPE of ``poses`` (one per trace row) against ``relations``; None without any."""
+    if relations is None:
+        return None
+    result = relative_pose_error(
+        trace.timestamps, poses, relations.t1, relations.t2, relations.motion, split_s=split_s
+    )
+    return result.to_dict()
+
+
+def end_pose_error(trace: Trace, poses: FloatArray) -> dict[str, float] | None:
+    """Error of the estimated motion from the first to the last view (needs the truth)."""
+    if trace.true_poses is None:
+        return None
+    truth = between_arrays(trace.true_poses[0], trace.true_poses[-1])
+    est = between_arrays(poses[0], poses[-1])
+    err = between_arrays(truth, est)
+    return {
+        "trans_m": float(math.hypot(err[0], err[1])),
+        "rot_deg": abs(math.degrees(float(wrap_angle(err[2])))),
+    }
+
+
+def homing_section(trace: Trace, name: str) -> list[dict[str, Any]]:
+    """Bearing (deg, + = turn left) and distance (m) to the start at each stop."""
+    out = []
+    for stop in trace.stops:
+        pose, start = stop.estimates[name]
+        bearing_est, distance_est = homing(Pose.from_array(pose), start[:2])
+        entry: dict[str, Any] = {
+            "view": int(trace.frame_indices[stop.row]),
+            "travelled_m": stop.travelled_m,
+            "bearing_est_deg": bearing_est,
+            "bearing_true_deg": None,
+            "distance_est_m": distance_est,
+            "distance_true_m": None,
+            "bearing_error_deg": None,
+            "distance_error_m": None,
+        }
+        if trace.true_poses is not None:
+            bt, dt = homing(Pose.from_array(trace.true_poses[stop.row]), trace.true_poses[0, :2])
+            diff = math.degrees(float(wrap_angle(math.radians(bearing_est - bt))))
+            entry |= {"bearing_true_deg": bt, "distance_true_m": dt,
+                      "bearing_error_deg": diff, "distance_error_m": distance_est - dt}
+        out.append(entry)
+    return out
+
+
+def homing_summary(entries: list[dict[str, Any]]) -> dict[str, Any]:
+    """Worst and mean absolute homing errors (None without truth or stops)."""
+    errors = [(e["bearing_error_deg"], e["distance_error_m"]) for e in entries
+              if e["bearing_error_deg"] is not None]
+    if not errors:
+        return {"stops": len(entries), "bearing_abs_max_deg": None, "bearing_abs_mean_deg": None,
+                "distance_abs_max_m": None, "distance_abs_mean_m": None}
+    b, d = np.abs(np.array(errors, dtype=np.float64)).T
+    return {"stops": len(entries), "bearing_abs_max_deg": float(b.max()),
+            "bearing_abs_mean_deg": float(b.mean()), "distance_abs_max_m": float(d.max()),
+            "distance_abs_mean_m": float(d.mean())}
+
+
+def snapshot_rows(trace: Trace, n: int) -> list[int]:
+    """``n`` trace rows spread evenly over the run, the last one at its end (ascending)."""
+    f = trace.n_frames
+    return sorted({max(math.ceil(f * k / n) - 1, 0) for k in range(1, n + 1)})
+
+
+def _map_rows(trace: Trace, route: RouteMap) -> NDArray[np.int64]:
+    """Trace row of each local map's view."""
+    frame_indices = np.array([m.frame_index for m in route], dtype=np.int64)
+    order = np.argsort(trace.frame_indices, kind="stable")
+    pos = np.searchsorted(trace.frame_indices[order], frame_indices)
+    return order[np.clip(pos, 0, len(order) - 1)]
+
+
+def counts_section(trace: Trace, mapper: Mapper) -> dict[str, Any]:
+    counts = mapper.counts()
+    out: dict[str, Any] = {
+        "views": counts.views,
+        "local_maps": counts.local_maps,
+        "triangulations": counts.triangulations,
+        "path_integrations": counts.path_integrations,
+        "global_map_surfaces": len(mapper.global_map().segments),
+        "moves_between_updates_mean": (
+            counts.views / counts.local_maps if counts.local_maps else None
+        ),
+        "moves_between_updates_max": None,
+        "metres_between_updates_mean": None,
+    }
+    route = route_of(mapper)
+    if route is not None and len(route) > 1:
+        rows = _map_rows(trace, route)
+        moves = np.diff(rows)
+        out["moves_between_updates_mean"] = float(moves.mean())
+        out["moves_between_updates_max"] = int(moves.max())
+        out["metres_between_updates_mean"] = float(np.diff(trace.travelled_m[rows]).mean())
+    return out
+
+
+def snapshots_section(trace: Trace, mapper: Mapper, n: int) -> list[dict[str, Any]] | None:
+    """The history moments of a view-based mapper: view, update number, surfaces then."""
+    route = route_of(mapper)
+    if route is None:
+        return None
+    map_frames = np.array([m.frame_index for m in route], dtype=np.int64)
+    out = []
+    for row in snapshot_rows(trace, n):
+        view = int(trace.frame_indices[row])
+        update = int(np.count_nonzero(map_frames <= view))
+        surfaces = len(mapper.global_map(at_update=update).segments)  # type: ignore[call-arg]
+        out.append({"view": view, "row": row, "travelled_m": float(trace.travelled_m[row]),
+                    "update": update, "surfaces": surfaces})
+    return out
+
+
+def map_section(
+    trace: Trace, mapper: Mapper, world_segments: FloatArray | None, params: MapQualityParams
+) -> dict[str, Any]:
+    """Map accuracy and completeness against the true walls (None fields on real logs)."""
+    segments = mapper.global_map().segments
+    if world_segments is None or trace.true_poses is None:
+        return dict.fromkeys(_MAP_FIELDS) | {"surfaces": len(segments)}
+    quality = map_quality(
+        segments, world_segments, start_pose=Pose.from_array(trace.true_poses[0]),
+        seen_points=trace.seen_points, params=params,
+    )  # fmt: skip
+    return quality.to_dict()
+
+
+def odometry_section(
+    trace: Trace, relations: Relations | None, params: EvaluationParams
+) -> dict[str, Any]:
+    """Raw odometry scored like a mapper (its trajectory is the odometry poses)."""
+    return {
+        "rpe": rpe_section(trace, trace.odom_poses, relations, params.rpe_split_s),
+        "end_pose_error": end_pose_error(trace, trace.odom_poses),
+    }
+
+
+def score_mappers(
+    trace: Trace,
+    relations: Relations | None,
+    world_segments: FloatArray | None,
+    params: EvaluationParams,
+) -> dict[str, dict[str, Any]]:
+    """The ``mappers`` section of report.json, in the order the mappers were given."""
+    out: dict[str, dict[str, Any]] = {}
+    for name, mapper in trace.mappers.items():
+        poses = trajectory_of(name, mapper, trace.n_frames)
+        entries = homing_section(trace, name)
+        timing = dict(mapper.timings_ms())
+        timing["total"] = trace.wall_ms.get(name, 0.0) / max(trace.n_frames, 1)
+        out[name] = {
+            "counts": counts_section(trace, mapper),
+            "homing": entries,
+            "homing_summary": homing_summary(entries),
+            "rpe": rpe_section(trace, poses, relations, params.rpe_split_s),
+            "end_pose_error": end_pose_error(trace, poses),
+            "map": map_section(trace, mapper, world_segments, params.map_quality),
+            "snapshots": snapshots_section(trace, mapper, params.snapshots),
+            "timing_ms": timing,
+        }
+    return out
