@@ -24,6 +24,9 @@ Numerical conventions (all tested):
 - A ray parallel to a wall never hits it, except a wall seen exactly edge-on (the origin on
   its line, within ``contact_tolerance_m``) whose near end is hit by the ray pointing at it.
 - An origin within ``contact_tolerance_m`` of a wall is inside it: every range is 0.
+- A ray passing a lone segment end within float precision of its own direction may hit
+  or miss that end (both are right to rounding); elsewhere ranges match an exact
+  intersection to ~1e-12 relative.
 - Zero-length segments (shorter than ``MIN_SEGMENT_LENGTH_M``) are dropped.
 - No hit within ``max_range``: the range is ``inf``.
 """
