@@ -90,8 +90,11 @@ def test_heuristic_one_drops_the_outlier_and_heuristic_two_picks_nearest_to_pi()
     assert len(aff.poses) == 4
     # The path-integration estimate lies towards the outlier; heuristic 1 must remove it.
     pi = Pose.from_array(aff.poses[2])
-    with_h1 = triangulate(local, cur, pi)
-    without_h1 = triangulate(local, cur, pi, TriangulationParams(use_outlier_heuristic=False))
+    bare = {"max_pi_deviation_m": math.inf, "max_pi_deviation_deg": math.inf}
+    with_h1 = triangulate(local, cur, pi, TriangulationParams(**bare))
+    without_h1 = triangulate(
+        local, cur, pi, TriangulationParams(use_outlier_heuristic=False, **bare)
+    )
     assert without_h1 is not None and with_h1 is not None
     assert_pose_close(without_h1, pi)
     assert with_h1.distance_to(truth) < 0.03
@@ -100,3 +103,30 @@ def test_heuristic_one_drops_the_outlier_and_heuristic_two_picks_nearest_to_pi()
 def test_mismatched_lengths_raise() -> None:
     with pytest.raises(ValueError, match="surfaces"):
         triangulate(Surfaces.from_segments(ROOM[:2]), Surfaces.from_segments(ROOM[:1]), Pose())
+
+
+def test_affordances_inconsistent_with_path_integration_are_discarded() -> None:
+    local = Surfaces.from_segments(ROOM[:2])
+    truth = Pose(0.2, 0.1, 0.0)
+    current = observe(local, truth).segments.copy()
+    # Surface 0 seen rotated by 8 degrees about the robot: its affordance is far off.
+    c, s = math.cos(math.radians(8)), math.sin(math.radians(8))
+    p = current[0].reshape(2, 2)
+    current[0] = (p @ np.array([[c, s], [-s, c]])).ravel()
+    cur = Surfaces.from_segments(current)
+    pi = Pose(0.21, 0.1, 0.01)
+    est = triangulate(local, cur, pi)
+    assert est is not None
+    assert_pose_close(est, truth)  # only surface 1 is consistent with path integration
+    # Only the bad surface left: no affordance survives, the caller falls back to PI.
+    assert triangulate(local.select([0]), cur.select([0]), pi) is None
+    bare = TriangulationParams(max_pi_deviation_m=math.inf, max_pi_deviation_deg=math.inf)
+    assert triangulate(local.select([0]), cur.select([0]), pi, bare) is not None
+
+
+@pytest.mark.parametrize("field", ["max_pi_deviation_m", "max_pi_deviation_deg"])
+def test_gate_parameters_are_validated(field: str) -> None:
+    from albot2d.errors import InputError
+
+    with pytest.raises(InputError, match=field):
+        TriangulationParams(**{field: -1.0})

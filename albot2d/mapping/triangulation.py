@@ -9,13 +9,25 @@ heuristics pick one affordance:
    RMS distance of the positions to their mean; at least the one nearest the mean survives);
 2. of the rest, take the one nearest the path-integration estimate.
 
-The paper localises by a point and does not say where the heading comes from. By default
-(``heading="inlier_mean"``) the heading is the mean of the headings afforded by the
-surfaces that survive heuristic 1 and agree with the chosen one within
-``heading_consensus_deg``: each is one line fit's direction, so averaging them cuts the
-noise of a single fit, while a mis-tracked surface (whose heading disagrees) is left out.
-The chosen surface's position is then recomputed with that heading.
-``heading="selected"`` keeps the chosen affordance's own heading.
+Before the heuristics, an affordance that disagrees with the path-integration estimate by
+more than the paper's own recognition thresholds (``max_pi_deviation_m`` = 40 cm,
+``max_pi_deviation_deg`` = 5°) is discarded: the surface was recognised as the same
+precisely because its prediction by path integration agreed that well, so a pose that
+does not is a bad fit (typically a short surface with few points), not information.
+Set both to ``inf`` for the paper's bare heuristics.
+
+The paper localises by a point and does not say where the heading comes from. Options:
+
+- ``heading="weighted"`` (default): each inlier's heading is the difference of two line
+  fits' directions, whose variance falls as (points × length²) of each fit, so the headings
+  of the surfaces that survive heuristic 1 are averaged with those inverse-variance
+  weights; headings more than ``heading_consensus_deg`` from that estimate (mis-tracked
+  surfaces) are dropped once and the mean is taken again;
+- ``heading="inlier_mean"``: the plain mean of inlier headings within
+  ``heading_consensus_deg`` of the chosen one;
+- ``heading="selected"``: the chosen affordance's own heading.
+
+The chosen surface's position is then recomputed with the fused heading.
 """
 
 from __future__ import annotations
@@ -44,14 +56,22 @@ class TriangulationParams:
 
     use_outlier_heuristic: bool = True
     prefer_nearer_endpoint: bool = True
-    heading: Literal["inlier_mean", "selected"] = "inlier_mean"
+    heading: Literal["weighted", "inlier_mean", "selected"] = "weighted"
     heading_consensus_deg: float = 1.0
+    max_pi_deviation_m: float = 0.40
+    max_pi_deviation_deg: float = 5.0
 
     def __post_init__(self) -> None:
         from albot2d.validation import check_non_negative
 
         check_non_negative(self, "heading_consensus_deg")
-        if self.heading not in ("inlier_mean", "selected"):
+        for name in ("max_pi_deviation_m", "max_pi_deviation_deg"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
+                from albot2d.errors import InputError
+
+                raise InputError(f"TriangulationParams.{name} must be > 0, got {value!r}")
+        if self.heading not in ("weighted", "inlier_mean", "selected"):
             from albot2d.errors import InputError
 
             raise InputError(
@@ -128,6 +148,16 @@ def pose_affordances(
     return Affordances(np.column_stack([x, y, th]), idx.astype(np.int64), pl, pc)
 
 
+def _fit_weight(surfaces: Surfaces, index: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Inverse variance (up to a constant) of each surface's fitted direction: n · L².
+
+    Surfaces not from a scan (no beams) count as one point each."""
+    beams = surfaces.beams[index]
+    n = np.where(beams[:, 0] >= 0, beams[:, 1] - beams[:, 0] + 1, 1).astype(np.float64)
+    length = surfaces.lengths_m[index]
+    return np.maximum(n * length**2, 1e-12)
+
+
 def triangulate(
     local: Surfaces,
     current: Surfaces,
@@ -136,6 +166,15 @@ def triangulate(
 ) -> Pose | None:
     """The view's pose in the local map, or ``None`` when no surface affords one."""
     aff = pose_affordances(local, current, path_integration.theta, params)
+    consistent = (
+        np.hypot(aff.poses[:, 0] - path_integration.x, aff.poses[:, 1] - path_integration.y)
+        <= params.max_pi_deviation_m
+    ) & (
+        np.abs(wrap_angle(aff.poses[:, 2] - path_integration.theta))
+        <= np.radians(params.max_pi_deviation_deg)
+    )
+    if not consistent.all():
+        aff = Affordances(*(field[consistent] for field in aff))
     poses = aff.poses
     if len(poses) == 0:
         return None
@@ -152,9 +191,18 @@ def triangulate(
     best = int(kept[np.argmin(d_pi)])
     if params.heading == "selected" or len(kept) == 1:
         return Pose.from_array(poses[best])
-    # Mean heading of the inliers, as deviations from the chosen one (no wrap-around).
+    # Headings as deviations from the chosen one (so no wrap-around in the means).
     dev = np.asarray(wrap_angle(poses[kept, 2] - poses[best, 2]))
-    dev = dev[np.abs(dev) <= np.radians(params.heading_consensus_deg)]
-    heading = float(wrap_angle(poses[best, 2] + dev.mean()))
+    gate = np.radians(params.heading_consensus_deg)
+    if params.heading == "inlier_mean":
+        offset = float(dev[np.abs(dev) <= gate].mean())
+    else:
+        sid = aff.surface[kept]
+        w = 1.0 / (1.0 / _fit_weight(local, sid) + 1.0 / _fit_weight(current, sid))
+        offset = float(np.average(dev, weights=w))
+        agree = np.abs(dev - offset) <= gate
+        if agree.any():
+            offset = float(np.average(dev[agree], weights=w[agree]))
+    heading = float(wrap_angle(poses[best, 2] + offset))
     x, y = _position_for(heading, aff.local_points[best], aff.current_points[best])
     return Pose(float(x), float(y), heading)
