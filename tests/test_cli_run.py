@@ -38,9 +38,14 @@ def test_run_writes_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFix
                 "albot1_route.png", "naive_map.png", "truth_map.png"}
     assert set(report["figures"]) == expected
     assert {p.name for p in out.iterdir()} == expected | {"report.json"}
-    for name in expected:
+    umask = os.umask(0o022)
+    os.umask(umask)
+    for name in [*expected, "report.json"]:
         data = (out / name).read_bytes()
-        assert data.startswith(PNG_MAGIC) and len(data) < 400_000
+        assert data.startswith(PNG_MAGIC) or name == "report.json"
+        assert len(data) < 400_000
+        # Ordinary file permissions, not the private ones of a temporary file.
+        assert (out / name).stat().st_mode & 0o777 == 0o666 & ~umask
 
 
 def test_reproduce_gives_the_same_report(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:

@@ -76,8 +76,8 @@ def run(args: argparse.Namespace) -> int:
         result = finish(
             out, created, "replay",
             lambda: replay_log(log, relations_path=relations, mappers=mappers, params=params,
-                               max_frames=max_frames, on_frame=frame),
-            args.no_figures,
+                               max_frames=max_frames, on_frame=frame, on_stage=bar.set_description),
+            args.no_figures, bar.set_description,
         )  # fmt: skip
     finally:
         bar.close()

@@ -259,12 +259,15 @@ def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, by
 
 
 def finish(
-    out: Path, created: bool, command: str, compute: Callable[[], Any], no_figures: bool
+    out: Path, created: bool, command: str, compute: Callable[[], Any], no_figures: bool,
+    stage: Callable[[str], None] | None = None,
 ) -> Any:
     """Run ``compute`` (→ ExperimentResult), draw the figures, write everything; on any
     failure remove the output directory again if this command created it."""
     try:
         result = compute()
+        if stage is not None and not no_figures:
+            stage("figures")
         figures = _render(result, no_figures, command)
         result.report["figures"] = sorted(figures)
         write_outputs(out, result.report, figures)
@@ -337,10 +340,16 @@ def run(args: argparse.Namespace) -> int:
             bar.set_postfix_str(f"{f.index + 1} views", refresh=False)
             bar.update(0)
 
+    def stage(name: str) -> None:
+        if bar is not None:
+            bar.set_description(name)
+
     try:
-        result = finish(out, created, "run",
-                        lambda: run_experiment(spec, params, on_start=start, on_frame=frame),
-                        args.no_figures)
+        result = finish(
+            out, created, "run",
+            lambda: run_experiment(spec, params, on_start=start, on_frame=frame, on_stage=stage),
+            args.no_figures, stage,
+        )  # fmt: skip
     finally:
         if bar is not None:
             bar.close()

@@ -198,11 +198,13 @@ def run_experiment(
     *,
     on_start: Callable[[World, Tour], None] | None = None,
     on_frame: Callable[[Frame, float], None] | None = None,
+    on_stage: Callable[[str], None] | None = None,
 ) -> ExperimentResult:
     """Simulate ``spec`` and score every mapper; see the module docstring.
 
     ``on_start(world, tour)`` is called once the tour is planned, ``on_frame(frame,
-    travelled_m)`` after each frame (progress display).
+    travelled_m)`` after each frame and ``on_stage("scoring")`` after the last one
+    (progress display).
     """
     from albot2d.sim.driving import get_profile
 
@@ -222,6 +224,8 @@ def run_experiment(
         max_frames=spec.max_frames, on_frame=on_frame,
     )  # fmt: skip
     assert trace.true_poses is not None  # the simulator always knows the truth
+    if on_stage is not None:
+        on_stage("scoring")
     relations = relations_from_truth(trace.timestamps, trace.true_poses, options=params.relations)
     scores = score_mappers(trace, relations, world.obstacle_segments, params)
     world_info = {

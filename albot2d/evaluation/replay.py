@@ -74,8 +74,13 @@ def replay_log(
     params: EvaluationParams | None = None,
     max_frames: int | None = None,
     on_frame: Callable[[Frame, float], None] | None = None,
+    on_stage: Callable[[str], None] | None = None,
 ) -> ExperimentResult:
-    """Map ``log`` with every mapper and score against ``relations_path`` (found if None)."""
+    """Map ``log`` with every mapper and score against ``relations_path`` (found if None).
+
+    ``on_frame(frame, travelled_m)`` is called after each frame and ``on_stage("scoring")``
+    after the last one (progress display).
+    """
     params = params or EvaluationParams()
     t0 = time.perf_counter()
     log_path = Path(log)
@@ -97,6 +102,8 @@ def replay_log(
         frames, instances, homing=params.homing, last_k_views=params.map_quality.last_k_views,
         max_frames=max_frames, on_frame=on_frame,
     )  # fmt: skip
+    if on_stage is not None:
+        on_stage("scoring")
     scores = score_mappers(trace, relations, None, params)
     odometry = odometry_section(trace, relations, params)
     used = (odometry["rpe"] or {}).get("relations", 0)
