@@ -100,7 +100,7 @@ def replay_log(
     instances = {name: factory() for name, factory in factories.items()}
     trace = drive_mappers(
         frames, instances, homing=params.homing, last_k_views=params.map_quality.last_k_views,
-        max_frames=max_frames, on_frame=on_frame,
+        max_frames=max_frames, on_frame=on_frame, source=os.fspath(log_path),
     )  # fmt: skip
     if on_stage is not None:
         on_stage("scoring")

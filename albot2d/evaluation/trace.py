@@ -145,10 +145,12 @@ def drive_mappers(
     last_k_views: int = 10,
     max_frames: int | None = None,
     on_frame: Callable[[Frame, float], None] | None = None,
+    source: str = "the run",
 ) -> Trace:
     """Feed ``frames`` (at most ``max_frames``) to every mapper; see the module docstring.
 
-    ``on_frame(frame, travelled_m)`` is called after each frame (e.g. a progress bar).
+    ``on_frame(frame, travelled_m)`` is called after each frame (e.g. a progress bar);
+    ``source`` names the frames' origin in errors.
     """
     params = homing or HomingParams()
     rec = _Recorder(last_k_views)
@@ -179,7 +181,7 @@ def drive_mappers(
         if on_frame is not None:
             on_frame(frame, rec.travelled[-1])
     if not rec.stamps:
-        raise InputError("no frames to map: the run or log has no laser scans")
+        raise InputError(f"no frames to map: {source} has no laser scans")
     if params.include_last and (not stops or stops[-1].row != len(rec.stamps) - 1):
         stop_here()
     n = len(rec.stamps)
