@@ -189,6 +189,8 @@ def plot_route(
                 ax.plot(*poses[sel, :2].T, "o", color=color, ms=3, zorder=4)
                 handles.append(Line2D([], [], color=color, marker="o", ls="",
                                       label=f"{method.replace('_', ' ')} ({int(sel.sum())})"))
+    if len(poses):
+        ax.plot(*poses[0, :2], "*", color=START_COLOR, ms=12, zorder=5)
     handles.append(Line2D([], [], color=VIEW_COLOR, lw=1, label="remembered views' surfaces"))
     ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.8)
     parts = [segs.reshape(-1, 2), poses[:, :2]]
