@@ -12,6 +12,7 @@ import pytest
 from albot2d.geometry import Pose, point_segment_distance, transform_segments, wrap_angle
 from albot2d.mapping import Albot1, Albot1Params, Mapper
 from albot2d.perception.surfaces import Surfaces
+from tests.albot1_checks import check_local_map_rule
 
 # A corridor lined with 1 m wall panels and 0.5 m gaps, so panel ends are real corners.
 PANELS = np.array(
@@ -115,31 +116,6 @@ def test_featureless_stretch_uses_path_integration_then_recovers() -> None:
         m.trajectory()[-1], origin.between(poses[-1]).as_array(), atol=1e-9
     )
     check_local_map_rule(m, min_tracked=4)
-
-
-def check_local_map_rule(m: Albot1, min_tracked: int) -> None:
-    """A view is remembered exactly when fewer than ``min_tracked`` tracked surfaces remain;
-    V(c-1) is remembered unless it already is the current local map (Use-Vc)."""
-    steps = m.steps
-    assert steps[0].remembered == (steps[0].frame_index,)
-    for prev, step in itertools.pairwise(steps):
-        if step.tracked >= min_tracked:
-            assert step.remembered == ()
-            continue
-        assert step.remembered, f"frame {step.frame_index}: {step.tracked} tracked, nothing kept"
-        if step.use_vc:
-            assert step.remembered == (step.frame_index,)
-        else:
-            assert step.remembered[0] == prev.frame_index
-            assert step.remembered[-1] in (prev.frame_index, step.frame_index)
-    # The Use-Vc switch holds exactly when the previous view became the local map.
-    for prev, step in itertools.pairwise(steps):
-        assert step.use_vc == (bool(prev.remembered) and prev.remembered[-1] == prev.frame_index)
-    # Route map connectivity: the chain composes to the stored poses.
-    chain = m.route.compose_chain()
-    stored = np.array([lm.pose.as_array() for lm in m.route])
-    np.testing.assert_allclose(chain, stored, atol=1e-9)
-    assert [lm.map_id for lm in m.route] == list(range(len(m.route)))
 
 
 def test_params_are_validated() -> None:

@@ -92,6 +92,7 @@ class _ViewState:
     view: Surfaces
     pose_in_map: Pose
     tracked: TrackedSurfaces
+    steps_in_map: int = 0
 
 
 class Albot1:
@@ -185,17 +186,20 @@ class Albot1:
         need = self.params.min_tracked
         tparams = self.params.tracking
         pi_pose = prev.pose_in_map @ increment
+        steps = prev.steps_in_map + 1
         with self.timer.stage("tracking"):
             tracked, _ = rtsv(self._tracked, view, increment, tparams)
         tracked_after = len(tracked)
         if len(tracked) >= need:
-            self._continue(frame_index, timestamp, view, pi_pose, tracked)
+            self._continue(frame_index, timestamp, view, pi_pose, tracked, steps)
             return tracked_after
 
         if not self._prev_is_map:
             # Remember V(c-1): it still had >= 4 tracked surfaces to triangulate from.
             with self.timer.stage("localization"):
-                pose_prev, method = self._localise(prev.tracked, prev.pose_in_map)
+                pose_prev, method = self._localise(
+                    prev.tracked, prev.pose_in_map, prev.steps_in_map
+                )
             self._remember(
                 prev.frame_index, prev.timestamp, prev.view, pose_prev, method,
                 tracked=len(prev.tracked), replaces_last_frame=True,
@@ -204,30 +208,35 @@ class Albot1:
             with self.timer.stage("tracking"):
                 tracked, _ = rtsv(self._tracked, view, increment, tparams)
             pi_pose = increment
+            steps = 1
             if len(tracked) >= need:
-                self._continue(frame_index, timestamp, view, pi_pose, tracked)
+                self._continue(frame_index, timestamp, view, pi_pose, tracked, steps)
                 return tracked_after
 
         # Use-Vc: V(c-1) is the current local map, so remember V(c) itself.
         with self.timer.stage("localization"):
-            pose_c, method = self._localise(tracked, pi_pose)
+            pose_c, method = self._localise(tracked, pi_pose, steps)
         self._remember(frame_index, timestamp, view, pose_c, method, tracked=len(tracked))
         return tracked_after
 
     def _continue(
         self, frame_index: int, timestamp: float, view: Surfaces, pose: Pose,
-        tracked: TrackedSurfaces,
+        tracked: TrackedSurfaces, steps: int,
     ) -> None:
         self._tracked = tracked
-        self._prev = _ViewState(frame_index, timestamp, view, pose, tracked)
+        self._prev = _ViewState(frame_index, timestamp, view, pose, tracked, steps)
         self._prev_is_map = False
         self._frame_maps.append(len(self.route) - 1)
         self._frame_offsets.append(pose.as_array())
 
-    def _localise(self, tracked: TrackedSurfaces, pi_pose: Pose) -> tuple[Pose, Method]:
+    def _localise(
+        self, tracked: TrackedSurfaces, pi_pose: Pose, steps: int
+    ) -> tuple[Pose, Method]:
         """Triangulate from tracked surfaces; fall back to path integration (algorithm #4)."""
         if len(tracked):
-            pose = triangulate(tracked.local, tracked.current, pi_pose, self.params.triangulation)
+            pose = triangulate(
+                tracked.local, tracked.current, pi_pose, self.params.triangulation, steps=steps
+            )
             if pose is not None:
                 return pose, "triangulation"
         return pi_pose, "path_integration"

@@ -11,10 +11,11 @@ heuristics pick one affordance:
 
 Before the heuristics, an affordance that disagrees with the path-integration estimate by
 more than the paper's own recognition thresholds (``max_pi_deviation_m`` = 40 cm,
-``max_pi_deviation_deg`` = 5°) is discarded: the surface was recognised as the same
-precisely because its prediction by path integration agreed that well, so a pose that
-does not is a bad fit (typically a short surface with few points), not information.
-Set both to ``inf`` for the paper's bare heuristics.
+``max_pi_deviation_deg`` = 5°) per step since the local map's origin is discarded: at each
+step the surface was recognised as the same precisely because its prediction by the
+odometry increment agreed that well, so after ``k`` steps a pose that disagrees with path
+integration by more than ``k`` times that is a bad fit (typically a short surface seen
+with few beams), not information. Set both to ``inf`` for the paper's bare heuristics.
 
 The paper localises by a point and does not say where the heading comes from. Options:
 
@@ -163,15 +164,21 @@ def triangulate(
     current: Surfaces,
     path_integration: Pose,
     params: TriangulationParams = TriangulationParams(),
+    *,
+    steps: int = 1,
 ) -> Pose | None:
-    """The view's pose in the local map, or ``None`` when no surface affords one."""
+    """The view's pose in the local map, or ``None`` when no surface affords one.
+
+    ``steps``: odometry steps integrated since the local map's origin (scales the gate).
+    """
     aff = pose_affordances(local, current, path_integration.theta, params)
+    k = max(int(steps), 1)
     consistent = (
         np.hypot(aff.poses[:, 0] - path_integration.x, aff.poses[:, 1] - path_integration.y)
-        <= params.max_pi_deviation_m
+        <= k * params.max_pi_deviation_m
     ) & (
         np.abs(wrap_angle(aff.poses[:, 2] - path_integration.theta))
-        <= np.radians(params.max_pi_deviation_deg)
+        <= k * np.radians(params.max_pi_deviation_deg)
     )
     if not consistent.all():
         aff = Affordances(*(field[consistent] for field in aff))
