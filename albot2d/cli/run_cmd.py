@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 import os
 import sys
 import tempfile
@@ -26,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.atomic import atomic_path
+from albot2d.cli.options import positive_int, positive_number, world_params
 from albot2d.errors import InputError
 
 __all__ = [
@@ -99,33 +99,6 @@ def add_scoring_options(p: argparse.ArgumentParser) -> None:
                    help="moments of the map history to draw and report (default 4)")
 
 
-# -- checked conversions ----------------------------------------------------------------
-def positive_number(text: str | None, option: str, *, allow_zero: bool = False) -> float | None:
-    if text is None:
-        return None
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and (value > 0 or (allow_zero and value == 0))):
-        kind = "non-negative" if allow_zero else "positive"
-        raise InputError(f"{option} must be a {kind} number, got {text!r}")
-    return value
-
-
-def positive_int(text: str | None, option: str, *, allow_zero: bool = False) -> int | None:
-    if text is None:
-        return None
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value < 0 or (value == 0 and not allow_zero):
-        kind = "non-negative" if allow_zero else "positive"
-        raise InputError(f"{option} must be a {kind} integer, got {text!r}")
-    return value
-
-
 def scoring_params(args: argparse.Namespace, base: Any = None) -> Any:
     """EvaluationParams from the scoring options (unset ones from ``base`` or defaults)."""
     import dataclasses
@@ -148,28 +121,10 @@ def scoring_params(args: argparse.Namespace, base: Any = None) -> Any:
     return dataclasses.replace(base, homing=homing, map_quality=quality, snapshots=snapshots)
 
 
-def _world_params(args: argparse.Namespace) -> dict[str, Any]:
-    from albot2d.cli.world_cmd import parse_param
-
-    params: dict[str, Any] = {}
-    for text in args.param or []:
-        name, value = parse_param(text)
-        if name in params:
-            raise InputError(f"--param {name} given twice")
-        params[name] = value
-    for option, name in (("--width", "width_m"), ("--height", "height_m")):
-        value = positive_number(getattr(args, option[2:]), option)
-        if value is not None:
-            if name in params:
-                raise InputError(f"give {option} or --param {name}, not both")
-            params[name] = value
-    return params
-
-
 def _spec(args: argparse.Namespace) -> Any:
     from albot2d.evaluation import DEFAULT_MAPPERS, RunSpec
 
-    params = _world_params(args)
+    params = world_params(args)
     if args.world is not None and (args.kind is not None or params):
         raise InputError("give --world, or --kind with its parameters, not both")
     return RunSpec(

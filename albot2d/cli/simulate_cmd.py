@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from albot2d.atomic import atomic_write_bytes
+from albot2d.cli.options import seed_value
 from albot2d.errors import InputError
 from albot2d.seeding import spawn_rngs
 
@@ -58,18 +59,6 @@ def register(subparsers: Any) -> None:
     p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--no-png", action="store_true", help=f"do not draw {PNG_NAME}")
     p.set_defaults(handler=run)
-
-
-def _seed(text: str | None) -> int:
-    if text is None:
-        return 0
-    try:
-        seed = int(text)
-    except ValueError:
-        seed = -1
-    if seed < 0:
-        raise InputError(f"--seed must be a non-negative integer, got {text!r}")
-    return seed
 
 
 def _tour_length(text: str) -> float:
@@ -149,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     from albot2d.sim.simulator import Simulator
 
     out = _out_dir(args.out)
-    seed = _seed(args.seed)
+    seed = seed_value(args.seed) or 0
     profile = get_profile(args.profile)
     odometry = noise_preset(args.noise)
     laser_noise = _laser_noise(args.laser_noise)

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 from pathlib import Path
 from typing import Any
 
 from albot2d.atomic import atomic_path
+from albot2d.cli.options import parse_param, positive_number, seed_value, world_params
 from albot2d.errors import InputError
 from albot2d.seeding import spawn_rngs
 
@@ -54,63 +54,6 @@ def register(subparsers: Any) -> None:
     p.set_defaults(handler=run)
 
 
-def parse_param(text: str) -> tuple[str, Any]:
-    """``NAME=VALUE`` → (name, value); the value becomes an int, float, bool or string."""
-    name, sep, raw = text.partition("=")
-    name = name.strip()
-    if not sep or not name.isidentifier():
-        raise InputError(f"--param expects NAME=VALUE, got {text!r}")
-    raw = raw.strip()
-    for convert in (int, float):
-        try:
-            return name, convert(raw)
-        except ValueError:
-            pass
-    if raw.lower() in ("true", "false"):
-        return name, raw.lower() == "true"
-    return name, raw
-
-
-def _positive_number(text: str | None, option: str) -> float | None:
-    if text is None:
-        return None
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > 0.0):
-        raise InputError(f"{option} must be a positive number of metres, got {text!r}")
-    return value
-
-
-def _seed(text: str | None) -> int | None:
-    if text is None:
-        return None
-    try:
-        seed = int(text)
-    except ValueError:
-        seed = -1
-    if seed < 0:
-        raise InputError(f"--seed must be a non-negative integer, got {text!r}")
-    return seed
-
-
-def _params(args: argparse.Namespace) -> dict[str, Any]:
-    params: dict[str, Any] = {}
-    for text in args.param:
-        name, value = parse_param(text)
-        if name in params:
-            raise InputError(f"--param {name} given twice")
-        params[name] = value
-    for option, name in (("--width", "width_m"), ("--height", "height_m")):
-        value = _positive_number(getattr(args, option[2:]), option)
-        if value is not None:
-            if name in params:
-                raise InputError(f"give {option} or --param {name}, not both")
-            params[name] = value
-    return params
-
-
 def _build_world(args: argparse.Namespace, seed: int, params: dict[str, Any]) -> Any:
     import worldgen
 
@@ -137,7 +80,7 @@ def _tour_options(args: argparse.Namespace) -> tuple[str, float] | None:
     """Checked (kind, minimum length) of the tour to plan, or None for ``--no-tour``."""
     if args.tour_kind not in TOUR_KINDS:
         raise InputError(f"unknown --tour-kind {args.tour_kind!r}; valid: {', '.join(TOUR_KINDS)}")
-    length = _positive_number(args.tour_length, "--tour-length")
+    length = positive_number(args.tour_length, "--tour-length")
     if args.no_tour:
         return None
     return args.tour_kind, float(length or DEFAULT_TOUR_LENGTH_M)
@@ -184,8 +127,8 @@ def run(args: argparse.Namespace) -> int:
     png = None if args.png is None else Path(args.png)
     if png is not None and png.resolve() == out.resolve():
         raise InputError(f"--out and --png are the same file: {out}")
-    seed = _seed(args.seed)
-    params = _params(args)
+    seed = seed_value(args.seed)
+    params = world_params(args)
     tour_options = _tour_options(args)
     world = _build_world(args, seed, params)
     tour = _plan_tour(world, tour_options)
