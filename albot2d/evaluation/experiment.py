@@ -29,6 +29,7 @@ from albot2d.evaluation.scoring import EvaluationParams, odometry_section, score
 from albot2d.evaluation.trace import HomingParams, Trace, drive_mappers
 from albot2d.frames import Frame
 from albot2d.logs.relations import Relations, RelationsOptions, relations_from_truth
+from albot2d.mapping.protocol import Mapper
 from albot2d.mapping.registry import resolve_mappers
 from albot2d.seeding import spawn_rngs
 from worldgen.world import Tour, World
@@ -199,12 +200,14 @@ def run_experiment(
     on_start: Callable[[World, Tour], None] | None = None,
     on_frame: Callable[[Frame, float], None] | None = None,
     on_stage: Callable[[str], None] | None = None,
+    on_mappers: Callable[[Mapping[str, Mapper]], None] | None = None,
 ) -> ExperimentResult:
     """Simulate ``spec`` and score every mapper; see the module docstring.
 
     ``on_start(world, tour)`` is called once the tour is planned, ``on_frame(frame,
     travelled_m)`` after each frame and ``on_stage("scoring")`` after the last one
-    (progress display).
+    (progress display); ``on_mappers(mappers)`` once the mappers are made, before the
+    first frame (to attach invariant checks).
     """
     from albot2d.sim.driving import get_profile
 
@@ -219,6 +222,8 @@ def run_experiment(
     if on_start is not None:
         on_start(world, tour)
     mappers = {name: factory() for name, factory in factories.items()}
+    if on_mappers is not None:
+        on_mappers(mappers)
     trace = drive_mappers(
         frames, mappers, homing=params.homing, last_k_views=params.map_quality.last_k_views,
         max_frames=spec.max_frames, on_frame=on_frame,
