@@ -8,7 +8,6 @@ relations is the evaluation layer's job; this module only handles the files and 
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -19,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from albot2d.errors import InputError
 from albot2d.geometry import between_arrays
 from albot2d.logs.carmen_writer import format_float
-from albot2d.logs.textio import atomic_text_output, open_text
+from albot2d.logs.textio import atomic_text_output, read_number_table
 from albot2d.validation import check_positive, check_positive_int
 
 __all__ = [
@@ -71,34 +70,8 @@ class Relations:
 
 def read_relations(path: str | os.PathLike[str]) -> Relations:
     """Read a relations file (plain or gzip); ``#`` comments and blank lines are skipped."""
-    rows: list[list[float]] = []
-    with open_text(path) as handle:
-        for line_number, line in enumerate(handle, start=1):
-            text = line.split("#", 1)[0].strip()
-            if not text:
-                continue
-            tokens = text.split()
-            if len(tokens) != len(_FIELDS):
-                raise InputError(
-                    f"{path}:{line_number}: relation has {len(tokens)} fields, expected 8 "
-                    f"(t1 t2 x y z roll pitch yaw)"
-                )
-            rows.append([_number(path, line_number, tokens, k) for k in range(len(_FIELDS))])
-    table = np.array(rows, dtype=np.float64).reshape(-1, len(_FIELDS))
+    table = read_number_table(path, _FIELDS, "relation")
     return Relations(t1=table[:, 0], t2=table[:, 1], motion=table[:, [2, 3, 7]])
-
-
-def _number(path: str | os.PathLike[str], line_number: int, tokens: list[str], k: int) -> float:
-    try:
-        value = float(tokens[k])
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value):
-        raise InputError(
-            f"{path}:{line_number}: relation field {_FIELDS[k]} {tokens[k]!r} "
-            "is not a finite number"
-        ) from None
-    return value
 
 
 def write_relations(

@@ -17,7 +17,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
-import math
 import os
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
@@ -41,7 +40,7 @@ from albot2d.logs.relations import (
     relations_from_truth,
     write_relations,
 )
-from albot2d.logs.textio import atomic_text_output, open_text
+from albot2d.logs.textio import atomic_text_output, read_number_table
 
 __all__ = [
     "LOG_NAME",
@@ -99,26 +98,7 @@ def write_truth(
 
 def read_truth(path: str | os.PathLike[str]) -> tuple[FloatArray, FloatArray]:
     """Read ``truth.txt`` → ``(timestamps (N,), poses (N, 3))``."""
-    rows: list[list[float]] = []
-    with open_text(path) as handle:
-        for line_number, line in enumerate(handle, start=1):
-            text = line.split("#", 1)[0].strip()
-            if not text:
-                continue
-            tokens = text.split()
-            if len(tokens) != 4:
-                raise InputError(
-                    f"{path}:{line_number}: truth line has {len(tokens)} fields, "
-                    "expected 4 (ipc_timestamp x y theta)"
-                )
-            try:
-                row = [float(tok) for tok in tokens]
-            except ValueError:
-                raise InputError(f"{path}:{line_number}: non-numeric field in {text!r}") from None
-            if not all(math.isfinite(v) for v in row):
-                raise InputError(f"{path}:{line_number}: non-finite value in {text!r}")
-            rows.append(row)
-    table = np.array(rows, dtype=np.float64).reshape(-1, 4)
+    table = read_number_table(path, ("ipc_timestamp", "x", "y", "theta"), "truth line")
     return table[:, 0].copy(), table[:, 1:].copy()
 
 

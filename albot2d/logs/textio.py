@@ -11,15 +11,18 @@ from __future__ import annotations
 import contextlib
 import gzip
 import io
+import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TextIO
 
+import numpy as np
+
 from albot2d.atomic import atomic_path
 from albot2d.errors import InputError
 
-__all__ = ["GZIP_MAGIC", "atomic_text_output", "is_gzip", "open_text"]
+__all__ = ["GZIP_MAGIC", "atomic_text_output", "is_gzip", "open_text", "read_number_table"]
 
 GZIP_MAGIC = b"\x1f\x8b"
 
@@ -73,3 +76,39 @@ def atomic_text_output(path: str | os.PathLike[str]) -> Iterator[TextIO]:
             text.detach()
             if binary is not raw:
                 binary.close()
+
+
+def read_number_table(
+    path: str | os.PathLike[str], fields: tuple[str, ...], what: str
+) -> np.ndarray:
+    """Rows of ``len(fields)`` finite numbers from a text table (plain or gzip).
+
+    ``#`` starts a comment; blank lines are skipped. A bad line raises ``InputError``
+    naming ``file:line``, the ``what`` (e.g. "relation") and the offending field.
+    """
+    rows: list[list[float]] = []
+    with open_text(path) as handle:
+        for line_number, line in enumerate(handle, start=1):
+            text = line.split("#", 1)[0].strip()
+            if not text:
+                continue
+            tokens = text.split()
+            if len(tokens) != len(fields):
+                raise InputError(
+                    f"{path}:{line_number}: {what} has {len(tokens)} fields, expected "
+                    f"{len(fields)} ({' '.join(fields)})"
+                )
+            row = []
+            for name, token in zip(fields, tokens, strict=True):
+                try:
+                    value = float(token)
+                except ValueError:
+                    value = math.nan
+                if not math.isfinite(value):
+                    raise InputError(
+                        f"{path}:{line_number}: {what} field {name} {token!r} "
+                        "is not a finite number"
+                    )
+                row.append(value)
+            rows.append(row)
+    return np.array(rows, dtype=np.float64).reshape(-1, len(fields))
