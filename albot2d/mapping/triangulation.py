@@ -19,11 +19,13 @@ with few beams), not information. Set both to ``inf`` for the paper's bare heuri
 
 The paper localises by a point and does not say where the heading comes from. Options:
 
-- ``heading="weighted"`` (default): each inlier's heading is the difference of two line
-  fits' directions, whose variance falls as (points × length²) of each fit, so the headings
-  of the surfaces that survive heuristic 1 are averaged with those inverse-variance
-  weights; headings more than ``heading_consensus_deg`` from that estimate (mis-tracked
-  surfaces) are dropped once and the mean is taken again;
+- ``heading="weighted"`` (default): each tracked surface affords a heading, the difference
+  of two line fits' directions, whose variance falls as (points × length²) of each fit;
+  a direction needs no corner, so every tracked surface counts, not only those with a
+  usable endpoint. Headings that contradict path integration beyond the gate below are
+  left out, the rest averaged with those inverse-variance weights, and headings more
+  than ``heading_consensus_deg`` from that estimate (mis-tracked surfaces) are dropped
+  once before averaging again;
 - ``heading="inlier_mean"``: the plain mean of inlier headings within
   ``heading_consensus_deg`` of the chosen one;
 - ``heading="selected"``: the chosen affordance's own heading.
@@ -149,6 +151,38 @@ def pose_affordances(
     return Affordances(np.column_stack([x, y, th]), idx.astype(np.int64), pl, pc)
 
 
+def _weighted_heading_offset(
+    local: Surfaces,
+    current: Surfaces,
+    path_integration: Pose,
+    chosen_heading: float,
+    consensus_rad: float,
+    pi_gate_rad: float,
+) -> float:
+    """Correction to ``chosen_heading`` from every tracked surface's direction.
+
+    A direction needs no corner, so surfaces without a usable endpoint (long walls seen
+    at a grazing angle: the most precise directions of all) count too. Directions that
+    contradict path integration beyond the gate are left out; the rest are averaged with
+    inverse-variance weights, then once more without those farther than the consensus
+    from that mean.
+    """
+    dtheta = wrap_angle(segment_angles(local.segments) - segment_angles(current.segments))
+    flipped = np.abs(wrap_angle(dtheta - path_integration.theta)) > np.pi / 2
+    dtheta = np.where(flipped, wrap_angle(dtheta + np.pi), dtheta)
+    ok = np.abs(wrap_angle(dtheta - path_integration.theta)) <= pi_gate_rad
+    if not ok.any():
+        return 0.0
+    idx = np.flatnonzero(ok)
+    dev = np.asarray(wrap_angle(dtheta[idx] - chosen_heading))
+    w = 1.0 / (1.0 / _fit_weight(local, idx) + 1.0 / _fit_weight(current, idx))
+    offset = float(np.average(dev, weights=w))
+    agree = np.abs(dev - offset) <= consensus_rad
+    if agree.any():
+        offset = float(np.average(dev[agree], weights=w[agree]))
+    return offset
+
+
 def _fit_weight(surfaces: Surfaces, index: NDArray[np.int64]) -> NDArray[np.float64]:
     """Inverse variance (up to a constant) of each surface's fitted direction: n · L².
 
@@ -196,20 +230,19 @@ def triangulate(
     kept = np.flatnonzero(keep)
     d_pi = np.hypot(poses[kept, 0] - path_integration.x, poses[kept, 1] - path_integration.y)
     best = int(kept[np.argmin(d_pi)])
-    if params.heading == "selected" or len(kept) == 1:
+    if params.heading == "selected":
         return Pose.from_array(poses[best])
-    # Headings as deviations from the chosen one (so no wrap-around in the means).
-    dev = np.asarray(wrap_angle(poses[kept, 2] - poses[best, 2]))
     gate = np.radians(params.heading_consensus_deg)
     if params.heading == "inlier_mean":
+        if len(kept) == 1:
+            return Pose.from_array(poses[best])
+        dev = np.asarray(wrap_angle(poses[kept, 2] - poses[best, 2]))
         offset = float(dev[np.abs(dev) <= gate].mean())
     else:
-        sid = aff.surface[kept]
-        w = 1.0 / (1.0 / _fit_weight(local, sid) + 1.0 / _fit_weight(current, sid))
-        offset = float(np.average(dev, weights=w))
-        agree = np.abs(dev - offset) <= gate
-        if agree.any():
-            offset = float(np.average(dev[agree], weights=w[agree]))
+        offset = _weighted_heading_offset(
+            local, current, path_integration, float(poses[best, 2]), gate,
+            k * np.radians(params.max_pi_deviation_deg),
+        )
     heading = float(wrap_angle(poses[best, 2] + offset))
     x, y = _position_for(heading, aff.local_points[best], aff.current_points[best])
     return Pose(float(x), float(y), heading)
