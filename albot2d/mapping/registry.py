@@ -34,10 +34,17 @@ def _truth() -> Mapper:
     return GroundTruthIntegration()
 
 
+def _slam() -> Mapper:
+    from albot2d.mapping.slam import ScanMatchingSLAM
+
+    return ScanMatchingSLAM()
+
+
 BUILTIN_MAPPERS: dict[str, Callable[[], Mapper]] = {
     "albot1": _albot1,
     "naive": _naive,
     "truth": _truth,
+    "slam": _slam,
 }
 
 _REQUIRED = ("observe", "pose", "global_map", "trajectory", "counts", "timings_ms")

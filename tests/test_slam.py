@@ -1,0 +1,177 @@
+"""The optional scan-matching baseline (``slam``, KISS-ICP): accuracy, protocol, determinism.
+
+Tests that need kiss-icp skip when the ``[slam]`` extra is not installed; the clean error
+for a missing extra is tested either way (by making ``kiss_icp`` unimportable).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+import pytest
+
+from albot2d.cli import main
+from albot2d.errors import InputError
+from albot2d.evaluation.experiment import plan_tour
+from albot2d.evaluation.map_quality import map_quality
+from albot2d.evaluation.rpe import relative_pose_error
+from albot2d.frames import Frame, Scan, beam_angles
+from albot2d.geometry import Pose, between_arrays
+from albot2d.logs.relations import relations_from_truth
+from albot2d.mapping import Mapper, NaiveIntegration
+from albot2d.mapping.registry import BUILTIN_MAPPERS
+from albot2d.mapping.slam import ScanMatchingParams, ScanMatchingSLAM
+from albot2d.sim.odometry import noise_preset
+from albot2d.sim.simulator import Simulator
+from worldgen.generate import generate
+from worldgen.world import World
+
+MISSING = "kiss-icp is not installed (pip install -e '.[slam]')"
+
+
+@pytest.fixture(scope="module")
+def kiss() -> ModuleType:
+    return pytest.importorskip("kiss_icp", reason=MISSING)
+
+
+@pytest.fixture(scope="module")
+def office_run() -> tuple[World, list[Frame]]:
+    """A ~30 m loop through a small office, dataset3 profile, typical odometry noise."""
+    world = generate("office", seed=0, width_m=30, height_m=24)
+    tour = plan_tour(world, "loop", 30.0)
+    sim = Simulator(world, seed=0, odometry=noise_preset("typical"))
+    return world, list(sim.drive(tour, "dataset3"))
+
+
+def run_mapper(mapper: Mapper, frames: list[Frame]) -> Mapper:
+    for f in frames:
+        mapper.observe(f)
+    return mapper
+
+
+def test_slam_beats_odometry_and_naive_integration(
+    kiss: ModuleType, office_run: tuple[World, list[Frame]]
+) -> None:
+    world, frames = office_run
+    slam = run_mapper(ScanMatchingSLAM(), frames)
+    naive = run_mapper(NaiveIntegration(), frames)
+    times = np.array([f.timestamp for f in frames])
+    truth = np.array([f.true_pose.as_array() for f in frames])  # type: ignore[union-attr]
+    rel = relations_from_truth(times, truth)
+
+    def rpe(poses: np.ndarray) -> tuple[float, float]:
+        r = relative_pose_error(times, poses, rel.t1, rel.t2, rel.motion).overall
+        assert r.trans_m_mean is not None and r.rot_deg_mean is not None
+        return r.trans_m_mean, r.rot_deg_mean
+
+    odometry = rpe(np.array([f.odom_pose.as_array() for f in frames]))
+    scan_matched = rpe(slam.trajectory())
+    assert scan_matched[0] < odometry[0] and scan_matched[1] < odometry[1]
+
+    start = frames[0].true_pose
+    assert start is not None
+    q_slam = map_quality(slam.global_map().segments, world.obstacle_segments, start_pose=start)
+    q_naive = map_quality(naive.global_map().segments, world.obstacle_segments, start_pose=start)
+    assert q_slam.accuracy_m_mean is not None and q_naive.accuracy_m_mean is not None
+    assert q_slam.accuracy_m_mean < q_naive.accuracy_m_mean
+    assert q_slam.accuracy_m_p95 < q_naive.accuracy_m_p95  # type: ignore[operator]
+
+
+def test_slam_is_a_deterministic_protocol_mapper(
+    kiss: ModuleType, office_run: tuple[World, list[Frame]]
+) -> None:
+    _, frames = office_run
+    frames = frames[:120]
+    first = BUILTIN_MAPPERS["slam"]()
+    assert isinstance(first, Mapper) and first.name == "slam"
+    run_mapper(first, frames)
+    again = run_mapper(ScanMatchingSLAM(), frames)
+    traj = first.trajectory()
+    assert traj.shape == (len(frames), 3) and np.all(np.isfinite(traj))
+    np.testing.assert_array_equal(traj, again.trajectory())
+    snap, snap_again = first.global_map(), again.global_map()
+    np.testing.assert_array_equal(snap.segments, snap_again.segments)
+    np.testing.assert_array_equal(snap.map_ids, snap_again.map_ids)
+    assert snap.segments.shape[1] == 4 and len(snap.segments) == len(snap.map_ids)
+    np.testing.assert_array_equal(first.pose().as_array(), traj[-1])
+    np.testing.assert_array_equal(traj[0], 0.0)  # the global frame is the first pose's
+    counts = first.counts()
+    assert counts.views == counts.local_maps == len(frames)
+    assert counts.triangulations + counts.path_integrations == len(frames) - 1
+    assert {"extraction", "scan_matching", "global_map"} <= set(first.timings_ms())
+
+
+def blind_scan() -> Scan:
+    angles = beam_angles(181)
+    return Scan(np.full(181, 30.0), angles, np.zeros(181, bool), max_range_m=30.0)
+
+
+def test_scans_without_enough_hits_follow_odometry(kiss: ModuleType) -> None:
+    frames, prev = [], None
+    for k in range(6):
+        odom = Pose(3.0 + 0.2 * k, -1.0, 0.1 * k)
+        inc = Pose() if prev is None else prev.between(odom)
+        frames.append(Frame(k, float(k), blind_scan(), odom, inc))
+        prev = odom
+    slam = run_mapper(ScanMatchingSLAM(), frames)
+    odo = np.array([f.odom_pose.as_array() for f in frames])
+    np.testing.assert_allclose(slam.trajectory(), between_arrays(odo[:1], odo), atol=1e-9)
+    assert slam.counts().path_integrations == len(frames) - 1
+    assert slam.counts().triangulations == 0
+    assert len(slam.global_map().segments) == 0
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"voxel_size_m": 0.0}, "voxel_size_m"),
+        ({"layer_heights_m": (0.0,)}, "layer_heights_m"),
+        ({"layer_heights_m": (0.5, 0.5)}, "layer_heights_m"),
+        ({"min_range_m": 40.0}, "min_range_m"),
+        ({"fixed_threshold_m": -1.0}, "fixed_threshold_m"),
+    ],
+)
+def test_bad_params_name_the_field(overrides: dict[str, object], message: str) -> None:
+    with pytest.raises(InputError, match=message):
+        ScanMatchingParams(**overrides)  # type: ignore[arg-type]
+
+
+@pytest.fixture
+def without_kiss(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make kiss_icp unimportable, as when the extra is not installed."""
+    for name in ("kiss_icp", "kiss_icp.config", "kiss_icp.kiss_icp"):
+        monkeypatch.setitem(sys.modules, name, None)
+
+
+@pytest.mark.usefixtures("without_kiss")
+def test_missing_extra_is_one_clean_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(InputError, match=r"pip install 'albot2d\[slam\]'"):
+        ScanMatchingSLAM()
+    out = tmp_path / "out"
+    code = main(["run", "--mapper", "naive", "--mapper", "slam", "--kind", "rooms", "--width",
+                 "15", "--height", "15", "--tour-length", "20", "--out", str(out)])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.strip().count("\n") == 0 and "albot2d[slam]" in err
+    assert not (out / "report.json").exists()
+
+
+def test_run_cli_scores_the_slam_mapper(
+    kiss: ModuleType, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out"
+    assert main(["run", "--mapper", "albot1", "--mapper", "naive", "--mapper", "slam",
+                 "--kind", "rooms", "--width", "15", "--height", "15", "--tour-length", "20",
+                 "--profile", "dataset3", "--max-frames", "60", "--no-figures",
+                 "--out", str(out)]) == 0  # fmt: skip
+    assert "slam" in capsys.readouterr().out
+    report = json.loads((out / "report.json").read_text())
+    assert list(report["mappers"]) == ["albot1", "naive", "slam"]
+    slam = report["mappers"]["slam"]
+    assert slam["counts"]["views"] == 60 and slam["rpe"]["relations"] > 0
