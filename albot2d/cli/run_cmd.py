@@ -77,8 +77,8 @@ def register(subparsers: Any) -> None:
                        help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})")
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
     p.add_argument("--mapper", nargs="+", action="extend", metavar="NAME",
-                   help="mappers: albot1, naive, truth or module:Class (default: albot1 naive "
-                        "truth)")
+                   help="mappers: albot1, naive, truth, slam ([slam] extra) or module:Class "
+                        "(default: albot1 naive truth)")
     add_scoring_options(p)
     p.add_argument("--reproduce", metavar="report.json",
                    help="re-run the run recorded in a report (give only --out with it)")
