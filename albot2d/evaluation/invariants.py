@@ -1,0 +1,465 @@
+"""Invariants of a simulated run and its mapper, shared by the tests and the fuzzing campaign.
+
+Each ``check_*`` raises :class:`InvariantError` (an ``AssertionError`` carrying the
+invariant's name) when its property fails, so tests use them directly and the campaign
+records the name and message. Which checks apply:
+
+- any run: ``robot_clear_of_obstacles`` (the robot disc never overlaps a wall or clutter)
+  and ``laser_hits_on_obstacles`` (every valid hit lies on an obstacle, within a tolerance
+  derived from the laser noise; worlds with moving obstacles are skipped);
+- view-based mappers (with a route map): ``route_connected`` (every local map after the
+  first has a pose in its predecessor and composing the chain gives every map's pose),
+  ``zero_noise_localisation`` (with no odometry or laser noise, each local map is placed in
+  its predecessor within 5 cm / 0.5°) and ``heading_error_bound`` (see
+  :func:`heading_error_bound`);
+- Albot1 only: ``local_map_rule`` (algorithm #2's remembering rule with Use-Vc) and
+  ``update_deletes_facing_overlap`` (algorithm #5's postcondition after every update).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+
+from albot2d.frames import Frame
+from albot2d.geometry import Pose, between_arrays, transform_points, wrap_angle
+from albot2d.mapping.albot1 import Albot1
+from albot2d.mapping.global_map import UpdateReport
+from albot2d.mapping.route_map import LocalMap, RouteMap
+from albot2d.sim.driving import DrivingProfile
+from albot2d.sim.laser import LaserNoise
+from albot2d.sim.odometry import OdometryNoise
+from albot2d.validation import check_non_negative, check_positive
+
+__all__ = [
+    "INVARIANTS",
+    "FrameChecker",
+    "InvariantError",
+    "InvariantParams",
+    "UpdateRecorder",
+    "check_heading_error_bound",
+    "check_local_map_rule",
+    "check_robot_clear",
+    "check_route_connected",
+    "check_update_deleted_facing_overlap",
+    "check_zero_noise_localisation",
+    "heading_error_bound",
+    "heading_errors",
+    "local_map_errors",
+    "local_maps_per_row",
+]
+
+FloatArray = NDArray[np.float64]
+
+INVARIANTS: tuple[str, ...] = (
+    "route_connected",
+    "local_map_rule",
+    "update_deletes_facing_overlap",
+    "robot_clear_of_obstacles",
+    "laser_hits_on_obstacles",
+    "zero_noise_localisation",
+    "heading_error_bound",
+)
+
+
+class InvariantError(AssertionError):
+    """An invariant failed: ``invariant`` is its name (one of ``INVARIANTS``)."""
+
+    def __init__(self, invariant: str, message: str) -> None:
+        super().__init__(f"{invariant}: {message}")
+        self.invariant = invariant
+        self.message = message
+
+
+def _fail(invariant: str, message: str) -> None:
+    raise InvariantError(invariant, message)
+
+
+@dataclass(frozen=True, slots=True)
+class InvariantParams:
+    """Tolerances and bounds of the invariants.
+
+    - ``chain_atol_m``: stored vs freshly composed route-map poses (float rounding only).
+    - ``overlap_tolerance_m``: how far the robot disc may reach into an obstacle (rounding).
+    - ``hit_tolerance_m`` + ``hit_sigmas`` × the laser's range sigma (+ half its resolution,
+      + the jitter's lateral offset at that many sigmas): how far a hit may lie off a wall.
+    - ``zero_noise_position_m`` / ``zero_noise_heading_deg``: the largest error of a local
+      map's pose in its predecessor when neither odometry nor laser is noisy.
+    - ``heading_sigmas``, ``heading_floor_deg``, ``triangulation_heading_deg``: the heading
+      bound (see :func:`heading_error_bound`).
+    """
+
+    chain_atol_m: float = 1e-9
+    overlap_tolerance_m: float = 1e-9
+    hit_tolerance_m: float = 1e-6
+    hit_sigmas: float = 7.0
+    zero_noise_position_m: float = 0.05
+    zero_noise_heading_deg: float = 0.5
+    heading_sigmas: float = 5.0
+    heading_floor_deg: float = 1.0
+    triangulation_heading_deg: float = 0.6
+
+    def __post_init__(self) -> None:
+        check_non_negative(self, "chain_atol_m", "overlap_tolerance_m", "hit_tolerance_m",
+                           "heading_floor_deg", "triangulation_heading_deg")
+        check_positive(self, "hit_sigmas", "zero_noise_position_m", "zero_noise_heading_deg",
+                       "heading_sigmas")
+
+
+# -- the route map and algorithm #2 ---------------------------------------------------------
+def check_route_connected(route: RouteMap, atol_m: float = 1e-9) -> None:
+    """Every local map after the first has a pose in its predecessor, ids run 0, 1, 2…,
+    and composing the chain afresh gives every stored pose."""
+    name = "route_connected"
+    maps = route.maps
+    if [lm.map_id for lm in maps] != list(range(len(maps))):
+        _fail(name, "local map ids are not 0, 1, 2, … in order")
+    for lm in maps[1:]:
+        if lm.method == "start":
+            _fail(name, f"local map {lm.map_id} (frame {lm.frame_index}) has no pose in its "
+                        "predecessor (method 'start')")
+    if not maps:
+        return
+    rel = route.relative_poses()
+    if not np.all(np.isfinite(rel)):
+        bad = int(np.flatnonzero(~np.isfinite(rel).all(axis=1))[0])
+        _fail(name, f"local map {bad} has a non-finite pose in its predecessor")
+    chain = route.compose_chain()
+    stored = np.array([lm.pose.as_array() for lm in maps])
+    diff = np.abs(chain - stored)
+    diff[:, 2] = np.abs(wrap_angle(chain[:, 2] - stored[:, 2]))
+    if diff.max() > atol_m:
+        bad = int(np.argmax(diff.max(axis=1)))
+        _fail(name, f"local map {bad}: composed chain differs from its stored pose by "
+                    f"{diff[bad].max():.3g}")
+
+
+def check_local_map_rule(m: Albot1, min_tracked: int | None = None) -> None:
+    """A view is remembered exactly when fewer than ``min_tracked`` tracked surfaces remain;
+    V(c-1) is remembered unless it already is the current local map (Use-Vc), which holds
+    exactly when the previous step remembered V(c-1); the route map is connected."""
+    name = "local_map_rule"
+    need = m.params.min_tracked if min_tracked is None else min_tracked
+    steps = m.steps
+    if steps and steps[0].remembered != (steps[0].frame_index,):
+        _fail(name, f"the first view (frame {steps[0].frame_index}) was not remembered")
+    for prev, step in itertools.pairwise(steps):
+        at = f"frame {step.frame_index}"
+        if step.use_vc != (bool(prev.remembered) and prev.remembered[-1] == prev.frame_index):
+            _fail(name, f"{at}: Use-Vc is {step.use_vc} but V(c-1) "
+                        f"{'is' if not step.use_vc else 'is not'} the current local map")
+        if step.tracked >= need:
+            if step.remembered != ():
+                _fail(name, f"{at}: {step.tracked} tracked but {step.remembered} remembered")
+            continue
+        if not step.remembered:
+            _fail(name, f"{at}: {step.tracked} tracked (< {need}) and nothing remembered")
+        if step.use_vc:
+            if step.remembered != (step.frame_index,):
+                _fail(name, f"{at}: Use-Vc should remember V(c) only, got {step.remembered}")
+        elif step.remembered[0] != prev.frame_index or step.remembered[-1] not in (
+            prev.frame_index, step.frame_index
+        ):
+            _fail(name, f"{at}: should remember V(c-1) (frame {prev.frame_index}) and maybe "
+                        f"V(c), got {step.remembered}")
+    try:
+        check_route_connected(m.route)
+    except InvariantError as exc:
+        _fail(name, exc.message)
+
+
+# -- algorithm #5 ---------------------------------------------------------------------------
+def _facing(segs: FloatArray, robot: Pose, test: str) -> NDArray[np.bool_]:
+    c, s = math.cos(robot.theta), math.sin(robot.theta)
+    fwd0 = c * (segs[:, 0] - robot.x) + s * (segs[:, 1] - robot.y)
+    fwd1 = c * (segs[:, 2] - robot.x) + s * (segs[:, 3] - robot.y)
+    if test == "any_endpoint":
+        return (fwd0 > 0.0) | (fwd1 > 0.0)
+    if test == "both_endpoints":
+        return (fwd0 > 0.0) & (fwd1 > 0.0)
+    return (fwd0 + fwd1) > 0.0
+
+
+def check_update_deleted_facing_overlap(m: Albot1, report: UpdateReport, robot: Pose) -> None:
+    """Right after an update: no surface of the map being left lies inside or across the
+    enlarged view polygon, nor any older surface there on the robot's facing side."""
+    name = "update_deletes_facing_overlap"
+    snap = m.map.snapshot()
+    older = snap.map_ids < report.map_id
+    if not older.any() or report.polygon.is_empty:
+        return
+    segs = snap.segments[older]
+    ids = snap.map_ids[older]
+    hits = shapely.intersects(report.polygon, shapely.linestrings(segs.reshape(-1, 2, 2)))
+    facing = _facing(segs, robot, m.map.params.facing_test)
+    current = report.map_id - 1
+    left = hits & (ids == current)
+    if left.any():
+        _fail(name, f"update {report.update} (map {report.map_id}): {int(left.sum())} surface(s) "
+                    f"of the map being left remain inside the view polygon")
+    stale = hits & facing & (ids < current)
+    if stale.any():
+        _fail(name, f"update {report.update} (map {report.map_id}): {int(stale.sum())} older "
+                    f"surface(s) of map(s) {sorted(set(ids[stale].tolist()))} remain in view "
+                    "on the facing side")
+
+
+class UpdateRecorder:
+    """An Albot1 ``on_update`` hook checking algorithm #5's postcondition after every update.
+
+    With ``raise_at_once`` (tests) a violation propagates out of ``observe``; otherwise
+    (the campaign) the run goes on and the messages collect in ``violations``.
+    """
+
+    def __init__(self, mapper: Albot1 | None = None, *, raise_at_once: bool = True) -> None:
+        self.mapper = mapper
+        self.raise_at_once = raise_at_once
+        self.updates = 0
+        self.violations: list[str] = []
+
+    def attach(self, mapper: Albot1) -> UpdateRecorder:
+        """Hook into ``mapper`` (its ``on_update``); returns self."""
+        self.mapper = mapper
+        mapper.on_update = self
+        return self
+
+    def __call__(self, report: UpdateReport, lm: LocalMap) -> None:
+        if self.mapper is None:
+            raise RuntimeError("UpdateRecorder: attach it to a mapper first")
+        self.updates += 1
+        try:
+            check_update_deleted_facing_overlap(self.mapper, report, lm.pose)
+        except InvariantError as exc:
+            if self.raise_at_once:
+                raise
+            self.violations.append(exc.message)
+
+
+# -- the simulator: robot and laser ---------------------------------------------------------
+def _nearest_distance(tree: shapely.STRtree, points: FloatArray) -> FloatArray:
+    if len(points) == 0:
+        return np.zeros(0)
+    (idx, _), dist = tree.query_nearest(shapely.points(points), return_distance=True,
+                                        all_matches=False)
+    out = np.full(len(points), np.inf)
+    out[idx] = dist
+    return out
+
+
+def _segment_tree(segments: FloatArray) -> shapely.STRtree:
+    return shapely.STRtree(shapely.linestrings(np.asarray(segments).reshape(-1, 2, 2)))
+
+
+def check_robot_clear(
+    obstacle_segments: FloatArray, true_poses: FloatArray, radius_m: float,
+    tolerance_m: float = 1e-9,
+) -> None:
+    """The robot disc at every true pose keeps clear of every static obstacle segment."""
+    if len(obstacle_segments) == 0 or len(true_poses) == 0:
+        return
+    dist = _nearest_distance(_segment_tree(obstacle_segments), np.asarray(true_poses)[:, :2])
+    overlap = radius_m - dist
+    if overlap.max() > tolerance_m:
+        k = int(np.argmax(overlap))
+        _fail("robot_clear_of_obstacles",
+              f"frame row {k}: the robot (radius {radius_m} m) reaches {overlap[k]:.3g} m into "
+              f"an obstacle at ({true_poses[k, 0]:.3f}, {true_poses[k, 1]:.3f})")
+
+
+class FrameChecker:
+    """Checks each simulated frame's laser hits against the true obstacles (an ``on_frame``
+    hook). Hits are buffered and checked in batches; ``finish()`` checks the rest and
+    raises the first violation (or, without ``raise_at_once``, returns the messages)."""
+
+    def __init__(
+        self, obstacle_segments: FloatArray, laser_noise: LaserNoise,
+        params: InvariantParams | None = None, *, batch_frames: int = 64,
+        raise_at_once: bool = True,
+    ) -> None:
+        self.params = params or InvariantParams()
+        self.noise = laser_noise
+        self.raise_at_once = raise_at_once
+        self.batch_frames = batch_frames
+        self._tree = _segment_tree(obstacle_segments) if len(obstacle_segments) else None
+        self._points: list[FloatArray] = []
+        self._tolerance: list[FloatArray] = []
+        self._frames: list[FloatArray] = []
+        self.frames = 0
+        self.hits = 0
+        self.violations: list[str] = []
+
+    def tolerance_m(self, ranges: FloatArray) -> FloatArray:
+        """How far a hit at ``ranges`` may lie from the wall it hit."""
+        p, nz = self.params, self.noise
+        sigma = nz.range_sigma_m + nz.range_sigma_per_m * ranges
+        lateral = ranges * math.sin(min(p.hit_sigmas * math.radians(nz.angle_jitter_deg),
+                                        0.5 * math.pi))
+        return p.hit_tolerance_m + p.hit_sigmas * sigma + 0.5 * nz.range_resolution_m + lateral
+
+    def mixed_pixel_candidates(self, ranges: FloatArray) -> NDArray[np.bool_]:
+        """Beams that may be mixed pixels (a range blended between the two sides of a depth
+        jump, by design off every obstacle): where the laser mixes pixels, those whose
+        three-beam window spans a jump, and the two end beams (one side unseen)."""
+        n = len(ranges)
+        nz = self.noise
+        if nz.mixed_pixel_prob == 0.0 or n < 2:
+            return np.zeros(n, dtype=bool)
+        padded = np.concatenate([ranges[:1], ranges, ranges[-1:]])
+        window = np.stack([padded[:-2], padded[1:-1], padded[2:]])
+        spread = window.max(axis=0) - window.min(axis=0)
+        out = spread > nz.mixed_pixel_min_jump_m - 2.0 * self.tolerance_m(window.max(axis=0))
+        out[[0, -1]] = True
+        return out
+
+    def __call__(self, frame: Frame, travelled_m: float = 0.0) -> None:
+        if frame.true_pose is None:
+            raise ValueError("FrameChecker needs simulated frames (with a true pose)")
+        scan = frame.scan
+        checked = scan.valid & ~self.mixed_pixel_candidates(scan.ranges)
+        pts = transform_points(frame.true_pose.as_array(), scan.points(valid_only=False)[checked])
+        self._points.append(pts)
+        self._tolerance.append(self.tolerance_m(scan.ranges[checked]))
+        self._frames.append(np.full(len(pts), frame.index, dtype=np.float64))
+        self.frames += 1
+        if len(self._points) >= self.batch_frames:
+            self._check_batch()
+
+    def _check_batch(self) -> None:
+        if not self._points:
+            return
+        pts = np.vstack(self._points)
+        tol = np.concatenate(self._tolerance)
+        frames = np.concatenate(self._frames)
+        self._points, self._tolerance, self._frames = [], [], []
+        self.hits += len(pts)
+        if len(pts) == 0:
+            return
+        off = np.ones(len(pts), dtype=bool)
+        if self._tree is not None:
+            # A within-distance query is ~10× cheaper than nearest-distance for every hit.
+            near, _ = self._tree.query(shapely.points(pts), predicate="dwithin", distance=tol)
+            off[near] = False
+        if off.any():
+            k = int(np.flatnonzero(off)[0])
+            dist = np.full(len(pts), np.inf)
+            if self._tree is not None:
+                dist[k] = _nearest_distance(self._tree, pts[k : k + 1])[0]
+            msg = (f"frame {int(frames[k])}: {int(off.sum())} valid hit(s) off every obstacle, "
+                   f"e.g. ({pts[k, 0]:.3f}, {pts[k, 1]:.3f}) {dist[k]:.3g} m away "
+                   f"(tolerance {tol[k]:.3g} m)")
+            if self.raise_at_once:
+                _fail("laser_hits_on_obstacles", msg)
+            self.violations.append(msg)
+
+    def finish(self) -> list[str]:
+        self._check_batch()
+        return self.violations
+
+
+# -- localisation accuracy ------------------------------------------------------------------
+def _rows_of(frame_indices: NDArray[np.int64], wanted: NDArray[np.int64]) -> NDArray[np.int64]:
+    order = np.argsort(frame_indices, kind="stable")
+    pos = np.searchsorted(frame_indices[order], wanted)
+    return order[np.clip(pos, 0, len(order) - 1)]
+
+
+def local_map_errors(
+    route: RouteMap, frame_indices: NDArray[np.int64], true_poses: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Position (m) and absolute heading (rad) error of each local map's pose in its
+    predecessor (maps 1…L-1), against the true relative pose of the two views."""
+    if len(route) < 2:
+        return np.zeros(0), np.zeros(0)
+    rows = _rows_of(np.asarray(frame_indices), np.array([lm.frame_index for lm in route]))
+    truth = true_poses[rows]
+    rel_true = between_arrays(truth[:-1], truth[1:])
+    rel_est = route.relative_poses()[1:]
+    err = between_arrays(rel_true, rel_est)
+    return np.hypot(err[:, 0], err[:, 1]), np.abs(np.asarray(wrap_angle(err[:, 2])))
+
+
+def check_zero_noise_localisation(
+    route: RouteMap, frame_indices: NDArray[np.int64], true_poses: FloatArray,
+    params: InvariantParams | None = None,
+) -> None:
+    """With no noise, every local map is placed in its predecessor within the bounds."""
+    p = params or InvariantParams()
+    pos, head = local_map_errors(route, frame_indices, true_poses)
+    bad = (pos > p.zero_noise_position_m) | (head > math.radians(p.zero_noise_heading_deg))
+    if bad.any():
+        k = int(np.argmax(np.maximum(pos / p.zero_noise_position_m,
+                                     head / math.radians(p.zero_noise_heading_deg))))
+        lm = route[k + 1]
+        _fail("zero_noise_localisation",
+              f"{int(bad.sum())} of {len(pos)} local maps off; worst map {lm.map_id} (frame "
+              f"{lm.frame_index}, {lm.method}, {lm.tracked} tracked): {pos[k]:.3f} m, "
+              f"{math.degrees(head[k]):.2f}° (bounds {p.zero_noise_position_m} m, "
+              f"{p.zero_noise_heading_deg}°)")
+
+
+def heading_errors(estimate: FloatArray, truth: FloatArray) -> FloatArray:
+    """Absolute heading error (rad) of each pose relative to the run's first pose."""
+    est = np.asarray(estimate)[:, 2] - estimate[0, 2]
+    true = np.asarray(truth)[:, 2] - truth[0, 2]
+    return np.abs(np.asarray(wrap_angle(est - true)))
+
+
+def heading_error_bound(
+    true_poses: FloatArray,
+    noise: OdometryNoise,
+    profile: DrivingProfile,
+    local_maps: NDArray[np.int64],
+    params: InvariantParams | None = None,
+) -> FloatArray:
+    """The largest plausible heading error (rad) at each pose of a run, for a view-based
+    mapper fed odometry with ``noise`` and driven with ``profile``.
+
+    Odometry's own error envelope over the true motion so far — ``heading_sigmas`` standard
+    deviations of its random error (α1 per radian turned, α2 per metre, as in
+    ``perturb_increment``), plus the systematic part at full strength (turn scale error ×
+    radians turned, drift × metres, the induced error × turn steps) — widened by a random
+    walk of ``triangulation_heading_deg`` per local map remembered (the laser-based
+    localisation's own error) and a floor of ``heading_floor_deg``. A mapper that places
+    views by the laser should stay well inside it; one that breaks (a flipped triangulation,
+    a lost local map) leaves it.
+    """
+    p = params or InvariantParams()
+    poses = np.asarray(true_poses, dtype=np.float64)
+    inc = between_arrays(poses[:-1], poses[1:]) if len(poses) > 1 else np.zeros((0, 3))
+    dist = np.hypot(inc[:, 0], inc[:, 1])
+    turn = np.abs(np.asarray(wrap_angle(inc[:, 2])))
+    turn_steps = np.ceil(turn / math.radians(profile.turn_step_deg) - 1e-9)
+    var = (noise.alpha1 * turn + noise.alpha2 * dist) ** 2 + (noise.alpha2 * dist) ** 2
+    induced_rad = math.radians(abs(noise.induced_step_deg) + abs(profile.induced_step_deg))
+    systematic = (abs(noise.turn_scale_error) * turn
+                  + math.radians(abs(noise.heading_drift_deg_per_m)) * dist
+                  + induced_rad * turn_steps)
+    zero = np.zeros(1)
+    var_total = np.concatenate([zero, np.cumsum(var)])
+    var_total += math.radians(p.triangulation_heading_deg) ** 2 * np.asarray(local_maps)
+    sys_total = np.concatenate([zero, np.cumsum(systematic)])
+    return math.radians(p.heading_floor_deg) + p.heading_sigmas * np.sqrt(var_total) + sys_total
+
+
+def local_maps_per_row(route: RouteMap, frame_indices: NDArray[np.int64]) -> NDArray[np.int64]:
+    """How many local maps had been remembered by each trace row's view."""
+    made = np.sort(np.array([lm.frame_index for lm in route], dtype=np.int64))
+    return np.searchsorted(made, np.asarray(frame_indices), side="right").astype(np.int64)
+
+
+def check_heading_error_bound(
+    estimate: FloatArray, true_poses: FloatArray, bound: FloatArray
+) -> None:
+    """The heading error relative to the start stays within ``bound`` at every pose."""
+    err = heading_errors(estimate, true_poses)
+    over = err > bound
+    if over.any():
+        k = int(np.argmax(err - bound))
+        _fail("heading_error_bound",
+              f"row {k}: heading error {math.degrees(err[k]):.2f}° exceeds the bound "
+              f"{math.degrees(bound[k]):.2f}° ({int(over.sum())} of {len(err)} poses over)")

@@ -1,0 +1,220 @@
+"""The invariant checks (albot2d.evaluation.invariants): each passes on real runs and fails
+on a run broken on purpose; property tests of the simulator and of Albot1's heading error
+over random worlds; Albot1 against raw odometry on average."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from albot2d.evaluation import invariants as inv
+from albot2d.evaluation.campaign import CampaignParams
+from albot2d.evaluation.episode import EpisodeSpec, run_episode
+from albot2d.frames import Frame
+from albot2d.geometry import Pose
+from albot2d.mapping import Albot1, StepRecord, UpdateReport
+from albot2d.mapping.route_map import RouteMap
+from albot2d.seeding import make_rng
+from albot2d.sim.driving import get_profile
+from albot2d.sim.laser import LaserNoise
+from albot2d.sim.odometry import NOISE_PRESETS
+from albot2d.sim.robot import RobotParams
+from albot2d.sim.simulator import Simulator
+from worldgen.generate import generate
+from worldgen.strategies import worlds
+
+# The ci profile's 25 examples → 5 here; the fuzz profile's 5000 → 1000.
+EXAMPLES = max(2, settings().max_examples // 5)
+SMALL_WORLDS = worlds(kinds=("rooms", "corridors", "office", "open"), max_size_m=20.0)
+
+
+def simulate(world, seed: int, *, noise: str = "typical", laser: LaserNoise | None = None,  # type: ignore[no-untyped-def]
+             profile: str = "dataset3", length_m: float = 20.0):
+    tour = world.tour(make_rng(seed), kind="loop", min_length_m=length_m)
+    sim = Simulator(world, seed=seed, odometry=NOISE_PRESETS[noise],
+                    laser_noise=laser if laser is not None else LaserNoise())
+    return list(sim.drive(tour, profile=profile))
+
+
+def mapped(frames: list[Frame]) -> tuple[Albot1, inv.UpdateRecorder]:
+    m = Albot1()
+    recorder = inv.UpdateRecorder().attach(m)
+    for f in frames:
+        m.observe(f)
+    return m, recorder
+
+
+@pytest.fixture(scope="module")
+def run():  # type: ignore[no-untyped-def]
+    world = generate("rooms", seed=4, width_m=14.0, height_m=12.0)
+    frames = simulate(world, 4)
+    m, recorder = mapped(frames)
+    truth = np.array([f.true_pose.as_array() for f in frames])
+    index = np.array([f.index for f in frames])
+    return world, frames, m, recorder, truth, index
+
+
+# -- each check passes on a real run and fails on a broken one ------------------------------
+def test_a_real_run_passes_every_check(run) -> None:  # type: ignore[no-untyped-def]
+    world, frames, m, recorder, truth, index = run
+    assert recorder.updates == m.counts().local_maps > 3
+    inv.check_local_map_rule(m)
+    inv.check_route_connected(m.route)
+    inv.check_robot_clear(world.obstacle_segments, truth, RobotParams().radius_m)
+    checker = inv.FrameChecker(world.obstacle_segments, LaserNoise())
+    for f in frames:
+        checker(f)
+    assert checker.finish() == [] and checker.hits > 100 * len(frames)
+    bound = inv.heading_error_bound(truth, NOISE_PRESETS["typical"], get_profile("dataset3"),
+                                    inv.local_maps_per_row(m.route, index))
+    inv.check_heading_error_bound(m.trajectory(), truth, bound)
+
+
+def test_a_broken_chain_is_caught(run) -> None:  # type: ignore[no-untyped-def]
+    m = run[2]
+    maps = list(m.route.maps)
+    maps[2] = dataclasses.replace(maps[2], pose=maps[2].pose @ Pose(0.01, 0.0, 0.0))
+    with pytest.raises(inv.InvariantError, match="route_connected: local map 2"):
+        inv.check_route_connected(RouteMap(maps))
+    maps = list(m.route.maps)
+    maps[1] = dataclasses.replace(maps[1], method="start")
+    with pytest.raises(inv.InvariantError, match="no pose in its predecessor"):
+        inv.check_route_connected(RouteMap(maps))
+
+
+def test_a_broken_local_map_rule_is_caught(run) -> None:  # type: ignore[no-untyped-def]
+    m = run[2]
+    k = next(i for i, s in enumerate(m.steps) if i > 0 and s.tracked >= 4)
+    broken = Albot1()
+    broken.route = m.route
+    broken.steps = list(m.steps)
+    s = m.steps[k]
+    broken.steps[k] = StepRecord(s.frame_index, s.tracked, s.use_vc, (s.frame_index,),
+                                 ("triangulation",))
+    with pytest.raises(inv.InvariantError, match="local_map_rule"):
+        inv.check_local_map_rule(broken)
+
+
+def test_an_update_that_keeps_older_facing_surfaces_is_caught(run) -> None:  # type: ignore[no-untyped-def]
+    m = run[2]
+    snap = m.map.snapshot()
+    x0, y0 = snap.segments[:, [0, 2]].min() - 1, snap.segments[:, [1, 3]].min() - 1
+    x1, y1 = snap.segments[:, [0, 2]].max() + 1, snap.segments[:, [1, 3]].max() + 1
+    everything = shapely.box(x0, y0, x1, y1)
+    # A pretend update that "saw" the whole map from its left edge, looking along +x,
+    # yet deleted nothing: every older surface in front of the robot was left behind.
+    report = UpdateReport(m.map.n_updates + 1, int(snap.map_ids.max()) + 2, 0, (), (), 0, 0,
+                          everything)
+    with pytest.raises(inv.InvariantError, match="update_deletes_facing_overlap"):
+        inv.check_update_deleted_facing_overlap(m, report, Pose(x0, 0.5 * (y0 + y1), 0.0))
+    behind = Pose(x1 + 5.0, 0.5 * (y0 + y1), 0.0)  # every surface is behind this robot
+    report = report._replace(map_id=int(snap.map_ids.max()) + 1)
+    with pytest.raises(inv.InvariantError, match="map being left"):
+        inv.check_update_deleted_facing_overlap(m, report, behind)
+
+
+def test_a_robot_inside_a_wall_is_caught(run) -> None:  # type: ignore[no-untyped-def]
+    world = run[0]
+    wall = world.obstacle_segments[0]
+    on_wall = np.array([[0.5 * (wall[0] + wall[2]), 0.5 * (wall[1] + wall[3]), 0.0]])
+    with pytest.raises(inv.InvariantError, match="robot_clear_of_obstacles"):
+        inv.check_robot_clear(world.obstacle_segments, on_wall, 0.25)
+
+
+@pytest.mark.parametrize("laser", [LaserNoise(), LaserNoise.zero()], ids=["sick", "zero"])
+def test_hits_seen_from_the_wrong_pose_are_caught(run, laser: LaserNoise) -> None:  # type: ignore[no-untyped-def]
+    world, frames = run[0], run[1]
+    checker = inv.FrameChecker(world.obstacle_segments, laser)
+    f = frames[len(frames) // 2]
+    shifted = dataclasses.replace(f, true_pose=f.true_pose @ Pose(0.3, 0.0, 0.05))
+    with pytest.raises(inv.InvariantError, match="laser_hits_on_obstacles"):
+        checker(shifted)
+        checker.finish()
+
+
+def test_a_heading_that_jumps_is_caught(run) -> None:  # type: ignore[no-untyped-def]
+    m, truth, index = run[2], run[4], run[5]
+    bound = inv.heading_error_bound(truth, NOISE_PRESETS["typical"], get_profile("dataset3"),
+                                    inv.local_maps_per_row(m.route, index))
+    estimate = m.trajectory().copy()
+    estimate[len(estimate) // 2:, 2] += math.radians(60.0)
+    with pytest.raises(inv.InvariantError, match="heading_error_bound"):
+        inv.check_heading_error_bound(estimate, truth, bound)
+
+
+def test_the_heading_bound_grows_with_noise_travel_and_local_maps(run) -> None:  # type: ignore[no-untyped-def]
+    truth = run[4]
+    d1 = get_profile("dataset3")
+    zero_maps = np.zeros(len(truth), dtype=np.int64)
+    none = inv.heading_error_bound(truth, NOISE_PRESETS["none"], d1, zero_maps)
+    typical = inv.heading_error_bound(truth, NOISE_PRESETS["typical"], d1, zero_maps)
+    high = inv.heading_error_bound(truth, NOISE_PRESETS["high"], d1, zero_maps)
+    assert np.all(none == math.radians(inv.InvariantParams().heading_floor_deg))
+    assert np.all(np.diff(typical) >= 0) and np.all(high >= typical) and high[-1] > typical[-1]
+    maps = np.arange(len(truth))
+    assert np.all(inv.heading_error_bound(truth, NOISE_PRESETS["none"], d1, maps)[1:] > none[1:])
+
+
+def test_a_misplaced_local_map_breaks_zero_noise_localisation(run) -> None:  # type: ignore[no-untyped-def]
+    m, truth, index = run[2], run[4], run[5]
+    exact = RouteMap()
+    rows = {int(i): r for r, i in enumerate(index)}
+    for lm in m.route:
+        prev = exact.maps[-1] if exact.maps else None
+        rel = (Pose() if prev is None
+               else Pose.from_array(truth[rows[prev.frame_index]]).between(
+                   Pose.from_array(truth[rows[lm.frame_index]])))
+        exact.append(lm.frame_index, lm.view, rel, lm.method)
+    inv.check_zero_noise_localisation(exact, index, truth)
+    maps = list(exact.maps)
+    maps[3] = dataclasses.replace(maps[3], pose_in_previous=maps[3].pose_in_previous
+                                  @ Pose(0.0, 0.08, 0.0))
+    with pytest.raises(inv.InvariantError, match=r"1 of \d+ local maps off; worst map 3"):
+        inv.check_zero_noise_localisation(RouteMap(maps), index, truth)
+
+
+# -- properties over random worlds ----------------------------------------------------------
+@settings(max_examples=EXAMPLES)
+@given(worlds(max_size_m=20.0), st.integers(0, 2**16), st.sampled_from(["sick", "zero"]))
+def test_the_robot_stays_clear_and_every_hit_lies_on_an_obstacle(world, seed, laser) -> None:  # type: ignore[no-untyped-def]
+    noise = LaserNoise() if laser == "sick" else LaserNoise.zero()
+    frames = simulate(world, seed, laser=noise, length_m=12.0)
+    truth = np.array([f.true_pose.as_array() for f in frames])
+    inv.check_robot_clear(world.obstacle_segments, truth, RobotParams().radius_m)
+    checker = inv.FrameChecker(world.obstacle_segments, noise)
+    for f in frames:
+        checker(f)
+    checker.finish()
+
+
+@settings(max_examples=EXAMPLES)
+@given(SMALL_WORLDS, st.integers(0, 2**16), st.sampled_from(["low", "typical", "high"]))
+def test_albot1_heading_error_stays_within_the_noise_bound(world, seed, noise) -> None:  # type: ignore[no-untyped-def]
+    frames = simulate(world, seed, noise=noise)
+    m, _ = mapped(frames)
+    truth = np.array([f.true_pose.as_array() for f in frames])
+    maps = inv.local_maps_per_row(m.route, np.array([f.index for f in frames]))
+    bound = inv.heading_error_bound(truth, NOISE_PRESETS[noise], get_profile("dataset3"), maps)
+    inv.check_heading_error_bound(m.trajectory(), truth, bound)
+
+
+@pytest.mark.parametrize(("profile", "noise", "episodes", "tour_m"),
+                         [("dataset3", "high", 8, 25.0), ("dataset2", "none", 2, 8.0)])
+def test_albot1_beats_raw_odometry_on_average(profile, noise, episodes, tour_m) -> None:  # type: ignore[no-untyped-def]
+    """Holds clearly for the high preset and for dataset 2's induced error; with the typical
+    and low presets odometry is already good and Albot1 is not better on every run."""
+    campaign = CampaignParams(episodes=episodes, seed=3, kinds=("rooms", "corridors", "open"),
+                              profile=profile, noise=noise, world_size_min_m=12.0,
+                              world_size_max_m=16.0, tour_length_min_m=tour_m,
+                              tour_length_max_m=tour_m)
+    records = [run_episode(EpisodeSpec.draw(campaign, k)).record for k in range(episodes)]
+    assert [r["status"] for r in records] == ["ok"] * episodes, [r["violations"] for r in records]
+    mine = np.mean([r["metrics"]["heading_error_mean_deg"] for r in records])
+    odometry = np.mean([r["metrics"]["odometry_heading_error_mean_deg"] for r in records])
+    assert mine < odometry
