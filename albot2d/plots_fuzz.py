@@ -1,0 +1,69 @@
+"""The fuzzing campaign's figure: histograms of homing and pose errors over all episodes.
+
+matplotlib (the ``viz`` extra) is imported inside the function; the figure is drawn on the
+Agg canvas directly, headless.
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+__all__ = ["campaign_histograms"]
+
+MAPPER_COLOR = "#1f77b4"
+ODOMETRY_COLOR = "#9e9e9e"
+BINS = 30
+DEFAULT_DPI = 110
+# (title, mapper's metric, odometry's metric or None, unit)
+PANELS = (
+    ("homing: worst bearing error per episode", "homing_bearing_error_max_deg", None, "deg"),
+    ("homing: worst distance error per episode", "homing_distance_error_max_m", None, "m"),
+    ("RPE rotation (mean per episode)", "rpe_rot_deg", "odometry_rpe_rot_deg", "deg"),
+    ("RPE translation (mean per episode)", "rpe_trans_m", "odometry_rpe_trans_m", "m"),
+    ("worst heading error per episode", "heading_error_max_deg", "odometry_heading_error_max_deg",
+     "deg"),
+    ("mean heading error per episode", "heading_error_mean_deg",
+     "odometry_heading_error_mean_deg", "deg"),
+)
+
+
+def _values(records: Sequence[Mapping[str, Any]], name: str) -> np.ndarray:
+    out = [r["metrics"][name] for r in records
+           if isinstance(r.get("metrics", {}).get(name), int | float)]
+    return np.asarray(out, dtype=np.float64)
+
+
+def campaign_histograms(records: Sequence[Mapping[str, Any]], *, dpi: int = DEFAULT_DPI) -> bytes:
+    """PNG bytes: one histogram per error metric, the mapper against raw odometry."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(12.0, 6.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(2, 3).ravel()
+    mapper = next((r["mapper"] for r in records if r.get("mapper")), "mapper")
+    for ax, (title, mine, odometry, unit) in zip(axes, PANELS, strict=True):
+        series = [(mapper, _values(records, mine), MAPPER_COLOR)]
+        if odometry is not None:
+            series.append(("odometry", _values(records, odometry), ODOMETRY_COLOR))
+        present = [s for s in series if len(s[1])]
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel(unit)
+        if not present:
+            ax.text(0.5, 0.5, "no values", ha="center", va="center", transform=ax.transAxes)
+            continue
+        top = max(float(v.max()) for _, v, _ in present)
+        bins = np.linspace(0.0, top if top > 0 else 1.0, BINS + 1)
+        for label, values, color in present:
+            ax.hist(values, bins=bins, color=color, alpha=0.6,
+                    label=f"{label} (median {np.median(values):.3g})")
+        ax.set_ylabel("episodes")
+        ax.legend(fontsize=8)
+    fig.suptitle(f"fuzzing campaign: {len(records)} episodes, {mapper}")
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return buf.getvalue()
