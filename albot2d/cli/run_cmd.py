@@ -310,7 +310,9 @@ def run(args: argparse.Namespace) -> int:
             bar.close()
     print_tables(result, out)
     if recorded is not None:
-        ignore = ("figures", "albot2d_version")
+        # A fuzzing reproducer is a report plus a "reproducer" section (the episode, the
+        # world JSON, what failed): only the report part is compared.
+        ignore = ("figures", "albot2d_version", "reproducer")
         diff = _differences(
             {k: v for k, v in without_timings(recorded).items() if k not in ignore},
             {k: v for k, v in without_timings(result.report).items() if k not in ignore},
