@@ -252,11 +252,13 @@ def run_campaign(
     progress: bool = False,
     on_episode: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
-    """Run the campaign into ``out_dir`` (which must exist and be writable) on ``backend``
-    (default: this process); returns the summary (also written to summary.json)."""
+    """Run the campaign into ``out_dir`` (created if missing) on ``backend`` (default: this
+    process, one episode after another); returns the summary (also in summary.json).
+    ``on_episode(record)`` is called as each episode is written down."""
     from albot2d.evaluation.backends import LocalBackend
 
     out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
     done = _check_resume(out, params, resume)
     _write_json(out / CAMPAIGN_NAME, {"format": _FORMAT, "format_version": 1,
                                       "params": params.to_dict()})

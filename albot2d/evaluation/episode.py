@@ -19,6 +19,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 import time
 import traceback
 from collections.abc import Mapping
@@ -27,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from albot2d.errors import InputError
 from albot2d.evaluation import invariants as inv
 from albot2d.evaluation.experiment import (
     ExperimentResult,
@@ -44,7 +46,13 @@ from albot2d.sim.laser import LaserNoise
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.robot import RobotParams
 
-__all__ = ["EpisodeOutcome", "EpisodeSpec", "episode_seed", "run_episode"]
+__all__ = [
+    "EpisodeOutcome",
+    "EpisodeSpec",
+    "episode_seed",
+    "replay_reproducer",
+    "run_episode",
+]
 
 # The largest run seed drawn for an episode (any non-negative int is a valid RunSpec seed).
 _RUN_SEED_BOUND = 2**63
@@ -97,6 +105,21 @@ class EpisodeSpec:
             profile=campaign.profile, noise=campaign.noise, laser_noise=campaign.laser_noise,
             tour_kind=campaign.tour_kind, mapper=campaign.mapper,
         )  # fmt: skip
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> EpisodeSpec:
+        """The episode a record (an episodes.jsonl line, a reproducer's episode) describes."""
+        try:
+            return cls(
+                index=record["episode"], entropy=record["seed"]["entropy"],
+                kind=record["world"]["kind"], world_params=dict(record["world"]["params"]),
+                tour_length_m=record["tour"]["min_length_m"], run_seed=record["run_seed"],
+                profile=record["profile"], noise=record["noise"],
+                laser_noise=record["laser_noise"], tour_kind=record["tour"]["kind"],
+                mapper=record["mapper"],
+            )  # fmt: skip
+        except (KeyError, TypeError) as exc:
+            raise InputError(f"not an episode record: missing {exc}") from None
 
     @property
     def spawn_key(self) -> tuple[int, ...]:
@@ -269,6 +292,18 @@ def _world_document(spec: EpisodeSpec, world: Any) -> Any:
         except Exception:  # the world itself is what failed: the seed still reproduces it
             return None
     return json.loads(world_to_json(world))
+
+
+def replay_reproducer(path: str | os.PathLike[str]) -> EpisodeOutcome:
+    """Run a saved reproducer's episode again, with every check (``albot2d run --reproduce``
+    replays the run itself; this also says whether the invariants still fail)."""
+    try:
+        with open(path, encoding="utf-8") as handle:
+            doc = json.load(handle)
+        record = doc["reproducer"]["episode"]
+    except (ValueError, KeyError, TypeError) as exc:
+        raise InputError(f"{path}: not a fuzzing reproducer ({exc})") from None
+    return run_episode(EpisodeSpec.from_record(record))
 
 
 def run_episode(spec: EpisodeSpec, params: EvaluationParams | None = None) -> EpisodeOutcome:
