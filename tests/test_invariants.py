@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from albot2d.evaluation import invariants as inv
+from albot2d.evaluation import sim_invariants as sim_inv
 from albot2d.evaluation.campaign import CampaignParams
 from albot2d.evaluation.episode import EpisodeSpec, run_episode
 from albot2d.frames import Frame
@@ -66,8 +67,8 @@ def test_a_real_run_passes_every_check(run) -> None:  # type: ignore[no-untyped-
     assert recorder.updates == m.counts().local_maps > 3
     inv.check_local_map_rule(m)
     inv.check_route_connected(m.route)
-    inv.check_robot_clear(world.obstacle_segments, truth, RobotParams().radius_m)
-    checker = inv.FrameChecker(world.obstacle_segments, LaserNoise())
+    sim_inv.check_robot_clear(world.obstacle_segments, truth, RobotParams().radius_m)
+    checker = sim_inv.FrameChecker(world.obstacle_segments, LaserNoise())
     for f in frames:
         checker(f)
     assert checker.finish() == [] and checker.hits > 100 * len(frames)
@@ -124,13 +125,13 @@ def test_a_robot_inside_a_wall_is_caught(run) -> None:  # type: ignore[no-untype
     wall = world.obstacle_segments[0]
     on_wall = np.array([[0.5 * (wall[0] + wall[2]), 0.5 * (wall[1] + wall[3]), 0.0]])
     with pytest.raises(inv.InvariantError, match="robot_clear_of_obstacles"):
-        inv.check_robot_clear(world.obstacle_segments, on_wall, 0.25)
+        sim_inv.check_robot_clear(world.obstacle_segments, on_wall, 0.25)
 
 
 @pytest.mark.parametrize("laser", [LaserNoise(), LaserNoise.zero()], ids=["sick", "zero"])
 def test_hits_seen_from_the_wrong_pose_are_caught(run, laser: LaserNoise) -> None:  # type: ignore[no-untyped-def]
     world, frames = run[0], run[1]
-    checker = inv.FrameChecker(world.obstacle_segments, laser)
+    checker = sim_inv.FrameChecker(world.obstacle_segments, laser)
     f = frames[len(frames) // 2]
     shifted = dataclasses.replace(f, true_pose=f.true_pose @ Pose(0.3, 0.0, 0.05))
     with pytest.raises(inv.InvariantError, match="laser_hits_on_obstacles"):
@@ -186,8 +187,8 @@ def test_the_robot_stays_clear_and_every_hit_lies_on_an_obstacle(world, seed, la
     noise = LaserNoise() if laser == "sick" else LaserNoise.zero()
     frames = simulate(world, seed, laser=noise, length_m=12.0)
     truth = np.array([f.true_pose.as_array() for f in frames])
-    inv.check_robot_clear(world.obstacle_segments, truth, RobotParams().radius_m)
-    checker = inv.FrameChecker(world.obstacle_segments, noise)
+    sim_inv.check_robot_clear(world.obstacle_segments, truth, RobotParams().radius_m)
+    checker = sim_inv.FrameChecker(world.obstacle_segments, noise)
     for f in frames:
         checker(f)
     checker.finish()

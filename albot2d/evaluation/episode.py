@@ -30,6 +30,7 @@ import numpy as np
 
 from albot2d.errors import InputError
 from albot2d.evaluation import invariants as inv
+from albot2d.evaluation import sim_invariants as sim_inv
 from albot2d.evaluation.experiment import (
     ExperimentResult,
     RunSpec,
@@ -165,7 +166,7 @@ class _Checks:
     def __init__(self, spec: EpisodeSpec) -> None:
         self.spec = spec
         self.laser = LaserNoise.zero() if spec.laser_noise == "zero" else LaserNoise.sick_lms200()
-        self.frames: inv.FrameChecker | None = None
+        self.frames: sim_inv.FrameChecker | None = None
         self.updates: inv.UpdateRecorder | None = None
         self.world: Any = None
         self.checked: list[str] = []
@@ -174,7 +175,7 @@ class _Checks:
     def on_start(self, world: Any, tour: Any) -> None:
         self.world = world
         if not world.dynamic_obstacles:  # hits on moving obstacles are not on the walls
-            self.frames = inv.FrameChecker(world.obstacle_segments, self.laser,
+            self.frames = sim_inv.FrameChecker(world.obstacle_segments, self.laser,
                                            raise_at_once=False)
 
     def on_frame(self, frame: Any, travelled_m: float) -> None:
@@ -202,8 +203,8 @@ class _Checks:
         trace = result.trace
         truth = trace.true_poses
         assert truth is not None and self.world is not None  # a simulated run
-        self.run("robot_clear_of_obstacles", inv.check_robot_clear, self.world.obstacle_segments,
-                 truth, RobotParams().radius_m)
+        self.run("robot_clear_of_obstacles", sim_inv.check_robot_clear,
+                 self.world.obstacle_segments, truth, RobotParams().radius_m)
         if self.frames is not None:
             self.checked.append("laser_hits_on_obstacles")
             self.add("laser_hits_on_obstacles", self.frames.finish())

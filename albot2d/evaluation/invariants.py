@@ -4,9 +4,8 @@ Each ``check_*`` raises :class:`InvariantError` (an ``AssertionError`` carrying 
 invariant's name) when its property fails, so tests use them directly and the campaign
 records the name and message. Which checks apply:
 
-- any run: ``robot_clear_of_obstacles`` (the robot disc never overlaps a wall or clutter)
-  and ``laser_hits_on_obstacles`` (every valid hit lies on an obstacle, within a tolerance
-  derived from the laser noise; worlds with moving obstacles are skipped);
+- any simulated run: ``robot_clear_of_obstacles`` and ``laser_hits_on_obstacles``, in
+  ``albot2d.evaluation.sim_invariants``;
 - view-based mappers (with a route map): ``route_connected`` (every local map after the
   first has a pose in its predecessor and composing the chain gives every map's pose),
   ``zero_noise_localisation`` (with no odometry or laser noise, each local map is placed in
@@ -26,28 +25,25 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from albot2d.frames import Frame
-from albot2d.geometry import Pose, between_arrays, transform_points, wrap_angle
+from albot2d.geometry import Pose, between_arrays, wrap_angle
 from albot2d.mapping.albot1 import Albot1
 from albot2d.mapping.global_map import UpdateReport
 from albot2d.mapping.route_map import LocalMap, RouteMap
 from albot2d.sim.driving import DrivingProfile
-from albot2d.sim.laser import LaserNoise
 from albot2d.sim.odometry import OdometryNoise
 from albot2d.validation import check_non_negative, check_positive
 
 __all__ = [
     "INVARIANTS",
-    "FrameChecker",
     "InvariantError",
     "InvariantParams",
     "UpdateRecorder",
     "check_heading_error_bound",
     "check_local_map_rule",
-    "check_robot_clear",
     "check_route_connected",
     "check_update_deleted_facing_overlap",
     "check_zero_noise_localisation",
+    "fail",
     "heading_error_bound",
     "heading_errors",
     "local_map_errors",
@@ -76,7 +72,8 @@ class InvariantError(AssertionError):
         self.message = message
 
 
-def _fail(invariant: str, message: str) -> None:
+def fail(invariant: str, message: str) -> None:
+    """Raise the InvariantError of ``invariant``."""
     raise InvariantError(invariant, message)
 
 
@@ -118,24 +115,24 @@ def check_route_connected(route: RouteMap, atol_m: float = 1e-9) -> None:
     name = "route_connected"
     maps = route.maps
     if [lm.map_id for lm in maps] != list(range(len(maps))):
-        _fail(name, "local map ids are not 0, 1, 2, … in order")
+        fail(name, "local map ids are not 0, 1, 2, … in order")
     for lm in maps[1:]:
         if lm.method == "start":
-            _fail(name, f"local map {lm.map_id} (frame {lm.frame_index}) has no pose in its "
+            fail(name, f"local map {lm.map_id} (frame {lm.frame_index}) has no pose in its "
                         "predecessor (method 'start')")
     if not maps:
         return
     rel = route.relative_poses()
     if not np.all(np.isfinite(rel)):
         bad = int(np.flatnonzero(~np.isfinite(rel).all(axis=1))[0])
-        _fail(name, f"local map {bad} has a non-finite pose in its predecessor")
+        fail(name, f"local map {bad} has a non-finite pose in its predecessor")
     chain = route.compose_chain()
     stored = np.array([lm.pose.as_array() for lm in maps])
     diff = np.abs(chain - stored)
     diff[:, 2] = np.abs(wrap_angle(chain[:, 2] - stored[:, 2]))
     if diff.max() > atol_m:
         bad = int(np.argmax(diff.max(axis=1)))
-        _fail(name, f"local map {bad}: composed chain differs from its stored pose by "
+        fail(name, f"local map {bad}: composed chain differs from its stored pose by "
                     f"{diff[bad].max():.3g}")
 
 
@@ -147,30 +144,30 @@ def check_local_map_rule(m: Albot1, min_tracked: int | None = None) -> None:
     need = m.params.min_tracked if min_tracked is None else min_tracked
     steps = m.steps
     if steps and steps[0].remembered != (steps[0].frame_index,):
-        _fail(name, f"the first view (frame {steps[0].frame_index}) was not remembered")
+        fail(name, f"the first view (frame {steps[0].frame_index}) was not remembered")
     for prev, step in itertools.pairwise(steps):
         at = f"frame {step.frame_index}"
         if step.use_vc != (bool(prev.remembered) and prev.remembered[-1] == prev.frame_index):
-            _fail(name, f"{at}: Use-Vc is {step.use_vc} but V(c-1) "
+            fail(name, f"{at}: Use-Vc is {step.use_vc} but V(c-1) "
                         f"{'is' if not step.use_vc else 'is not'} the current local map")
         if step.tracked >= need:
             if step.remembered != ():
-                _fail(name, f"{at}: {step.tracked} tracked but {step.remembered} remembered")
+                fail(name, f"{at}: {step.tracked} tracked but {step.remembered} remembered")
             continue
         if not step.remembered:
-            _fail(name, f"{at}: {step.tracked} tracked (< {need}) and nothing remembered")
+            fail(name, f"{at}: {step.tracked} tracked (< {need}) and nothing remembered")
         if step.use_vc:
             if step.remembered != (step.frame_index,):
-                _fail(name, f"{at}: Use-Vc should remember V(c) only, got {step.remembered}")
+                fail(name, f"{at}: Use-Vc should remember V(c) only, got {step.remembered}")
         elif step.remembered[0] != prev.frame_index or step.remembered[-1] not in (
             prev.frame_index, step.frame_index
         ):
-            _fail(name, f"{at}: should remember V(c-1) (frame {prev.frame_index}) and maybe "
+            fail(name, f"{at}: should remember V(c-1) (frame {prev.frame_index}) and maybe "
                         f"V(c), got {step.remembered}")
     try:
         check_route_connected(m.route)
     except InvariantError as exc:
-        _fail(name, exc.message)
+        fail(name, exc.message)
 
 
 # -- algorithm #5 ---------------------------------------------------------------------------
@@ -200,11 +197,11 @@ def check_update_deleted_facing_overlap(m: Albot1, report: UpdateReport, robot: 
     current = report.map_id - 1
     left = hits & (ids == current)
     if left.any():
-        _fail(name, f"update {report.update} (map {report.map_id}): {int(left.sum())} surface(s) "
+        fail(name, f"update {report.update} (map {report.map_id}): {int(left.sum())} surface(s) "
                     f"of the map being left remain inside the view polygon")
     stale = hits & facing & (ids < current)
     if stale.any():
-        _fail(name, f"update {report.update} (map {report.map_id}): {int(stale.sum())} older "
+        fail(name, f"update {report.update} (map {report.map_id}): {int(stale.sum())} older "
                     f"surface(s) of map(s) {sorted(set(ids[stale].tolist()))} remain in view "
                     "on the facing side")
 
@@ -238,127 +235,6 @@ class UpdateRecorder:
             if self.raise_at_once:
                 raise
             self.violations.append(exc.message)
-
-
-# -- the simulator: robot and laser ---------------------------------------------------------
-def _nearest_distance(tree: shapely.STRtree, points: FloatArray) -> FloatArray:
-    if len(points) == 0:
-        return np.zeros(0)
-    (idx, _), dist = tree.query_nearest(shapely.points(points), return_distance=True,
-                                        all_matches=False)
-    out = np.full(len(points), np.inf)
-    out[idx] = dist
-    return out
-
-
-def _segment_tree(segments: FloatArray) -> shapely.STRtree:
-    return shapely.STRtree(shapely.linestrings(np.asarray(segments).reshape(-1, 2, 2)))
-
-
-def check_robot_clear(
-    obstacle_segments: FloatArray, true_poses: FloatArray, radius_m: float,
-    tolerance_m: float = 1e-9,
-) -> None:
-    """The robot disc at every true pose keeps clear of every static obstacle segment."""
-    if len(obstacle_segments) == 0 or len(true_poses) == 0:
-        return
-    dist = _nearest_distance(_segment_tree(obstacle_segments), np.asarray(true_poses)[:, :2])
-    overlap = radius_m - dist
-    if overlap.max() > tolerance_m:
-        k = int(np.argmax(overlap))
-        _fail("robot_clear_of_obstacles",
-              f"frame row {k}: the robot (radius {radius_m} m) reaches {overlap[k]:.3g} m into "
-              f"an obstacle at ({true_poses[k, 0]:.3f}, {true_poses[k, 1]:.3f})")
-
-
-class FrameChecker:
-    """Checks each simulated frame's laser hits against the true obstacles (an ``on_frame``
-    hook). Hits are buffered and checked in batches; ``finish()`` checks the rest and
-    raises the first violation (or, without ``raise_at_once``, returns the messages)."""
-
-    def __init__(
-        self, obstacle_segments: FloatArray, laser_noise: LaserNoise,
-        params: InvariantParams | None = None, *, batch_frames: int = 64,
-        raise_at_once: bool = True,
-    ) -> None:
-        self.params = params or InvariantParams()
-        self.noise = laser_noise
-        self.raise_at_once = raise_at_once
-        self.batch_frames = batch_frames
-        self._tree = _segment_tree(obstacle_segments) if len(obstacle_segments) else None
-        self._points: list[FloatArray] = []
-        self._tolerance: list[FloatArray] = []
-        self._frames: list[FloatArray] = []
-        self.frames = 0
-        self.hits = 0
-        self.violations: list[str] = []
-
-    def tolerance_m(self, ranges: FloatArray) -> FloatArray:
-        """How far a hit at ``ranges`` may lie from the wall it hit."""
-        p, nz = self.params, self.noise
-        sigma = nz.range_sigma_m + nz.range_sigma_per_m * ranges
-        lateral = ranges * math.sin(min(p.hit_sigmas * math.radians(nz.angle_jitter_deg),
-                                        0.5 * math.pi))
-        return p.hit_tolerance_m + p.hit_sigmas * sigma + 0.5 * nz.range_resolution_m + lateral
-
-    def mixed_pixel_candidates(self, ranges: FloatArray) -> NDArray[np.bool_]:
-        """Beams that may be mixed pixels (a range blended between the two sides of a depth
-        jump, by design off every obstacle): where the laser mixes pixels, those whose
-        three-beam window spans a jump, and the two end beams (one side unseen)."""
-        n = len(ranges)
-        nz = self.noise
-        if nz.mixed_pixel_prob == 0.0 or n < 2:
-            return np.zeros(n, dtype=bool)
-        padded = np.concatenate([ranges[:1], ranges, ranges[-1:]])
-        window = np.stack([padded[:-2], padded[1:-1], padded[2:]])
-        spread = window.max(axis=0) - window.min(axis=0)
-        out = spread > nz.mixed_pixel_min_jump_m - 2.0 * self.tolerance_m(window.max(axis=0))
-        out[[0, -1]] = True
-        return out
-
-    def __call__(self, frame: Frame, travelled_m: float = 0.0) -> None:
-        if frame.true_pose is None:
-            raise ValueError("FrameChecker needs simulated frames (with a true pose)")
-        scan = frame.scan
-        checked = scan.valid & ~self.mixed_pixel_candidates(scan.ranges)
-        pts = transform_points(frame.true_pose.as_array(), scan.points(valid_only=False)[checked])
-        self._points.append(pts)
-        self._tolerance.append(self.tolerance_m(scan.ranges[checked]))
-        self._frames.append(np.full(len(pts), frame.index, dtype=np.float64))
-        self.frames += 1
-        if len(self._points) >= self.batch_frames:
-            self._check_batch()
-
-    def _check_batch(self) -> None:
-        if not self._points:
-            return
-        pts = np.vstack(self._points)
-        tol = np.concatenate(self._tolerance)
-        frames = np.concatenate(self._frames)
-        self._points, self._tolerance, self._frames = [], [], []
-        self.hits += len(pts)
-        if len(pts) == 0:
-            return
-        off = np.ones(len(pts), dtype=bool)
-        if self._tree is not None:
-            # A within-distance query is ~10× cheaper than nearest-distance for every hit.
-            near, _ = self._tree.query(shapely.points(pts), predicate="dwithin", distance=tol)
-            off[near] = False
-        if off.any():
-            k = int(np.flatnonzero(off)[0])
-            dist = np.full(len(pts), np.inf)
-            if self._tree is not None:
-                dist[k] = _nearest_distance(self._tree, pts[k : k + 1])[0]
-            msg = (f"frame {int(frames[k])}: {int(off.sum())} valid hit(s) off every obstacle, "
-                   f"e.g. ({pts[k, 0]:.3f}, {pts[k, 1]:.3f}) {dist[k]:.3g} m away "
-                   f"(tolerance {tol[k]:.3g} m)")
-            if self.raise_at_once:
-                _fail("laser_hits_on_obstacles", msg)
-            self.violations.append(msg)
-
-    def finish(self) -> list[str]:
-        self._check_batch()
-        return self.violations
 
 
 # -- localisation accuracy ------------------------------------------------------------------
@@ -395,7 +271,7 @@ def check_zero_noise_localisation(
         k = int(np.argmax(np.maximum(pos / p.zero_noise_position_m,
                                      head / math.radians(p.zero_noise_heading_deg))))
         lm = route[k + 1]
-        _fail("zero_noise_localisation",
+        fail("zero_noise_localisation",
               f"{int(bad.sum())} of {len(pos)} local maps off; worst map {lm.map_id} (frame "
               f"{lm.frame_index}, {lm.method}, {lm.tracked} tracked): {pos[k]:.3f} m, "
               f"{math.degrees(head[k]):.2f}° (bounds {p.zero_noise_position_m} m, "
@@ -460,6 +336,6 @@ def check_heading_error_bound(
     over = err > bound
     if over.any():
         k = int(np.argmax(err - bound))
-        _fail("heading_error_bound",
+        fail("heading_error_bound",
               f"row {k}: heading error {math.degrees(err[k]):.2f}° exceeds the bound "
               f"{math.degrees(bound[k]):.2f}° ({int(over.sum())} of {len(err)} poses over)")
