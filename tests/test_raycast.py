@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, example, given
+from hypothesis import example, given
 from hypothesis import strategies as st
 
 from albot2d.errors import InputError
@@ -14,39 +14,24 @@ from albot2d.frames import beam_angles
 from albot2d.geometry import Pose, point_segment_distance, transform_segments
 from albot2d.sim.raycast import NEAR_PASS_MIN_PIECES, BeamFan, RayCaster, cast_brute_force
 from tests.raycast_helpers import (
+    BACKENDS,
     EXACT_M,
+    assume_not_touching,
     box_segments,
+    coord,
     grazing,
     office_segments,
     ring_segments,
+    segment_sets,
     shapely_ranges,
 )
 
-CONTACT_M = 1e-9
 FAN = beam_angles(181, math.pi)
-
-coord = st.floats(-50.0, 50.0, allow_nan=False, allow_subnormal=False)
 heading = st.floats(-math.pi, math.pi, allow_nan=False)
 
 
-@st.composite
-def segment_sets(draw: st.DrawFn, max_size: int = 25) -> np.ndarray:
-    n = draw(st.integers(1, max_size))
-    values = draw(st.lists(coord, min_size=4 * n, max_size=4 * n))
-    segs = np.asarray(values, dtype=np.float64).reshape(n, 4)
-    # Some axis-aligned walls sharing vertices, like real worlds.
-    if draw(st.booleans()):
-        x0, y0 = draw(coord), draw(coord)
-        w, h = draw(st.floats(0.5, 20.0)), draw(st.floats(0.5, 20.0))
-        segs = np.vstack([segs, box_segments(x0, y0, x0 + w, y0 + h)])
-    return segs
-
-
-def assume_not_touching(segs: np.ndarray, ox: float, oy: float) -> None:
-    """Within the contact tolerance of a wall (but not on it) the laser is inside the wall by
-    design (all ranges 0) while the references still see past it: skip those origins."""
-    d = point_segment_distance(np.array([[ox, oy]]), segs)
-    assume(not np.any((d > 0.0) & (d <= 4 * CONTACT_M)))
+def make_caster(backend: str, segments: object, **kwargs: object) -> RayCaster:
+    return RayCaster(segments, backend=backend, **kwargs)  # type: ignore[arg-type]
 
 
 def assert_same_ranges(
@@ -69,11 +54,12 @@ def assert_same_ranges(
     assert np.all(np.abs(edge - max_range) < EXACT_M), (np.flatnonzero(only), edge)
 
 
-def test_box_room_matches_closed_form() -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_box_room_matches_closed_form(backend: str) -> None:
     segs = box_segments(-2.0, -1.0, 3.0, 4.0)
     o = (0.5, 0.25)
     angles = np.linspace(-math.pi, math.pi, 721)
-    got = RayCaster(segs).cast(o, angles, 100.0)
+    got = make_caster(backend, segs).cast(o, angles, 100.0)
     c, s = np.cos(angles), np.sin(angles)
     with np.errstate(divide="ignore"):
         tx = np.where(c > 0, (3.0 - o[0]) / c, (-2.0 - o[0]) / c)
@@ -82,23 +68,25 @@ def test_box_room_matches_closed_form() -> None:
     np.testing.assert_allclose(got, want, rtol=0.0, atol=EXACT_M)
 
 
-def test_hand_made_world_matches_shapely() -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_hand_made_world_matches_shapely(backend: str) -> None:
     segs = np.vstack(
         [box_segments(0, 0, 10, 8), box_segments(3, 3, 4, 4), [[6, 1, 9, 6], [1, 6, 2, 7.5]]]
     )
     for o, th in [((1.0, 1.0), 0.3), ((7.5, 2.0), 2.0), ((5.0, 6.0), -1.2)]:
         angles = FAN + th
-        got = RayCaster(segs).cast(o, angles, 30.0)
+        got = make_caster(backend, segs).cast(o, angles, 30.0)
         assert_same_ranges(got, shapely_ranges(segs, o, angles, 30.0), 30.0)
 
 
 @given(segs=segment_sets(), ox=coord, oy=coord, th=heading, r_max=st.floats(1.0, 80.0))
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_random_segments_match_shapely(
-    segs: np.ndarray, ox: float, oy: float, th: float, r_max: float
+    backend: str, segs: np.ndarray, ox: float, oy: float, th: float, r_max: float
 ) -> None:
     assume_not_touching(segs, ox, oy)
     angles = beam_angles(37, math.pi) + th
-    got = RayCaster(segs).cast((ox, oy), angles, r_max)
+    got = make_caster(backend, segs).cast((ox, oy), angles, r_max)
     want = shapely_ranges(segs, (ox, oy), angles, r_max)
     assert_same_ranges(got, want, r_max, segs, (ox, oy), angles)
 
@@ -111,13 +99,24 @@ def test_random_segments_match_shapely(
     cell=st.one_of(st.none(), st.floats(0.3, 30.0)),
     near_pass=st.sampled_from([0, 2, 20, NEAR_PASS_MIN_PIECES]),
 )
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_index_equals_brute_force_and_hits_lie_on_walls(
-    segs: np.ndarray, ox: float, oy: float, th: float, cell: float | None, near_pass: int
+    backend: str,
+    segs: np.ndarray,
+    ox: float,
+    oy: float,
+    th: float,
+    cell: float | None,
+    near_pass: int,
 ) -> None:
     assume_not_touching(segs, ox, oy)
     r_max = 60.0
-    caster = RayCaster(
-        segs, cell_size_m=cell, near_pass_min_pieces=near_pass, near_pass_pieces=near_pass + 1
+    caster = make_caster(
+        backend,
+        segs,
+        cell_size_m=cell,
+        near_pass_min_pieces=near_pass,
+        near_pass_pieces=near_pass + 1,
     )
     angles = FAN + th
     got = caster.cast((ox, oy), angles, r_max)
@@ -139,15 +138,21 @@ def test_index_equals_brute_force_and_hits_lie_on_walls(
     th=heading,
     move=st.tuples(coord, coord, heading),
 )
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_rigid_motion_of_world_and_laser_leaves_scan_unchanged(
-    segs: np.ndarray, ox: float, oy: float, th: float, move: tuple[float, float, float]
+    backend: str,
+    segs: np.ndarray,
+    ox: float,
+    oy: float,
+    th: float,
+    move: tuple[float, float, float],
 ) -> None:
     assume_not_touching(segs, ox, oy)  # the contact decision may flip under rounding
     r_max = 40.0
-    before = RayCaster(segs).cast((ox, oy), FAN + th, r_max)
+    before = make_caster(backend, segs).cast((ox, oy), FAN + th, r_max)
     m = Pose(*move)
     moved_origin = m.transform_points(np.array([[ox, oy]]))[0]
-    after = RayCaster(transform_segments(m.as_array(), segs)).cast(
+    after = make_caster(backend, transform_segments(m.as_array(), segs)).cast(
         moved_origin, FAN + th + m.theta, r_max
     )
     ok = grazing(segs, (ox, oy), FAN + th)
@@ -164,14 +169,15 @@ def test_rigid_motion_of_world_and_laser_leaves_scan_unchanged(
     cell=st.one_of(st.none(), st.floats(0.2, 5.0)),
 )
 @example(n=4, radii=[1.0] * 40, spin=math.pi / 4, cell=None)
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_closed_polygon_around_origin_leaks_no_ray(
-    n: int, radii: list[float], spin: float, cell: float | None
+    backend: str, n: int, radii: list[float], spin: float, cell: float | None
 ) -> None:
     """Rays aimed exactly at shared vertices (and everywhere else) always hit."""
     phi = spin + np.arange(n) * (2 * math.pi / n)
     pts = np.column_stack([np.cos(phi), np.sin(phi)]) * np.asarray(radii[:n])[:, None]
     segs = ring_segments(pts)
-    caster = RayCaster(segs, cell_size_m=cell)
+    caster = make_caster(backend, segs, cell_size_m=cell)
     at_vertices = np.arctan2(pts[:, 1], pts[:, 0])
     angles = np.concatenate([at_vertices, np.linspace(-math.pi, math.pi, 360, endpoint=False)])
     got = caster.cast((0.0, 0.0), angles, 100.0)
@@ -179,61 +185,73 @@ def test_closed_polygon_around_origin_leaks_no_ray(
     np.testing.assert_allclose(got[:n], np.asarray(radii[:n]), rtol=1e-12)
 
 
-def test_ray_through_box_corners() -> None:
-    caster = RayCaster(box_segments(-1.0, -1.0, 1.0, 1.0))
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_ray_through_box_corners(backend: str) -> None:
+    caster = make_caster(backend, box_segments(-1.0, -1.0, 1.0, 1.0))
     corners = np.array([1, 3, 5, 7]) * (math.pi / 4)
     np.testing.assert_allclose(caster.cast((0.0, 0.0), corners, 5.0), math.sqrt(2), rtol=1e-12)
 
 
-def test_ray_parallel_to_wall_misses_it() -> None:
-    caster = RayCaster([[0.0, 1.0, 5.0, 1.0]])
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_ray_parallel_to_wall_misses_it(backend: str) -> None:
+    caster = make_caster(backend, [[0.0, 1.0, 5.0, 1.0]])
     assert caster.cast((0.0, 0.0), [0.0], 10.0)[0] == np.inf
 
 
-def test_wall_seen_edge_on_is_hit_at_its_near_end() -> None:
-    caster = RayCaster([[2.0, 0.0, 5.0, 0.0], [0.0, -3.0, 0.0, -7.0]])
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_wall_seen_edge_on_is_hit_at_its_near_end(backend: str) -> None:
+    caster = make_caster(backend, [[2.0, 0.0, 5.0, 0.0], [0.0, -3.0, 0.0, -7.0]])
     got = caster.cast((0.0, 0.0), [0.0, 1e-3, -math.pi / 2, math.pi], 10.0)
     np.testing.assert_allclose(got[[0, 2]], [2.0, 3.0], rtol=1e-12)
     assert np.isinf(got[[1, 3]]).all()
 
 
 @pytest.mark.parametrize("origin", [(0.0, 0.0), (1.0, 0.0), (-0.3, 0.0), (0.5, 1e-12)])
-def test_origin_on_a_wall_gives_zero_ranges(origin: tuple[float, float]) -> None:
-    caster = RayCaster(np.vstack([[[-1.0, 0.0, 1.0, 0.0]], box_segments(-5, -5, 5, 5)]))
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_origin_on_a_wall_gives_zero_ranges(backend: str, origin: tuple[float, float]) -> None:
+    caster = make_caster(backend, np.vstack([[[-1.0, 0.0, 1.0, 0.0]], box_segments(-5, -5, 5, 5)]))
     got = caster.cast(origin, FAN, 30.0)
     assert np.all(got == 0.0)
 
 
-def test_zero_length_segments_are_ignored() -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_zero_length_segments_are_ignored(backend: str) -> None:
     walls = box_segments(-3.0, -2.0, 4.0, 5.0)
     dots = np.array([[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0]])
-    with_dots = RayCaster(np.vstack([walls, dots])).cast((0.0, 0.0), FAN, 30.0)
-    np.testing.assert_array_equal(with_dots, RayCaster(walls).cast((0.0, 0.0), FAN, 30.0))
+    with_dots = make_caster(backend, np.vstack([walls, dots])).cast((0.0, 0.0), FAN, 30.0)
+    np.testing.assert_array_equal(
+        with_dots, make_caster(backend, walls).cast((0.0, 0.0), FAN, 30.0)
+    )
 
 
-def test_no_segments_and_out_of_range_give_inf() -> None:
-    assert np.isinf(RayCaster(np.zeros((0, 4))).cast((0.0, 0.0), FAN, 30.0)).all()
-    far = RayCaster(box_segments(-50.0, -50.0, 50.0, 50.0))
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_no_segments_and_out_of_range_give_inf(backend: str) -> None:
+    assert np.isinf(make_caster(backend, np.zeros((0, 4))).cast((0.0, 0.0), FAN, 30.0)).all()
+    far = make_caster(backend, box_segments(-50.0, -50.0, 50.0, 50.0))
     assert np.isinf(far.cast((0.0, 0.0), FAN, 30.0)).all()
     assert np.isfinite(far.cast((0.0, 0.0), FAN, 80.0)).all()
 
 
-def test_extra_segments_are_seen_with_the_static_walls() -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_extra_segments_are_seen_with_the_static_walls(backend: str) -> None:
     walls = box_segments(-10.0, -10.0, 10.0, 10.0)
-    caster = RayCaster(walls)
+    caster = make_caster(backend, walls)
     mover = box_segments(2.0, -0.5, 3.0, 0.5)
     alone = caster.cast((0.0, 0.0), FAN, 30.0)
     seen = caster.cast((0.0, 0.0), FAN, 30.0, extra_segments=mover)
     want = shapely_ranges(np.vstack([walls, mover]), (0.0, 0.0), FAN, 30.0)
     assert_same_ranges(seen, want, 30.0)
     assert seen[90] == pytest.approx(2.0) and alone[90] == pytest.approx(10.0)
-    only_extra = RayCaster(np.zeros((0, 4))).cast((0.0, 0.0), FAN, 30.0, extra_segments=mover)
+    only_extra = make_caster(backend, np.zeros((0, 4))).cast(
+        (0.0, 0.0), FAN, 30.0, extra_segments=mover
+    )
     assert np.isfinite(only_extra).sum() > 0
 
 
-def test_unsorted_angles_and_prepared_fans_agree() -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_unsorted_angles_and_prepared_fans_agree(backend: str) -> None:
     segs = office_segments(4)
-    caster = RayCaster(segs)
+    caster = make_caster(backend, segs)
     rng = np.random.default_rng(3)
     angles = rng.uniform(-math.pi, math.pi, 200)
     got = caster.cast((6.0, 5.5), angles, 30.0)
@@ -248,9 +266,12 @@ def test_unsorted_angles_and_prepared_fans_agree() -> None:
 
 
 @pytest.mark.parametrize("sigma_deg", [0.01, 0.3, 5.0])
-def test_jittered_fan_equals_a_fan_built_from_the_turned_angles(sigma_deg: float) -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_jittered_fan_equals_a_fan_built_from_the_turned_angles(
+    backend: str, sigma_deg: float
+) -> None:
     """Small jitter takes the cheap path, large jitter (beams out of order) a rebuild."""
-    caster = RayCaster(office_segments(4))
+    caster = make_caster(backend, office_segments(4))
     fan = BeamFan.from_angles(FAN)
     offsets = np.random.default_rng(1).normal(0.0, math.radians(sigma_deg), len(FAN))
     turned = fan.jittered(offsets)
@@ -261,9 +282,12 @@ def test_jittered_fan_equals_a_fan_built_from_the_turned_angles(sigma_deg: float
 
 
 @pytest.mark.parametrize("near_pass", [0, NEAR_PASS_MIN_PIECES])
-def test_office_grid_full_circle_matches_brute_force(near_pass: int) -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_office_grid_full_circle_matches_brute_force(backend: str, near_pass: int) -> None:
     segs = office_segments(6)
-    caster = RayCaster(segs, near_pass_min_pieces=near_pass, near_pass_pieces=near_pass // 20 + 1)
+    caster = make_caster(
+        backend, segs, near_pass_min_pieces=near_pass, near_pass_pieces=near_pass // 20 + 1
+    )
     angles = np.linspace(-math.pi, math.pi, 720, endpoint=False)
     for o in [(2.0, 2.0), (13.1, 9.7), (4.0, 6.0), (23.5, 0.5)]:
         got = caster.cast(o, angles, 30.0)
@@ -274,8 +298,8 @@ def test_office_grid_full_circle_matches_brute_force(near_pass: int) -> None:
 def test_near_pass_at_long_range_matches_single_pass() -> None:
     """In a dense world at 80 m the occlusion cut kicks in; it must not change a range."""
     segs = office_segments(30)
-    cut = RayCaster(segs)
-    plain = RayCaster(segs, near_pass_min_pieces=10**9)
+    cut = RayCaster(segs, backend="numpy")
+    plain = RayCaster(segs, near_pass_min_pieces=10**9, backend="numpy")
     rng = np.random.default_rng(7)
     for _ in range(12):
         o = (float(rng.uniform(1, 119)), float(rng.uniform(1, 119)))
@@ -283,6 +307,35 @@ def test_near_pass_at_long_range_matches_single_pass() -> None:
         np.testing.assert_array_equal(cut.cast(o, angles, 80.0), plain.cast(o, angles, 80.0))
     box = (0.0, 0.0, 120.0, 120.0)
     assert cut.grid.count(*box) > NEAR_PASS_MIN_PIECES  # the cut really ran
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("turns", [-7, -1, 1, 3, 40])
+def test_headings_and_angles_any_number_of_turns_away_give_the_same_scan(
+    backend: str, turns: int
+) -> None:
+    """A fan is the same fan whichever multiple of 2 pi its angles or the heading carry."""
+    caster = make_caster(backend, office_segments(4))
+    fan = BeamFan.from_angles(FAN)
+    want = caster.cast((6.0, 5.5), fan, 30.0, heading=0.4)
+    assert np.isfinite(want).all()
+    shift = 2.0 * math.pi * turns
+    np.testing.assert_allclose(
+        caster.cast((6.0, 5.5), fan, 30.0, heading=0.4 + shift), want, rtol=1e-9
+    )
+    np.testing.assert_allclose(caster.cast((6.0, 5.5), FAN + 0.4 + shift, 30.0), want, rtol=1e-9)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_contact_is_checked_all_around_the_origin(backend: str) -> None:
+    """A wall within the contact tolerance behind a forward-looking laser still touches it."""
+    # Clutter further behind keeps the index from handing out whole rows of pieces.
+    clutter = [[x, -0.9, x, 0.9] for x in np.linspace(-0.9, -0.3, 30)]
+    walls = [[-0.08, -0.5, -0.08, 0.5], *clutter, *box_segments(-1.0, -1.0, 1.0, 1.0)]
+    caster = make_caster(backend, walls, contact_tolerance_m=0.1, cell_size_m=0.05)
+    assert caster.cell_size_m < 0.08  # the wall is in a cell the fan's own box misses
+    assert np.all(caster.cast((0.0, 0.0), FAN, 30.0) == 0.0)
+    assert np.all(caster.cast((0.2, 0.0), FAN, 30.0) > 0.0)
 
 
 @pytest.mark.parametrize(
@@ -294,6 +347,7 @@ def test_near_pass_at_long_range_matches_single_pass() -> None:
         ({"segments": [[0, 0, 1, 1]], "contact_tolerance_m": -1.0}, "contact_tolerance_m"),
         ({"segments": [[0, 0, 1, 1]], "near_pass_min_pieces": 1.5}, "near_pass_min_pieces"),
         ({"segments": [[0, 0, 1, 1]], "near_pass_pieces": 0}, "near_pass_pieces"),
+        ({"segments": [[0, 0, 1, 1]], "backend": "cuda"}, "backend"),
     ],
 )
 def test_bad_construction_names_the_input(kwargs: dict, field: str) -> None:

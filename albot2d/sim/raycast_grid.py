@@ -32,6 +32,9 @@ _MAX_CELLS_PER_SEGMENT = 16
 _MIN_PIECE_M = 1e-10
 #: Up to this many grid rows, a query copies row runs by slicing instead of fancy indexing.
 _MAX_SLICED_ROWS = 64
+#: A query returns one view of the table instead of copying its row runs when that adds at
+#: most this many pieces per grid row (about the cost of copying one run).
+_SPAN_SLACK_PER_ROW = 16
 
 
 def _readonly(arr: np.ndarray) -> np.ndarray:
@@ -146,6 +149,21 @@ class SegmentGrid:
         counts = np.bincount(cell_id, minlength=self._nx * self._ny)
         self._cell_start = _readonly(np.concatenate([[0], np.cumsum(counts)]).astype(np.intp))
 
+    @property
+    def table(self) -> np.ndarray:
+        """All pieces, ``(3, n_pieces)`` complex, cell by cell in row-major cell order."""
+        return self._table
+
+    @property
+    def cell_start(self) -> NDArray[np.intp]:
+        """``(nx * ny + 1,)``: cell ``i = iy * nx + ix`` holds columns ``start[i]:start[i + 1]``."""
+        return self._cell_start
+
+    @property
+    def layout(self) -> FloatArray:
+        """``[x0, y0, cell_size_m, nx, ny]``: cell (ix, iy) spans x0 + ix * cell onwards."""
+        return _readonly(np.array([self._x0, self._y0, self.cell_size_m, self._nx, self._ny]))
+
     def runs(
         self, xmin: float, ymin: float, xmax: float, ymax: float
     ) -> tuple[list[int], list[int]]:
@@ -173,9 +191,13 @@ class SegmentGrid:
     def gather(self, starts: list[int], ends: list[int]) -> np.ndarray:
         """Table columns ``(3, K)`` of the pieces in the runs ``[starts[i], ends[i])``."""
         table = self._table
+        if not starts:
+            return table[:, :0]
+        # One view of the whole span when the pieces between the runs are few: casting
+        # against them (beyond the box, they are harmless) is cheaper than copying runs.
+        if ends[-1] - starts[0] <= sum(ends) - sum(starts) + _SPAN_SLACK_PER_ROW * len(starts):
+            return table[:, starts[0] : ends[-1]]
         if len(starts) <= _MAX_SLICED_ROWS:
-            if not starts:
-                return table[:, :0]
             # A few contiguous copies beat building and applying a fancy index.
             parts = [table[:, a:b] for a, b in zip(starts, ends, strict=True)]
             return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)

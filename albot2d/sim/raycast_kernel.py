@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from albot2d.errors import InputError
 
-__all__ = ["BeamFan", "cast_pieces"]
+__all__ = ["BeamFan", "beam_directions", "cast_pieces"]
 
 FloatArray = NDArray[np.float64]
 
@@ -108,65 +108,83 @@ def _arange(n: int) -> NDArray[np.intp]:
     return _ARANGE[:n]
 
 
+def beam_directions(fan: BeamFan, heading: float) -> NDArray[np.complex128]:
+    """``(B,)`` world directions of the fan's beams (in sorted order) turned by ``heading``.
+
+    Computed once per scan and shared by every pass and backend, so they all see the very
+    same directions.
+    """
+    return fan.ext_dir[: fan.n_beams] * complex(math.cos(heading), math.sin(heading))
+
+
+def _pairs(z: np.ndarray) -> FloatArray:
+    """A contiguous complex array seen as ``(..., 2)`` floats ``[real, imag]`` (no copy)."""
+    return z.view(np.float64).reshape(*z.shape, 2)
+
+
 def cast_pieces(
     table: np.ndarray,
     ox: float,
     oy: float,
     mid: float,
-    heading: float,
+    directions: NDArray[np.complex128],
     fan: BeamFan,
     r_max: float,
     tol: float,
 ) -> FloatArray:
     """The vectorised kernel: ranges of every beam of ``fan`` against the pieces ``table``.
 
-    ``table`` is ``(3, K)`` complex: rows endpoint a, endpoint b, conj(unit normal). The
-    calls are ufuncs and array methods on purpose: at a few hundred pieces a scan is
-    dominated by per-call overhead, not arithmetic.
+    ``table`` is ``(3, K)`` complex: rows endpoint a, endpoint b, conj(unit normal);
+    ``directions`` come from ``beam_directions``. The calls are ufuncs and array methods on
+    purpose: at a few hundred pieces a scan is dominated by per-call overhead, not
+    arithmetic. Distances use plain float products and sums, never a complex product
+    (numpy may fuse those into FMAs), so the compiled kernel reproduces them bit for bit.
     """
     n_beams = fan.n_beams
     if table.shape[1] == 0:
         return np.full(n_beams, np.inf)
     conj_n = table[2]
-    x = table[0:2].real - ox  # (2, K) endpoint coordinates relative to the origin
-    y = table[0:2].imag - oy
-    s = x[0] * conj_n.real - y[0] * conj_n.imag  # signed distance origin → line
-    # w = 1 / (foot of the perpendicular), so a beam of world direction d meets the line at
-    # 1 / Re(d * w). Turning w by the heading lets the fan's own directions stand in for d.
-    turn = complex(math.cos(heading), math.sin(heading))
+    z = table[0:2] - complex(ox, oy)  # (2, K) endpoints relative to the origin
+    s = z[0].real * conj_n.real
+    s -= z[0].imag * conj_n.imag  # signed distance origin → line: Re(z * conj(n)) = z · n
+    # w = conj(n) / s = 1 / (foot of the perpendicular): a beam of direction d meets the
+    # line at 1 / Re(d * w).
     edge_on = None
     if abs(s).min() <= tol:
-        inside, w, edge_on = _degenerate(x, y, s, conj_n, tol)
+        inside, w, edge_on = _degenerate(z, s, conj_n, tol)
         if inside:
             return np.zeros(n_beams)
-        w *= turn
     else:
-        w = (conj_n * turn) * (1.0 / s)
-    ang = np.arctan2(y, x)  # endpoint directions...
-    ang -= mid  # ...relative to the fan centre, in (-2 pi, 2 pi)
+        w = _pairs(conj_n) * (1.0 / s)[:, None]  # (K, 2) [Re, Im]
+    ang = np.arctan2(z.imag, z.real)  # endpoint directions...
+    ang -= mid  # ...relative to the fan centre (mid in [-pi, pi]), in [-2 pi, 2 pi]
     # Beams from each endpoint's direction on; ext_rel repeats the fan at ±2 pi, so moving
     # a direction by 2 pi moves its index by exactly n_beams. Intervals are half-open,
     # [first, last): of two walls meeting at a vertex, exactly one owns a ray through it.
     idx = fan.ext_rel.searchsorted(ang)
     if edge_on is not None:  # a point-like target: close its interval to catch the ray
         idx[1, edge_on] = fan.ext_rel.searchsorted(ang[1, edge_on], side="right")
-    first = np.minimum(idx[0], idx[1])
-    span = abs(idx[1] - idx[0])
+    lo, hi = idx.min(axis=0), idx.max(axis=0)
+    span = hi - lo
     # A piece subtends less than pi; a larger gap means it spans the ±pi seam, and its
     # beams run from the larger index to the smaller one one turn later.
     wrap = abs(ang[1] - ang[0]) > math.pi
-    first += wrap * span
-    counts = span + wrap * (n_beams - 2 * span)
+    first = np.where(wrap, hi, lo)
+    counts = np.where(wrap, n_beams - span, span)
     cum = counts.cumsum()
     n_pairs = int(cum[-1])
     # 1 / range per beam; no pair leaves 2 * r_max, beyond range like any hit past r_max.
-    den = np.empty(3 * n_beams)
-    den.fill(0.5 / r_max)
+    den = np.full(3 * n_beams, 0.5 / r_max)
     if n_pairs:
-        pos = (first + counts - cum).repeat(counts)
+        first += counts
+        first -= cum
+        pos = first.repeat(counts)
         pos += _arange(n_pairs)
-        np.maximum.at(den, pos, (fan.ext_dir[pos] * w.repeat(counts)).real)
-    ranges = 1.0 / den.reshape(3, n_beams).max(axis=0)
+        prod = _pairs(np.concatenate((directions, directions, directions)))[pos]
+        prod *= w.repeat(counts, axis=0)  # [Re d * Re w, Im d * Im w]
+        np.maximum.at(den, pos, np.subtract(prod[:, 0], prod[:, 1]))
+    ranges = den.reshape(3, n_beams).max(axis=0)
+    np.divide(1.0, ranges, out=ranges)
     ranges[ranges > r_max] = np.inf
     if fan.order is not None:
         unsorted = np.empty_like(ranges)
@@ -176,25 +194,29 @@ def cast_pieces(
 
 
 def _degenerate(
-    x: FloatArray, y: FloatArray, s: FloatArray, conj_n: np.ndarray, tol: float
-) -> tuple[bool, np.ndarray, NDArray[np.bool_]]:
+    z: np.ndarray, s: FloatArray, conj_n: np.ndarray, tol: float
+) -> tuple[bool, FloatArray, NDArray[np.bool_]]:
     """Pieces whose line passes within ``tol`` of the origin; returns (inside, w, edge_on).
 
     ``inside`` when the origin is on a piece. A piece seen edge-on collapses (in place, in
-    ``x`` and ``y``) to its near endpoint, hit only by the ray that points straight at it.
+    ``z``) to its near endpoint, hit only by the ray that points straight at it. Float
+    arithmetic only, in the order the compiled kernel uses.
     """
     deg = abs(s) <= tol
-    za = x[0, deg] + 1j * y[0, deg]
-    zb = x[1, deg] + 1j * y[1, deg]
-    e = zb - za
-    length = np.abs(e)
-    t = -(za * np.conj(e)).real / (length * length)
+    ar, ai = z[0, deg].real, z[0, deg].imag
+    br, bi = z[1, deg].real, z[1, deg].imag
+    er, ei = br - ar, bi - ai
+    length = np.hypot(er, ei)
+    t = -(ar * er + ai * ei) / (length * length)
     slack = tol / length
+    w = _pairs(conj_n) * (1.0 / np.where(deg, 1.0, s))[:, None]
     if ((t >= -slack) & (t <= 1.0 + slack)).any():
-        return True, conj_n, deg
-    near = np.where(np.abs(za) <= np.abs(zb), za, zb)
-    x[:, deg] = near.real
-    y[:, deg] = near.imag
-    w = conj_n / np.where(deg, 1.0, s)
-    w[deg] = 1.0 / near
+        return True, w, deg
+    qa, qb = ar * ar + ai * ai, br * br + bi * bi
+    a_nearer = qa <= qb
+    nr, ni = np.where(a_nearer, ar, br), np.where(a_nearer, ai, bi)
+    q = np.where(a_nearer, qa, qb)
+    z[:, deg] = nr + 1j * ni
+    w[deg, 0] = nr / q  # 1 / near
+    w[deg, 1] = -ni / q
     return False, w, deg
