@@ -14,6 +14,10 @@ a fixed number of numpy calls (``raycast_kernel``):
 With long ranges in dense worlds an occlusion cut first casts against the pieces near the
 laser and looks further only along the beams that saw nothing (see ``RayCaster``).
 
+With numba installed (the ``fast`` extra) a compiled kernel (``raycast_numba``) walks each
+beam through the same grid instead, nearest cell first, for the same ranges (bit for bit
+except beams grazing a piece end, see below) several times faster; ``backend`` chooses.
+
 Only pieces in range are touched, so a scan's cost follows the walls near the laser, not
 the size of the world. Results are exact segment intersections, not grid approximations.
 
@@ -83,19 +87,31 @@ def numba_available() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
-def _compiled_kernel(backend: str) -> Callable[..., None] | None:
-    """The numba kernel for ``backend``, or None for the numpy one."""
-    if backend == "numpy" or (backend == "auto" and not numba_available()):
-        return None
-    try:
+_numba_cast_beams: Callable[..., None] | None = None
+
+
+def _numba_kernel() -> Callable[..., None]:
+    """``raycast_numba.cast_beams``, imported on first use (numba takes a while to import)."""
+    global _numba_cast_beams
+    if _numba_cast_beams is None:
         from albot2d.sim.raycast_numba import cast_beams
+
+        _numba_cast_beams = cast_beams
+    return _numba_cast_beams
+
+
+def _resolve_backend(backend: str) -> str:
+    if backend == "numpy" or (backend == "auto" and not numba_available()):
+        return "numpy"
+    try:
+        _numba_kernel()
     except ImportError as exc:
         if backend == "auto":
-            return None
+            return "numpy"
         raise InputError(
             f"backend='numba' needs numba (pip install 'albot2d[fast]'): {exc}"
         ) from None
-    return cast_beams
+    return "numba"
 
 
 class RayCaster:
@@ -143,13 +159,14 @@ class RayCaster:
         self.contact_tolerance_m = float(contact_tolerance_m)
         self.near_pass_min_pieces = near_pass_min_pieces
         self.near_pass_pieces = near_pass_pieces
-        self._cast_beams = _compiled_kernel(backend)
+        # The name, not the kernel: a RayCaster pickles small and loads numba where needed.
+        self._backend = _resolve_backend(backend)
         self._layout = self.grid.layout
 
     @property
     def backend(self) -> str:
         """The kernel in use: "numpy" or "numba"."""
-        return "numpy" if self._cast_beams is None else "numba"
+        return self._backend
 
     @property
     def segments(self) -> FloatArray:
@@ -207,11 +224,11 @@ class RayCaster:
         tol = self.contact_tolerance_m
         # Pieces within this of the origin are checked for contact; the fan's box pads.
         pad = 1e-9 * (1.0 + r_max + abs(ox) + abs(oy))
-        if self._cast_beams is not None:
+        if self._backend == "numba":
             ranges = np.empty(fan.n_beams)
             scan = np.array([ox, oy, mid, r_max, tol, pad])
             grid = self.grid
-            self._cast_beams(
+            (_numba_cast_beams or _numba_kernel())(
                 grid.table,
                 grid.cell_start,
                 self._layout,
