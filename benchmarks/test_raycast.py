@@ -81,6 +81,8 @@ def space(office) -> pymunk.Space:
 
 
 def rays_per_s(benchmark, n_rays: int) -> None:
+    if benchmark.stats is None:  # --benchmark-disable: run once, untimed
+        return
     stats = benchmark.stats.stats
     benchmark.extra_info["Mrays_per_s"] = round(n_rays / stats.median / 1e6, 3)
     benchmark.extra_info["Mrays_per_s_mean"] = round(n_rays / stats.mean / 1e6, 3)

@@ -37,7 +37,6 @@ Numerical conventions (all tested):
 
 from __future__ import annotations
 
-import importlib.util
 import itertools
 import math
 from collections.abc import Callable
@@ -82,11 +81,6 @@ BACKENDS = ("auto", "numpy", "numba")
 _NO_PIECES = np.zeros((3, 0), dtype=np.complex128)
 
 
-def numba_available() -> bool:
-    """Whether numba is installed (the optional ``fast`` extra), without importing it."""
-    return importlib.util.find_spec("numba") is not None
-
-
 _numba_cast_beams: Callable[..., None] | None = None
 
 
@@ -100,17 +94,20 @@ def _numba_kernel() -> Callable[..., None]:
     return _numba_cast_beams
 
 
+def numba_available() -> bool:
+    """Whether the compiled kernel can be used: numba (the ``fast`` extra) imports."""
+    try:
+        _numba_kernel()
+    except ImportError:
+        return False
+    return True
+
+
 def _resolve_backend(backend: str) -> str:
     if backend == "numpy" or (backend == "auto" and not numba_available()):
         return "numpy"
-    try:
-        _numba_kernel()
-    except ImportError as exc:
-        if backend == "auto":
-            return "numpy"
-        raise InputError(
-            f"backend='numba' needs numba (pip install 'albot2d[fast]'): {exc}"
-        ) from None
+    if not numba_available():
+        raise InputError("backend='numba' needs numba: pip install 'albot2d[fast]'")
     return "numba"
 
 
