@@ -155,7 +155,7 @@ def cast_pieces(
         if inside:
             return np.zeros(n_beams)
     else:
-        w = _pairs(conj_n) * (1.0 / s)[:, None]  # (K, 2) [Re, Im]
+        w = conj_n * (1.0 / s)  # complex times real: each part one rounded product
     ang = np.arctan2(z.imag, z.real)  # endpoint directions...
     ang -= mid  # ...relative to the fan centre (mid in [-pi, pi]), in [-2 pi, 2 pi]
     # Beams from each endpoint's direction on; ext_rel repeats the fan at ±2 pi, so moving
@@ -180,8 +180,8 @@ def cast_pieces(
         first -= cum
         pos = first.repeat(counts)
         pos += _arange(n_pairs)
-        prod = _pairs(np.concatenate((directions, directions, directions)))[pos]
-        prod *= w.repeat(counts, axis=0)  # [Re d * Re w, Im d * Im w]
+        prod = _pairs(np.concatenate((directions, directions, directions)).take(pos))
+        prod *= _pairs(w.repeat(counts))  # [Re d * Re w, Im d * Im w]
         np.maximum.at(den, pos, np.subtract(prod[:, 0], prod[:, 1]))
     ranges = den.reshape(3, n_beams).max(axis=0)
     np.divide(1.0, ranges, out=ranges)
@@ -195,7 +195,7 @@ def cast_pieces(
 
 def _degenerate(
     z: np.ndarray, s: FloatArray, conj_n: np.ndarray, tol: float
-) -> tuple[bool, FloatArray, NDArray[np.bool_]]:
+) -> tuple[bool, NDArray[np.complex128], NDArray[np.bool_]]:
     """Pieces whose line passes within ``tol`` of the origin; returns (inside, w, edge_on).
 
     ``inside`` when the origin is on a piece. A piece seen edge-on collapses (in place, in
@@ -209,7 +209,7 @@ def _degenerate(
     length = np.hypot(er, ei)
     t = -(ar * er + ai * ei) / (length * length)
     slack = tol / length
-    w = _pairs(conj_n) * (1.0 / np.where(deg, 1.0, s))[:, None]
+    w = conj_n * (1.0 / np.where(deg, 1.0, s))
     if ((t >= -slack) & (t <= 1.0 + slack)).any():
         return True, w, deg
     qa, qb = ar * ar + ai * ai, br * br + bi * bi
@@ -217,6 +217,6 @@ def _degenerate(
     nr, ni = np.where(a_nearer, ar, br), np.where(a_nearer, ai, bi)
     q = np.where(a_nearer, qa, qb)
     z[:, deg] = nr + 1j * ni
-    w[deg, 0] = nr / q  # 1 / near
-    w[deg, 1] = -ni / q
+    w.real[deg] = nr / q  # 1 / near
+    w.imag[deg] = -ni / q
     return False, w, deg
