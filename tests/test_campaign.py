@@ -296,3 +296,12 @@ def test_a_users_own_mapper_is_fuzzed_the_same_way(plugins: Path, tmp_path: Path
 def test_bad_campaign_parameters_are_input_errors(change: dict, message: str) -> None:
     with pytest.raises(InputError, match=message):
         CampaignParams(**{"episodes": 1, **change})
+
+
+def test_pinned_campaign_findings_now_pass() -> None:
+    """Episodes that failed in a 1000-episode campaign (seed 0) and were fixed since:
+    326 — two neighbouring mixed pixels were taken for hits off the walls."""
+    spec = EpisodeSpec.draw(CampaignParams(episodes=1000, seed=0), 326)
+    assert (spec.kind, spec.run_seed) == ("office", 5094196264049440860)  # still that episode
+    record = run_episode(spec).record
+    assert record["status"] == "ok", record["violations"]

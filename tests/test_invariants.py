@@ -219,3 +219,18 @@ def test_albot1_beats_raw_odometry_on_average(profile, noise, episodes, tour_m) 
     mine = np.mean([r["metrics"]["heading_error_mean_deg"] for r in records])
     odometry = np.mean([r["metrics"]["odometry_heading_error_mean_deg"] for r in records])
     assert mine < odometry
+
+
+def test_two_neighbouring_mixed_pixels_are_exempt() -> None:
+    """Pinned from a 1000-episode campaign (seed 0, episode 326, frame 145): two adjacent
+    depth jumps each blended one beam, so beam 94 (4.53 m, true 4.25 m) had no jump right
+    beside it; it lies 7.5 cm off the wall by design."""
+    checker = sim_inv.FrameChecker(np.zeros((0, 4)), LaserNoise())
+    ranges = np.full(181, 7.0)
+    ranges[91:98] = [7.19, 7.13, 4.57, 4.53, 4.53, 4.89, 5.25]
+    ranges[98:] = 5.3
+    candidates = checker.mixed_pixel_candidates(ranges)
+    assert candidates[93] and candidates[94]
+    assert not candidates[50] and not candidates[150]
+    assert not sim_inv.FrameChecker(np.zeros((0, 4)), LaserNoise.zero()).mixed_pixel_candidates(
+        ranges).any()

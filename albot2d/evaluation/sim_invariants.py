@@ -22,9 +22,12 @@ from albot2d.frames import Frame
 from albot2d.geometry import transform_points
 from albot2d.sim.laser import LaserNoise
 
-__all__ = ["FrameChecker", "check_robot_clear"]
+__all__ = ["MIXED_PIXEL_REACH_BEAMS", "FrameChecker", "check_robot_clear"]
 
 FloatArray = NDArray[np.float64]
+
+# Beams this close to an observed depth jump may be mixed pixels (see FrameChecker).
+MIXED_PIXEL_REACH_BEAMS = 2
 
 
 def _nearest_distance(tree: shapely.STRtree, points: FloatArray) -> FloatArray:
@@ -89,16 +92,22 @@ class FrameChecker:
 
     def mixed_pixel_candidates(self, ranges: FloatArray) -> NDArray[np.bool_]:
         """Beams that may be mixed pixels (a range blended between the two sides of a depth
-        jump, by design off every obstacle): where the laser mixes pixels, those whose
-        three-beam window spans a jump, and the two end beams (one side unseen)."""
+        jump, by design off every obstacle): where the laser mixes pixels, every beam within
+        ``MIXED_PIXEL_REACH_BEAMS`` of an observed jump, and the two end beams (one side
+        unseen). Two jumps next to each other can blend two neighbouring beams, hiding the
+        jump between them, hence a reach of two beams rather than one."""
         n = len(ranges)
         nz = self.noise
         if nz.mixed_pixel_prob == 0.0 or n < 2:
             return np.zeros(n, dtype=bool)
-        padded = np.concatenate([ranges[:1], ranges, ranges[-1:]])
-        window = np.stack([padded[:-2], padded[1:-1], padded[2:]])
-        spread = window.max(axis=0) - window.min(axis=0)
-        out = spread > nz.mixed_pixel_min_jump_m - 2.0 * self.tolerance_m(window.max(axis=0))
+        pair_far = np.maximum(ranges[:-1], ranges[1:])
+        jump = np.abs(np.diff(ranges)) > nz.mixed_pixel_min_jump_m - 2.0 * self.tolerance_m(
+            pair_far)
+        out = np.zeros(n, dtype=bool)
+        reach = MIXED_PIXEL_REACH_BEAMS
+        for shift in range(-reach + 1, reach + 1):  # pair a covers beams a-reach+1 … a+reach
+            lo, hi = max(shift, 0), min(n - 1 + shift, n)
+            out[lo:hi] |= jump[lo - shift : hi - shift]
         out[[0, -1]] = True
         return out
 
