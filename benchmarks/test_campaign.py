@@ -4,8 +4,8 @@ Run: ``python -m pytest benchmarks/test_campaign.py --benchmark-only
 --benchmark-group-by=group -s``. Each worker pool is started and warmed up (two episodes,
 so every worker has imported albot2d) before the clock starts, so the times are the
 campaign's throughput, not the pool's start-up (about a second per spawned worker). The
-2-worker row's ``extra_info`` holds its speed-up over the 1-worker row; the goal is ≥ 1.7×
-on a 2-core machine.
+2-worker row's ``extra_info`` holds its speed-up over the 1-worker row (best of two rounds
+each); the goal is ≥ 1.7× on a 2-core machine.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ EPISODES = 20
 PARAMS = CampaignParams(episodes=EPISODES, seed=2024)
 WARM_UP = CampaignParams(episodes=2, seed=1, kinds=("rooms",), world_size_max_m=15.0,
                          tour_length_min_m=10.0, tour_length_max_m=10.0)
+ROUNDS = 2  # the machine is shared: the faster of two rounds is the one compared
 _seconds: dict[int, float] = {}
 
 
@@ -37,11 +38,11 @@ def test_campaign_throughput(benchmark: Any, workers: int) -> None:
             with tempfile.TemporaryDirectory() as out:
                 return run_campaign(PARAMS, out, backend=backend)
 
-        summary = benchmark.pedantic(campaign, rounds=1, iterations=1)
+        summary = benchmark.pedantic(campaign, rounds=ROUNDS, iterations=1)
     finally:
         backend.close()
     assert summary["episodes"] == EPISODES and summary["crashes"] == 0
-    _seconds[workers] = benchmark.stats.stats.mean
+    _seconds[workers] = benchmark.stats.stats.min
     benchmark.extra_info["episodes_per_min"] = 60.0 * EPISODES / _seconds[workers]
     if workers > 1 and 1 in _seconds:
         speedup = _seconds[1] / _seconds[workers]
