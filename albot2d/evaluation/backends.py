@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import signal
 import socket
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -62,6 +63,12 @@ class WorkerDiedError(RuntimeError):
     """The worker process running a task died (a segfault, the OOM killer, os._exit)."""
 
 
+def _ignore_interrupts() -> None:
+    """Workers leave Ctrl-C to the campaign, which stops handing out episodes, lets the
+    running ones finish and keeps everything written so far."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 class LocalBackend:
     """This machine's cores: a spawn-context process pool (or, for one worker, this process).
 
@@ -79,7 +86,8 @@ class LocalBackend:
     def _executor(self) -> ProcessPoolExecutor:
         if self._pool is None:
             self._pool = ProcessPoolExecutor(
-                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn")
+                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
+                initializer=_ignore_interrupts,
             )
         return self._pool
 

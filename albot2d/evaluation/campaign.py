@@ -290,6 +290,8 @@ def run_campaign(
     t0 = time.perf_counter()
     try:
         for index, result in backend.map_unordered(_episode_task, todo, params.to_dict()):
+            if isinstance(result, BaseException) and not isinstance(result, Exception):
+                raise result  # an interrupt on a worker: stop, it is no finding
             outcome = (result if isinstance(result, EpisodeOutcome)
                        else _crash_outcome(params.to_dict(), index, result))
             if outcome.reproducer is not None:
