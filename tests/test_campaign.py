@@ -298,10 +298,14 @@ def test_bad_campaign_parameters_are_input_errors(change: dict, message: str) ->
         CampaignParams(**{"episodes": 1, **change})
 
 
-def test_pinned_campaign_findings_now_pass() -> None:
-    """Episodes that failed in a 1000-episode campaign (seed 0) and were fixed since:
-    326 — two neighbouring mixed pixels were taken for hits off the walls."""
-    spec = EpisodeSpec.draw(CampaignParams(episodes=1000, seed=0), 326)
-    assert (spec.kind, spec.run_seed) == ("office", 5094196264049440860)  # still that episode
+@pytest.mark.parametrize(("index", "kind", "run_seed"), [
+    (326, "office", 5094196264049440860),  # two neighbouring mixed pixels
+    (126, "rooms", 8752786329543876772),  # a mixed pixel splitting a 0.205 m jump in two
+])
+def test_pinned_campaign_findings_now_pass(index: int, kind: str, run_seed: int) -> None:
+    """Episodes that failed in 1000-episode campaigns (seed 0) and were fixed since: the
+    laser-hit check took mixed pixels for hits off the walls."""
+    spec = EpisodeSpec.draw(CampaignParams(episodes=1000, seed=0), index)
+    assert (spec.kind, spec.run_seed) == (kind, run_seed)  # still the episode that failed
     record = run_episode(spec).record
     assert record["status"] == "ok", record["violations"]

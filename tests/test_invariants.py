@@ -17,13 +17,13 @@ from albot2d.evaluation import invariants as inv
 from albot2d.evaluation import sim_invariants as sim_inv
 from albot2d.evaluation.campaign import CampaignParams
 from albot2d.evaluation.episode import EpisodeSpec, run_episode
-from albot2d.frames import Frame
+from albot2d.frames import Frame, Scan
 from albot2d.geometry import Pose
 from albot2d.mapping import Albot1, StepRecord, UpdateReport
 from albot2d.mapping.route_map import RouteMap
 from albot2d.seeding import make_rng
 from albot2d.sim.driving import get_profile
-from albot2d.sim.laser import LaserNoise
+from albot2d.sim.laser import Laser, LaserNoise
 from albot2d.sim.odometry import NOISE_PRESETS
 from albot2d.sim.robot import RobotParams
 from albot2d.sim.simulator import Simulator
@@ -221,16 +221,31 @@ def test_albot1_beats_raw_odometry_on_average(profile, noise, episodes, tour_m) 
     assert mine < odometry
 
 
-def test_two_neighbouring_mixed_pixels_are_exempt() -> None:
-    """Pinned from a 1000-episode campaign (seed 0, episode 326, frame 145): two adjacent
-    depth jumps each blended one beam, so beam 94 (4.53 m, true 4.25 m) had no jump right
-    beside it; it lies 7.5 cm off the wall by design."""
-    checker = sim_inv.FrameChecker(np.zeros((0, 4)), LaserNoise())
-    ranges = np.full(181, 7.0)
-    ranges[91:98] = [7.19, 7.13, 4.57, 4.53, 4.53, 4.89, 5.25]
-    ranges[98:] = 5.3
-    candidates = checker.mixed_pixel_candidates(ranges)
-    assert candidates[93] and candidates[94]
-    assert not candidates[50] and not candidates[150]
-    assert not sim_inv.FrameChecker(np.zeros((0, 4)), LaserNoise.zero()).mixed_pixel_candidates(
-        ranges).any()
+def test_mixed_pixels_are_exempt_other_hits_off_the_walls_are_not() -> None:
+    """Pinned from 1000-episode campaigns (seed 0; episodes 326, 126): two neighbouring
+    depth jumps each blending one beam, and a 0.205 m jump split by its blended beam into
+    two small steps, had been taken for hits off the walls."""
+    walls = np.array([[2.0, -3.0, 2.0, 0.02], [4.0, -10.0, 4.0, 10.0]])  # near panel, far wall
+    laser = Laser(walls, noise=LaserNoise.zero())
+    exact = laser.true_ranges(Pose())
+    edge = int(np.flatnonzero(np.isclose(exact, 2.0 / np.cos(laser.angles), atol=1e-9))[-1])
+
+    def frame(ranges: np.ndarray) -> Frame:
+        scan = Scan(ranges, laser.angles, np.isfinite(ranges), 30.0)
+        return Frame(0, 0.0, scan, Pose(), Pose(), true_pose=Pose())
+
+    mixed = exact.copy()
+    mixed[edge] = 0.5 * (exact[edge] + exact[edge + 1])  # the near beam, blended outwards
+    mixed[edge + 1] = exact[edge + 1] - 0.3 * (exact[edge + 1] - exact[edge])  # and the far
+    checker = sim_inv.FrameChecker(walls, LaserNoise())
+    checker(frame(mixed))
+    assert checker.finish() == [] and checker.mixed_pixels == 2
+    for noise in (LaserNoise(), LaserNoise.zero()):  # the zero-noise laser never mixes
+        wrong = exact.copy()
+        wrong[edge + 20] -= 0.5  # a far-wall beam returning 0.5 m short: no jump there
+        if noise.mixed_pixel_prob == 0.0:
+            wrong = mixed
+        checker = sim_inv.FrameChecker(walls, noise)
+        with pytest.raises(inv.InvariantError, match="laser_hits_on_obstacles"):
+            checker(frame(wrong))
+            checker.finish()

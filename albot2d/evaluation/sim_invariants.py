@@ -3,8 +3,8 @@
 - ``robot_clear_of_obstacles``: the robot disc at every true pose keeps clear of every
   static wall and clutter segment (moving obstacles are not static segments);
 - ``laser_hits_on_obstacles``: every valid hit, placed by the true pose, lies on a static
-  obstacle within a tolerance derived from the laser noise (``FrameChecker``); hits that
-  may be mixed pixels (by design between two surfaces) are exempt.
+  obstacle within a tolerance derived from the laser noise (``FrameChecker``), unless it is
+  a mixed pixel: on its beam, between the exact ranges of a true depth jump.
 
 Violations raise ``albot2d.evaluation.invariants.InvariantError`` like the mapper checks.
 """
@@ -22,12 +22,9 @@ from albot2d.frames import Frame
 from albot2d.geometry import transform_points
 from albot2d.sim.laser import LaserNoise
 
-__all__ = ["MIXED_PIXEL_REACH_BEAMS", "FrameChecker", "check_robot_clear"]
+__all__ = ["FrameChecker", "check_robot_clear"]
 
 FloatArray = NDArray[np.float64]
-
-# Beams this close to an observed depth jump may be mixed pixels (see FrameChecker).
-MIXED_PIXEL_REACH_BEAMS = 2
 
 
 def _nearest_distance(tree: shapely.STRtree, points: FloatArray) -> FloatArray:
@@ -63,7 +60,14 @@ def check_robot_clear(
 class FrameChecker:
     """Checks each simulated frame's laser hits against the true obstacles (an ``on_frame``
     hook). Hits are buffered and checked in batches; ``finish()`` checks the rest and
-    raises the first violation (or, without ``raise_at_once``, returns the messages)."""
+    raises the first violation (or, without ``raise_at_once``, returns the messages).
+
+    A hit off every obstacle is still right when it is a mixed pixel, which the laser makes
+    by design (``albot2d.sim.laser``): where the laser mixes pixels, a beam whose exact range
+    and a neighbour's differ by more than ``mixed_pixel_min_jump_m`` may return a range
+    between the two. Those beams' exact ranges are computed here, independently of the
+    simulator's ray caster, by intersecting the rays with the obstacle segments.
+    """
 
     def __init__(
         self, obstacle_segments: FloatArray, laser_noise: LaserNoise,
@@ -74,12 +78,12 @@ class FrameChecker:
         self.noise = laser_noise
         self.raise_at_once = raise_at_once
         self.batch_frames = batch_frames
-        self._tree = _segment_tree(obstacle_segments) if len(obstacle_segments) else None
-        self._points: list[FloatArray] = []
-        self._tolerance: list[FloatArray] = []
-        self._frames: list[FloatArray] = []
+        self.segments = np.asarray(obstacle_segments, dtype=np.float64).reshape(-1, 4)
+        self._tree = _segment_tree(self.segments) if len(self.segments) else None
+        self._rows: list[FloatArray] = []
         self.frames = 0
         self.hits = 0
+        self.mixed_pixels = 0
         self.violations: list[str] = []
 
     def tolerance_m(self, ranges: FloatArray) -> FloatArray:
@@ -90,63 +94,73 @@ class FrameChecker:
                                         0.5 * math.pi))
         return p.hit_tolerance_m + p.hit_sigmas * sigma + 0.5 * nz.range_resolution_m + lateral
 
-    def mixed_pixel_candidates(self, ranges: FloatArray) -> NDArray[np.bool_]:
-        """Beams that may be mixed pixels (a range blended between the two sides of a depth
-        jump, by design off every obstacle): where the laser mixes pixels, every beam within
-        ``MIXED_PIXEL_REACH_BEAMS`` of an observed jump, and the two end beams (one side
-        unseen). Two jumps next to each other can blend two neighbouring beams, hiding the
-        jump between them, hence a reach of two beams rather than one."""
-        n = len(ranges)
-        nz = self.noise
-        if nz.mixed_pixel_prob == 0.0 or n < 2:
-            return np.zeros(n, dtype=bool)
-        pair_far = np.maximum(ranges[:-1], ranges[1:])
-        jump = np.abs(np.diff(ranges)) > nz.mixed_pixel_min_jump_m - 2.0 * self.tolerance_m(
-            pair_far)
-        out = np.zeros(n, dtype=bool)
-        reach = MIXED_PIXEL_REACH_BEAMS
-        for shift in range(-reach + 1, reach + 1):  # pair a covers beams a-reach+1 … a+reach
-            lo, hi = max(shift, 0), min(n - 1 + shift, n)
-            out[lo:hi] |= jump[lo - shift : hi - shift]
-        out[[0, -1]] = True
-        return out
-
     def __call__(self, frame: Frame, travelled_m: float = 0.0) -> None:
         if frame.true_pose is None:
             raise ValueError("FrameChecker needs simulated frames (with a true pose)")
         scan = frame.scan
-        checked = scan.valid & ~self.mixed_pixel_candidates(scan.ranges)
-        pts = transform_points(frame.true_pose.as_array(), scan.points(valid_only=False)[checked])
-        self._points.append(pts)
-        self._tolerance.append(self.tolerance_m(scan.ranges[checked]))
-        self._frames.append(np.full(len(pts), frame.index, dtype=np.float64))
+        laser = frame.true_pose @ scan.laser_pose
+        beams = np.flatnonzero(scan.valid)
+        angles = laser.theta + scan.angles
+        padded = np.concatenate([[np.nan], angles, [np.nan]])  # no neighbour past the ends
+        pts = transform_points(frame.true_pose.as_array(), scan.points())
+        r = scan.ranges[beams]
+        # One row per valid hit: point, tolerance, frame, range, laser origin, the beam's and
+        # its two neighbours' world angles, the scan's maximum range.
+        self._rows.append(np.column_stack([
+            pts, self.tolerance_m(r), np.full(len(r), frame.index), r,
+            np.full(len(r), laser.x), np.full(len(r), laser.y),
+            padded[beams], padded[beams + 1], padded[beams + 2],
+            np.full(len(r), scan.max_range_m),
+        ]))  # fmt: skip
         self.frames += 1
-        if len(self._points) >= self.batch_frames:
+        if len(self._rows) >= self.batch_frames:
             self._check_batch()
 
+    def _mixed_pixels(self, rows: FloatArray) -> NDArray[np.bool_]:
+        """Which off-obstacle hits are mixed pixels of a true depth jump (see the class)."""
+        nz = self.noise
+        if nz.mixed_pixel_prob == 0.0 or len(rows) == 0:
+            return np.zeros(len(rows), dtype=bool)
+        exact = _ray_ranges(rows[:, 5:7], rows[:, [8, 7, 9]], self.segments)  # beam, i-1, i+1
+        exact[exact > rows[:, 10:11]] = np.inf  # beyond the maximum range: no hit there
+        r, tol = rows[:, 4], rows[:, 2]
+        own = exact[:, 0]
+        mixed = np.zeros(len(rows), dtype=bool)
+        for j in (1, 2):
+            other = exact[:, j]
+            with np.errstate(invalid="ignore"):
+                jump = np.isfinite(own) & np.isfinite(other) & (
+                    np.abs(own - other) > nz.mixed_pixel_min_jump_m)
+                between = ((np.minimum(own, other) - tol <= r)
+                           & (r <= np.maximum(own, other) + tol))
+            mixed |= jump & between
+        return mixed
+
     def _check_batch(self) -> None:
-        if not self._points:
+        if not self._rows:
             return
-        pts = np.vstack(self._points)
-        tol = np.concatenate(self._tolerance)
-        frames = np.concatenate(self._frames)
-        self._points, self._tolerance, self._frames = [], [], []
-        self.hits += len(pts)
-        if len(pts) == 0:
+        rows = np.vstack(self._rows)
+        self._rows = []
+        self.hits += len(rows)
+        if len(rows) == 0:
             return
-        off = np.ones(len(pts), dtype=bool)
+        pts, tol = rows[:, :2], rows[:, 2]
+        off = np.ones(len(rows), dtype=bool)
         if self._tree is not None:
             # A within-distance query is ~10× cheaper than nearest-distance for every hit.
             near, _ = self._tree.query(shapely.points(pts), predicate="dwithin", distance=tol)
             off[near] = False
+        suspects = np.flatnonzero(off)
+        mixed = self._mixed_pixels(rows[suspects])
+        self.mixed_pixels += int(mixed.sum())
+        off[suspects[mixed]] = False
         if off.any():
             k = int(np.flatnonzero(off)[0])
-            dist = np.full(len(pts), np.inf)
-            if self._tree is not None:
-                dist[k] = _nearest_distance(self._tree, pts[k : k + 1])[0]
-            msg = (f"frame {int(frames[k])}: {int(off.sum())} valid hit(s) off every obstacle, "
-                   f"e.g. ({pts[k, 0]:.3f}, {pts[k, 1]:.3f}) {dist[k]:.3g} m away "
-                   f"(tolerance {tol[k]:.3g} m)")
+            dist = (_nearest_distance(self._tree, pts[k : k + 1])[0] if self._tree is not None
+                    else math.inf)
+            msg = (f"frame {int(rows[k, 3])}: {int(off.sum())} valid hit(s) off every obstacle "
+                   f"(and not mixed pixels), e.g. ({pts[k, 0]:.3f}, {pts[k, 1]:.3f}) "
+                   f"{dist:.3g} m away (tolerance {tol[k]:.3g} m)")
             if self.raise_at_once:
                 fail("laser_hits_on_obstacles", msg)
             self.violations.append(msg)
@@ -154,3 +168,28 @@ class FrameChecker:
     def finish(self) -> list[str]:
         self._check_batch()
         return self.violations
+
+
+# Rays intersected with the segments per chunk (bounds the (rays, segments) work arrays).
+_RAY_CHUNK = 256
+
+
+def _ray_ranges(origins: FloatArray, angles: FloatArray, segments: FloatArray) -> FloatArray:
+    """Exact distance along each ray (``origins (M, 2)``, world ``angles (M, K)``, NaN: no
+    ray) to the nearest of ``segments``; inf where a ray hits nothing."""
+    out = np.full(angles.shape, np.inf)
+    if len(segments) == 0:
+        return out
+    p, e = segments[:, :2], segments[:, 2:] - segments[:, :2]
+    for lo in range(0, len(origins), _RAY_CHUNK):
+        o = origins[lo : lo + _RAY_CHUNK, None, None, :]
+        a = angles[lo : lo + _RAY_CHUNK, :, None]
+        dx, dy = np.cos(a), np.sin(a)
+        wx, wy = p[:, 0] - o[..., 0], p[:, 1] - o[..., 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            denom = dx * e[:, 1] - dy * e[:, 0]
+            t = (wx * e[:, 1] - wy * e[:, 0]) / denom
+            u = (wx * dy - wy * dx) / denom
+            hit = (denom != 0.0) & (t >= 0.0) & (u >= 0.0) & (u <= 1.0)
+        out[lo : lo + _RAY_CHUNK] = np.where(hit, t, np.inf).min(axis=-1)
+    return out
