@@ -7,6 +7,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -101,12 +102,15 @@ def test_same_seed_same_world_and_different_seed_differs():
         assert a.walls.tobytes() != c.walls.tobytes()
 
 
-DIGEST_SCRIPT = """
-import hashlib, json, sys
-from worldgen import generate
-for kind in sys.argv[1:]:
-    w = generate(kind, seed=11, width_m=30.0 if kind != "mixed" else 40.0, height_m=32.0,
-                 dynamic_obstacles=2)
+def world_digest(kind):
+    """SHA-256 over every array, geometry and feature of the kind's seed-11 world."""
+    w = generate(
+        kind,
+        seed=11,
+        width_m=30.0 if kind != "mixed" else 40.0,
+        height_m=32.0,
+        dynamic_obstacles=2,
+    )
     h = hashlib.sha256()
     for arr in (w.walls, w.roadmap.nodes, w.roadmap.edges):
         h.update(arr.tobytes())
@@ -116,31 +120,15 @@ for kind in sys.argv[1:]:
     h.update(json.dumps(w.features, sort_keys=True).encode())
     for o in w.dynamic_obstacles:
         h.update(o.path.tobytes() + o.shape.tobytes() + repr(o.pose).encode())
-    print(kind, h.hexdigest())
+    return h.hexdigest()
+
+
+DIGEST_SCRIPT = """
+import sys
+from tests.test_worldgen_generate import world_digest
+for kind in sys.argv[1:]:
+    print(kind, world_digest(kind))
 """
-
-
-def digests_here(kinds):
-    out = {}
-    for kind in kinds:
-        w = generate(
-            kind,
-            seed=11,
-            width_m=30.0 if kind != "mixed" else 40.0,
-            height_m=32.0,
-            dynamic_obstacles=2,
-        )
-        h = hashlib.sha256()
-        for arr in (w.walls, w.roadmap.nodes, w.roadmap.edges):
-            h.update(arr.tobytes())
-        for c in w.clutter:
-            h.update(c.wkb)
-        h.update(repr(w.start).encode())
-        h.update(json.dumps(w.features, sort_keys=True).encode())
-        for o in w.dynamic_obstacles:
-            h.update(o.path.tobytes() + o.shape.tobytes() + repr(o.pose).encode())
-        out[kind] = h.hexdigest()
-    return out
 
 
 def test_determinism_across_processes():
@@ -150,9 +138,10 @@ def test_determinism_across_processes():
         text=True,
         check=True,
         env={**os.environ, "PYTHONHASHSEED": "123"},
+        cwd=Path(__file__).resolve().parents[1],
     )
     theirs = dict(line.split() for line in result.stdout.strip().splitlines())
-    assert theirs == digests_here(KINDS)
+    assert theirs == {kind: world_digest(kind) for kind in KINDS}
 
 
 @pytest.mark.parametrize("kind", KINDS)

@@ -24,6 +24,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from albot2d.errors import InputError
 from albot2d.geometry import Pose, as_segments
 from albot2d.mapping.spatial_index import SegmentGridIndex
 from albot2d.validation import check_non_negative, check_positive
@@ -58,8 +59,6 @@ class GlobalMapParams:
         check_non_negative(self, "enlarge_m")
         check_positive(self, "index_cell_m")
         if self.facing_test not in ("midpoint", "any_endpoint", "both_endpoints"):
-            from albot2d.errors import InputError
-
             raise InputError(
                 f"GlobalMapParams.facing_test must be midpoint, any_endpoint or "
                 f"both_endpoints, got {self.facing_test!r}"

@@ -41,8 +41,10 @@ from typing import Literal, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.errors import InputError
 from albot2d.geometry import Pose, segment_angles, wrap_angle
 from albot2d.perception.surfaces import Surfaces
+from albot2d.validation import check_non_negative
 
 __all__ = ["Affordances", "TriangulationParams", "pose_affordances", "triangulate"]
 
@@ -65,18 +67,12 @@ class TriangulationParams:
     max_pi_deviation_deg: float = 5.0
 
     def __post_init__(self) -> None:
-        from albot2d.validation import check_non_negative
-
         check_non_negative(self, "heading_consensus_deg")
         for name in ("max_pi_deviation_m", "max_pi_deviation_deg"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
-                from albot2d.errors import InputError
-
                 raise InputError(f"TriangulationParams.{name} must be > 0, got {value!r}")
         if self.heading not in ("weighted", "inlier_mean", "selected"):
-            from albot2d.errors import InputError
-
             raise InputError(
                 f"TriangulationParams.heading must be inlier_mean or selected, got {self.heading!r}"
             )
