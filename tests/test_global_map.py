@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import shapely
 from hypothesis import given
 from hypothesis import strategies as st
 
+from albot2d.errors import InputError
 from albot2d.geometry import Pose
+from albot2d.mapping.deletion import group_maps
 from albot2d.mapping.global_map import GlobalMap, GlobalMapParams, view_polygon
 from albot2d.mapping.spatial_index import SegmentGridIndex
 
@@ -33,18 +36,22 @@ def build_maps_25_to_29(params: GlobalMapParams | None = None) -> GlobalMap:
     return g
 
 
-def test_update_deletes_exactly_the_expected_surfaces() -> None:
-    g = build_maps_25_to_29()
-    # Incoming view 30 from the origin facing +x: a wall 5 m ahead spanning y in [-2, 2].
-    incoming = np.array([[5.0, -2.0, 5.0, 2.0]])
-    report = g.add_view(incoming, 30, Pose(0.0, 0.0, 0.0))
+def _kept(g: GlobalMap) -> set[tuple[int, tuple[float, ...]]]:
+    snap = g.snapshot()
+    return {(int(m), tuple(s)) for s, m in zip(snap.segments.tolist(), snap.map_ids, strict=True)}
+
+
+INCOMING = np.array([[5.0, -2.0, 5.0, 2.0]])  # a wall 5 m ahead of a robot at the origin
+
+
+def test_v1_rule_deletes_the_contiguous_group_on_the_facing_half_plane() -> None:
+    g = build_maps_25_to_29(GlobalMapParams.preset("v1"))
+    report = g.add_view(INCOMING, 30, Pose(0.0, 0.0, 0.0))
     assert report.deleted_current == 1  # (1, .5)-(2, .5) of map 29
     assert report.affected_maps == (25, 28)
     assert report.group == (25, 26, 27, 28)
     # Facing side of maps 25..28: the four "ahead" surfaces (26 and 27 ones are far but ahead).
     assert report.deleted_older == 4
-    snap = g.snapshot()
-    kept = {(int(m), tuple(s)) for s, m in zip(snap.segments.tolist(), snap.map_ids, strict=True)}
     expected = {
         (24, (30.0, 10.0, 31.0, 10.0)),
         (24, (-30.0, 10.0, -31.0, 10.0)),
@@ -55,20 +62,126 @@ def test_update_deletes_exactly_the_expected_surfaces() -> None:
         (29, (40.0, 40.0, 41.0, 40.0)),
         (30, (5.0, -2.0, 5.0, 2.0)),
     }
-    assert kept == expected
+    assert _kept(g) == expected
 
 
-def test_without_expand_only_affected_maps_lose_surfaces() -> None:
-    g = build_maps_25_to_29(GlobalMapParams(expand_group=False))
-    report = g.add_view(np.array([[5.0, -2.0, 5.0, 2.0]]), 30, Pose())
-    assert report.group == (25, 28)
+def test_paper_rule_deletes_only_what_the_robot_could_see() -> None:
+    g = build_maps_25_to_29()  # default: the paper reading
+    report = g.add_view(INCOMING, 30, Pose(0.0, 0.0, 0.0))
+    assert report.deleted_current == 1
+    assert report.affected_maps == (25, 28, 29)  # the current map joins the group
+    assert report.group == (25, 26, 27, 28, 29)
+    # Only the two older surfaces inside the view: 26's and 27's are ahead but not in view.
     assert report.deleted_older == 2
+    removed = {(25, (3.0, 1.0, 4.0, 1.0)), (28, (3.0, -1.0, 4.0, -1.0)),
+               (29, (1.0, 0.5, 2.0, 0.5))}  # fmt: skip
+    assert not removed & _kept(g)
+    assert len(_kept(g)) == 12 - 3 + 1
+
+
+def test_original_rule_deletes_group_members_in_front_even_out_of_view() -> None:
+    g = build_maps_25_to_29(GlobalMapParams.preset("original"))
+    report = g.add_view(INCOMING, 30, Pose(0.0, 0.0, 0.0))
+    assert report.group == (25, 26, 27, 28, 29)
+    assert report.deleted_current == 1
+    assert report.deleted_older == 4
+
+
+def test_paper_rule_keeps_surfaces_behind_or_straddling_the_robot() -> None:
+    """A side wall of the map being left that reaches behind the robot stays (v1 deletes it:
+    its polygon is buffered behind the robot and the current map goes whole on touch)."""
+    side_wall = seg(-3.0, 1.0, 2.0, 1.0)  # from 3 m behind to 2 m ahead, 1 m to the left
+    behind = seg(-0.2, -0.3, -2.0, -0.3)  # entirely behind, within 0.5 m of the viewpoint
+    view = np.array([[3.0, -1.0, 3.0, 1.0]])
+    for rule, survivors in (("paper", 2), ("v1", 0)):
+        g = GlobalMap(GlobalMapParams.preset(rule))
+        g.insert(np.vstack([side_wall, behind]), 0)
+        report = g.add_view(view, 1, Pose())
+        assert report.deleted_current == 2 - survivors, rule
+        assert len(g) == survivors + 1, rule
+
+
+def test_forward_enlargement_adds_nothing_behind_the_robot() -> None:
+    segs = np.array([[2.0, -1.0, 2.0, 1.0]])
+    forward = view_polygon(segs, Pose(), 0.5, "forward")
+    all_round = view_polygon(segs, Pose(), 0.5, "all_round")
+    assert all_round.contains(shapely.Point(-0.3, 0.0))
+    assert not forward.contains(shapely.Point(-0.3, 0.0))
+    assert forward.contains(shapely.Point(2.4, 0.0)) and forward.contains(shapely.Point(1.0, 0.8))
+    # Rotated robot: "behind" turns with it.
+    turned = view_polygon(np.array([[-1.0, 2.0, 1.0, 2.0]]), Pose(0, 0, np.pi / 2), 0.5)
+    assert turned.contains(shapely.Point(0.0, 2.4))
+    assert not turned.contains(shapely.Point(0.0, -0.3))
+
+
+def test_radial_enlargement_pushes_vertices_out_from_the_viewpoint() -> None:
+    poly = view_polygon(np.array([[2.0, -1.0, 2.0, 1.0]]), Pose(), 0.3, "radial")
+    assert poly.contains(shapely.Point(2.2, 0.0))
+    assert not poly.contains(shapely.Point(2.5, 0.0))
+    assert not poly.contains(shapely.Point(-0.1, 0.0))
+
+
+def test_groups_split_where_map_ids_jump() -> None:
+    existing = set(range(200))
+    assert group_maps((3, 10, 40, 45), "split", 20, existing) == (
+        *range(3, 11), *range(40, 46)
+    )
+    assert group_maps((3, 10, 40, 45), "contiguous", 20, existing) == tuple(range(3, 46))
+    assert group_maps((3, 10, 40, 45), "none", 20, existing) == (3, 10, 40, 45)
+    assert group_maps((3, 23, 44), "split", 20, existing) == (*range(3, 24), 44)
+    assert group_maps((), "split", 20, existing) == ()
+
+
+def test_a_revisit_deletes_only_the_group_near_the_revisited_maps() -> None:
+    """Maps 0–4 at a place, 5–59 elsewhere, then the robot returns: the 'contiguous' Expand
+    deletes the facing surfaces of every map in between; 'split' only those of 0–4."""
+    def build(params: GlobalMapParams) -> GlobalMap:
+        g = GlobalMap(params)
+        for m in range(5):
+            g.insert(seg(3.0, -1.0 + 0.3 * m, 4.0, -1.0 + 0.3 * m), m)
+        for m in range(5, 59):
+            g.insert(seg(10.0 + m, 20.0, 10.5 + m, 20.0), m)  # ahead of the robot, far off
+        g.insert(seg(2.0, -0.5, 2.5, -0.5), 59)  # the map being left, in view
+        return g
+
+    for expand, lost_far in (("contiguous", 54), ("split", 0)):
+        g = build(GlobalMapParams(could_see="half_plane", expand=expand))
+        report = g.add_view(INCOMING, 60, Pose())
+        far = g.snapshot().map_ids
+        assert 54 - int(np.count_nonzero((far >= 5) & (far < 59))) == lost_far, expand
+        assert report.deleted_current == 1 and report.deleted_older >= 5, expand
+
+
+def test_keep_if_all_deletes_nothing_when_everything_would_go() -> None:
+    g = GlobalMap(GlobalMapParams.preset("original"))
+    g.insert(seg(3.0, -0.5, 3.0, 0.5), 0)
+    report = g.add_view(INCOMING, 1, Pose())
+    assert report.deleted_current == 0 and len(g) == 2
+    g2 = GlobalMap(GlobalMapParams.preset("original", keep_if_all=False))
+    g2.insert(seg(3.0, -0.5, 3.0, 0.5), 0)
+    assert g2.add_view(INCOMING, 1, Pose()).deleted_current == 1
+
+
+def test_forward_ray_touches_what_lies_across_the_heading() -> None:
+    far_wall = seg(2.8, -0.2, 2.8, 0.2)  # across the heading, outside a view closed at 1 m
+    view = np.array([[1.0, -3.0, 1.0, -2.0], [1.0, 2.0, 1.0, 3.0]])
+    for ray, deleted in ((0.0, 0), (3.0, 1)):
+        g = GlobalMap(GlobalMapParams(enlarge_m=0.0, forward_ray_m=ray, include_viewpoint=False))
+        g.insert(far_wall, 0)
+        assert g.add_view(view, 1, Pose()).deleted_current == deleted
+
+
+def test_unknown_rule_names_are_refused_with_the_valid_ones() -> None:
+    with pytest.raises(InputError, match="valid: paper, v1, original"):
+        GlobalMapParams.preset("papr")
+    with pytest.raises(InputError, match="could_see must be one of"):
+        GlobalMapParams(could_see="maybe")  # type: ignore[arg-type]
 
 
 def test_history_snapshots_replay_the_evolution() -> None:
-    g = build_maps_25_to_29()
+    g = build_maps_25_to_29(GlobalMapParams.preset("v1"))
     before = g.snapshot()
-    g.add_view(np.array([[5.0, -2.0, 5.0, 2.0]]), 30, Pose())
+    g.add_view(INCOMING, 30, Pose())
     after = g.snapshot()
     assert len(before.segments) == 12 and len(after.segments) == 8
     np.testing.assert_array_equal(g.snapshot(at_update=6).segments, before.segments)

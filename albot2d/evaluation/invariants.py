@@ -183,19 +183,26 @@ def _facing(segs: FloatArray, robot: Pose, test: str) -> NDArray[np.bool_]:
 
 
 def check_update_deleted_facing_overlap(m: Albot1, report: UpdateReport, robot: Pose) -> None:
-    """Right after an update: no surface of the map being left lies inside or across the
-    enlarged view polygon, nor any older surface there on the robot's facing side."""
+    """Right after an update: no surface of an earlier map that touches the enlarged view
+    polygon and lies on the robot's facing side (by the rule's facing test) remains; with
+    ``current_map="touch"`` no surface of the map being left touches it at all. (A rule with
+    ``keep_if_all`` may skip an update that would empty the map.)"""
     name = "update_deletes_facing_overlap"
+    params = m.map.params
     snap = m.map.snapshot()
     older = snap.map_ids < report.map_id
     if not older.any() or report.polygon.is_empty:
         return
+    if params.keep_if_all and report.deleted_current + report.deleted_older == 0:
+        return
     segs = snap.segments[older]
     ids = snap.map_ids[older]
     hits = shapely.intersects(report.polygon, shapely.linestrings(segs.reshape(-1, 2, 2)))
-    facing = _facing(segs, robot, m.map.params.facing_test)
+    facing = _facing(segs, robot, params.facing_test)
     current = report.map_id - 1
     left = hits & (ids == current)
+    if params.current_map != "touch":
+        left &= facing
     if left.any():
         fail(name, f"update {report.update} (map {report.map_id}): {int(left.sum())} surface(s) "
                     f"of the map being left remain inside the view polygon")

@@ -2,13 +2,17 @@
 
 Every surface is tagged with the id of the local map it came from. Adding a view:
 
-1. P = the polygon joining the view's surface endpoints in scan order (and, by default,
-   the viewpoint, so P is the area the view saw), enlarged by 0.5 m;
-2. surfaces of the current map (the one the robot is leaving) inside or crossing P are
-   deleted; older maps with surfaces there are "affected";
-3. the affected maps are expanded to the contiguous group of ids (25 and 28 → 25…28) and
-   those maps' surfaces on the robot's facing side (in front of its viewpoint) are deleted;
+1. P = the polygon joining the view's surface endpoints in scan order (through the
+   viewpoint, so P is the area the view saw), enlarged (by default 0.5 m in front of the
+   robot only);
+2. surfaces touching P make their maps "affected"; those of the current map (the one the
+   robot is leaving) that the robot could see are deleted;
+3. the affected maps are grouped (the paper's Expand: 25 and 28 → 25…28, split where the
+   ids jump) and the group's surfaces the robot could see from where it is are deleted;
 4. the incoming view is added.
+
+Which surfaces "could be seen", how P is enlarged and how far a group reaches are the
+paper's gaps; ``albot2d.mapping.deletion`` holds the rule and its named readings.
 
 Surfaces are never modified, only added and deleted, so each carries the update number at
 which it was added and removed: any past state of the map is a cheap filter
@@ -17,52 +21,26 @@ which it was added and removed: any past state of the map is a cheap filter
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Literal, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from albot2d.errors import InputError
 from albot2d.geometry import Pose, as_segments
+from albot2d.mapping.deletion import (
+    GlobalMapParams,
+    facing_mask,
+    group_maps,
+    in_range_mask,
+    touching_mask,
+    view_polygon,
+)
 from albot2d.mapping.spatial_index import SegmentGridIndex
-from albot2d.validation import check_non_negative, check_positive
 
 __all__ = ["GlobalMap", "GlobalMapParams", "MapSnapshot", "UpdateReport", "view_polygon"]
 
 _NEVER = np.iinfo(np.int64).max
-FacingTest = Literal["midpoint", "any_endpoint", "both_endpoints"]
-
-
-@dataclass(frozen=True, slots=True)
-class GlobalMapParams:
-    """Parameters of algorithm #5 (paper defaults).
-
-    - ``enlarge_m``: how much the view polygon is enlarged (paper: 50 cm).
-    - ``include_viewpoint``: close the polygon through the viewpoint (the view's visible
-      area) rather than only through the surface endpoints.
-    - ``expand_group``: delete from the contiguous group min…max of affected map ids
-      (the paper's Expand) rather than only the affected maps.
-    - ``facing_test``: which points of a surface must be in front of the robot for it to
-      lie "on the facing side".
-    - ``index_cell_m``: cell size of the spatial index (performance only).
-    """
-
-    enlarge_m: float = 0.50
-    include_viewpoint: bool = True
-    expand_group: bool = True
-    facing_test: FacingTest = "midpoint"
-    index_cell_m: float = 2.0
-
-    def __post_init__(self) -> None:
-        check_non_negative(self, "enlarge_m")
-        check_positive(self, "index_cell_m")
-        if self.facing_test not in ("midpoint", "any_endpoint", "both_endpoints"):
-            raise InputError(
-                f"GlobalMapParams.facing_test must be midpoint, any_endpoint or "
-                f"both_endpoints, got {self.facing_test!r}"
-            )
 
 
 class MapSnapshot(NamedTuple):
@@ -85,26 +63,11 @@ class UpdateReport(NamedTuple):
     polygon: shapely.Geometry
 
 
-def view_polygon(
-    segments: NDArray[np.float64], viewpoint: Pose | None, enlarge_m: float
-) -> shapely.Geometry:
-    """The enlarged polygon of a view whose surfaces (global frame) are given in scan order."""
-    segs = as_segments(segments)
-    pts = segs.reshape(-1, 2)
-    if viewpoint is not None:
-        pts = np.vstack([[viewpoint.x, viewpoint.y], pts])
-    if len(pts) == 0:
-        return shapely.Polygon()
-    if len(pts) < 3:
-        return shapely.MultiPoint(pts).buffer(enlarge_m)
-    poly = shapely.make_valid(shapely.Polygon(pts))
-    return poly.buffer(enlarge_m) if enlarge_m > 0 else poly
-
-
 class GlobalMap:
     """The global map of algorithm #5, with a grid index and a full add/delete history."""
 
-    def __init__(self, params: GlobalMapParams = GlobalMapParams()) -> None:
+    def __init__(self, params: GlobalMapParams | None = None) -> None:
+        params = params if params is not None else GlobalMapParams()
         self.params = params
         self._segments = np.zeros((64, 4))
         self._map_ids = np.zeros(64, np.int64)
@@ -139,52 +102,65 @@ class GlobalMap:
         self._alive -= len(ids)
         return len(ids)
 
-    def _facing(self, ids: NDArray[np.int64], robot: Pose) -> NDArray[np.bool_]:
-        segs = self._segments[ids]
-        c, s = np.cos(robot.theta), np.sin(robot.theta)
-        fwd0 = c * (segs[:, 0] - robot.x) + s * (segs[:, 1] - robot.y)
-        fwd1 = c * (segs[:, 2] - robot.x) + s * (segs[:, 3] - robot.y)
-        test = self.params.facing_test
-        if test == "midpoint":
-            return (fwd0 + fwd1) > 0.0
-        if test == "any_endpoint":
-            return (fwd0 > 0.0) | (fwd1 > 0.0)
-        return (fwd0 > 0.0) & (fwd1 > 0.0)
+    def _alive_ids(self, ids: NDArray[np.int64]) -> NDArray[np.int64]:
+        return ids[self._removed[ids] == _NEVER]
 
     def add_view(self, segments: NDArray[np.float64], map_id: int, robot: Pose) -> UpdateReport:
         """Algorithm #5: add view ``map_id`` (surfaces in the global frame, scan order) seen
         from ``robot`` (global pose), deleting overlapping older information first."""
         segs = as_segments(segments)
-        self.n_updates += 1
         if self.last_map_id is not None and map_id <= self.last_map_id:
             raise ValueError(f"map ids must increase: got {map_id} after {self.last_map_id}")
-        viewpoint = robot if self.params.include_viewpoint else None
-        poly = view_polygon(segs, viewpoint, self.params.enlarge_m)
+        self.n_updates += 1
+        p = self.params
+        poly = view_polygon(
+            segs, robot, p.enlarge_m, p.enlarge, include_viewpoint=p.include_viewpoint
+        )
         current = self.last_map_id
-        deleted_current = deleted_older = 0
+        doomed = np.zeros(0, np.int64)
+        n_current = 0
         affected: tuple[int, ...] = ()
         group: tuple[int, ...] = ()
         if self._alive and not poly.is_empty:
-            cand = self._index.query_box(*poly.bounds)
-            cand = cand[self._removed[cand] == _NEVER]
-            if len(cand):
-                shapely.prepare(poly)
-                lines = shapely.linestrings(self._segments[cand].reshape(-1, 2, 2))
-                hit = cand[shapely.intersects(poly, lines)]
-                hit_maps = self._map_ids[hit]
-                deleted_current = self._delete(hit[hit_maps == current])
-                older = np.unique(hit_maps[hit_maps != current])
-                affected = tuple(int(m) for m in older)
-                if affected:
-                    if self.params.expand_group:
-                        group = tuple(
-                            m for m in range(affected[0], affected[-1] + 1) if m in self._by_map
-                        )
-                    else:
-                        group = affected
-                    ids = np.concatenate([self._by_map[m] for m in group])
-                    ids = ids[self._removed[ids] == _NEVER]
-                    deleted_older = self._delete(ids[self._facing(ids, robot)])
+            box = np.array(poly.bounds)
+            if p.forward_ray_m > 0:
+                tip = robot @ Pose(p.forward_ray_m, 0.0, 0.0)
+                box = np.array([
+                    min(box[0], tip.x), min(box[1], tip.y), max(box[2], tip.x), max(box[3], tip.y)
+                ])
+            cand = self._alive_ids(self._index.query_box(*box))
+            touch = touching_mask(poly, self._segments[cand], robot, p.forward_ray_m)
+            hit = cand[touch]
+            hit_maps = self._map_ids[hit]
+            visible = facing_mask(self._segments[hit], robot, p.facing_test)
+            is_current = hit_maps == current
+            cur_del = is_current if p.current_map == "touch" else is_current & visible
+            doomed = hit[cur_del]
+            n_current = len(doomed)
+            touched = hit_maps if p.current_in_group else hit_maps[~is_current]
+            affected = tuple(int(m) for m in np.unique(touched))
+            group = group_maps(affected, p.expand, p.group_gap_maps, self._by_map)
+            older_group = tuple(m for m in group if m != current)
+            if older_group:
+                if p.could_see == "in_view":
+                    in_group = np.isin(hit_maps, older_group)
+                    older = hit[in_group & visible]
+                else:
+                    ids = self._alive_ids(np.concatenate([self._by_map[m] for m in older_group]))
+                    gsegs = self._segments[ids]
+                    keep = facing_mask(gsegs, robot, p.facing_test)
+                    if p.could_see == "in_range":
+                        pts = segs.reshape(-1, 2)
+                        reach = float(np.max(np.hypot(pts[:, 0] - robot.x, pts[:, 1] - robot.y),
+                                             initial=0.0))
+                        keep &= in_range_mask(gsegs, robot, reach + p.enlarge_m)
+                    older = ids[keep]
+                doomed = np.concatenate([doomed, older])
+            if p.keep_if_all and len(np.unique(doomed)) >= self._alive:
+                doomed = np.zeros(0, np.int64)
+                n_current = 0
+        deleted_older = self._delete(np.unique(doomed[n_current:])) if len(doomed) else 0
+        deleted_current = self._delete(doomed[:n_current]) if n_current else 0
         self._append(segs, map_id)
         return UpdateReport(
             self.n_updates, map_id, deleted_current, affected, group, deleted_older, len(segs), poly

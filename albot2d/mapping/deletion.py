@@ -1,0 +1,287 @@
+"""Algorithm #5's deletion rule: which surfaces of the global map an incoming view deletes.
+
+The paper (Appendix 3 and section "Computing simultaneously a route map and a global map")
+says: compute the polygon P joining the incoming view's surfaces, "slightly enlarged" (by
+50 cm) "to remove a bit more of the surfaces in front"; surfaces of the current map inside
+or crossing P are removed; older maps with surfaces there are "affected", grouped by
+Expand ("25 and 28 → 25…28"), and of those maps only the surfaces "on the facing side" that
+the robot "could 'see' from its current position" are removed, which "leaves more
+information in the global map, thus creating a residual effect".
+
+It leaves open how P is enlarged, what "facing side" and "could see" mean, and how far a
+group reaches. Every reading is a field of ``GlobalMapParams``; three consistent sets are
+presets (``GlobalMapParams.preset(name)``):
+
+- ``"paper"`` (default): P enlarged by 0.5 m *in front of* the robot only (the buffer is
+  clipped at its lateral axis: "surfaces in front"); a surface is deleted only if the robot
+  could see it: it touches P and both its endpoints are in front of the robot — for the
+  current map too; affected maps (the current one included) are grouped as Expand, split
+  where consecutive map ids differ by more than ``group_gap_maps`` (20, the value of the
+  authors' code), so a revisit does not wipe the whole history in between.
+- ``"v1"``: albot2d's first reading: P buffered 0.5 m all round (behind the robot too), any
+  current-map surface touching P deleted whole, one contiguous group from the oldest to the
+  newest affected map, "facing side" the half-plane in front of the robot by the surface's
+  midpoint. Measured to delete 87–95 % of everything added (the map ends nearly empty).
+- ``"original"``: the authors' C++ code (``../shared/spec/albot1-original-code.md`` §5):
+  polygon vertices pushed radially out by 0.3 m; a surface of any map is deleted when both
+  its endpoints are in front and it touches the view (or crosses the forward ray up to
+  3 m); groups split at gaps > 20; group members with both endpoints in front deleted even
+  out of view; nothing deleted if that would delete everything.
+
+The functions here are pure and vectorised over ``(N, 4)`` segment arrays; ``GlobalMap``
+(``albot2d.mapping.global_map``) applies them to its store.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+
+from albot2d.errors import InputError
+from albot2d.geometry import Pose, as_segments
+from albot2d.validation import check_non_negative, check_positive, check_positive_int
+
+__all__ = [
+    "DELETION_PRESETS",
+    "CouldSee",
+    "CurrentMapRule",
+    "EnlargeMode",
+    "FacingTest",
+    "GlobalMapParams",
+    "GroupRule",
+    "facing_mask",
+    "group_maps",
+    "in_range_mask",
+    "touching_mask",
+    "view_polygon",
+]
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+EnlargeMode = Literal["forward", "all_round", "radial"]
+CurrentMapRule = Literal["could_see", "touch"]
+FacingTest = Literal["both_endpoints", "midpoint", "any_endpoint"]
+CouldSee = Literal["in_view", "in_range", "half_plane"]
+GroupRule = Literal["split", "contiguous", "none"]
+
+_CHOICES: dict[str, tuple[str, ...]] = {
+    "enlarge": ("forward", "all_round", "radial"),
+    "current_map": ("could_see", "touch"),
+    "facing_test": ("both_endpoints", "midpoint", "any_endpoint"),
+    "could_see": ("in_view", "in_range", "half_plane"),
+    "expand": ("split", "contiguous", "none"),
+}
+
+
+@dataclass(frozen=True, slots=True)
+class GlobalMapParams:
+    """Parameters of algorithm #5 (defaults: the ``"paper"`` reading; see the module doc).
+
+    - ``enlarge_m``: how much the view polygon is enlarged (paper: 50 cm).
+    - ``enlarge``: ``"forward"`` buffer clipped at the robot's lateral axis, ``"all_round"``
+      buffer (behind the robot too), or ``"radial"`` vertices pushed out from the viewpoint.
+    - ``include_viewpoint``: close the polygon through the viewpoint (the area the view saw)
+      rather than only through the surface endpoints.
+    - ``current_map``: a current-map surface touching P is deleted only if the robot
+      ``"could_see"`` it (the same test as older maps), or whenever it ``"touch"``es P.
+    - ``facing_test``: which points of a surface must be in front of the robot for it to
+      lie "on the facing side".
+    - ``could_see``: which surfaces of the affected group are deleted besides facing:
+      ``"in_view"`` those touching P, ``"in_range"`` those within the view's reach (the
+      farthest view point + ``enlarge_m``), ``"half_plane"`` all facing ones.
+    - ``expand``: Expand as ``"split"`` groups (break where consecutive affected map ids
+      differ by more than ``group_gap_maps``), one ``"contiguous"`` group min…max, or
+      ``"none"`` (only the affected maps).
+    - ``current_in_group``: the current map's touched surfaces make it an affected map
+      (so a group can reach from it back to older maps).
+    - ``forward_ray_m``: a surface crossing the robot's forward ray up to this length also
+      touches the view (0: off).
+    - ``keep_if_all``: delete nothing when the rule would delete every surface.
+    - ``index_cell_m``: cell size of the spatial index (performance only).
+    """
+
+    enlarge_m: float = 0.50
+    enlarge: EnlargeMode = "forward"
+    include_viewpoint: bool = True
+    current_map: CurrentMapRule = "could_see"
+    facing_test: FacingTest = "both_endpoints"
+    could_see: CouldSee = "in_view"
+    expand: GroupRule = "split"
+    group_gap_maps: int = 20
+    current_in_group: bool = True
+    forward_ray_m: float = 0.0
+    keep_if_all: bool = False
+    index_cell_m: float = 2.0
+
+    def __post_init__(self) -> None:
+        check_non_negative(self, "enlarge_m", "forward_ray_m")
+        check_positive(self, "index_cell_m")
+        check_positive_int(self, "group_gap_maps")
+        for name, valid in _CHOICES.items():
+            value = getattr(self, name)
+            if value not in valid:
+                raise InputError(
+                    f"GlobalMapParams.{name} must be one of {', '.join(valid)}, got {value!r}"
+                )
+        for name in ("include_viewpoint", "current_in_group", "keep_if_all"):
+            if not isinstance(getattr(self, name), bool):
+                raise InputError(
+                    f"GlobalMapParams.{name} must be true or false, got {getattr(self, name)!r}"
+                )
+
+    @classmethod
+    def preset(cls, name: str, **overrides: Any) -> GlobalMapParams:
+        """The named consistent set (``paper``, ``v1``, ``original``), with overrides."""
+        if name not in DELETION_PRESETS:
+            raise InputError(
+                f"unknown global-map deletion rule {name!r}; valid: {', '.join(DELETION_PRESETS)}"
+            )
+        return dataclasses.replace(DELETION_PRESETS[name], **overrides)
+
+
+DELETION_PRESETS: dict[str, GlobalMapParams] = {
+    "paper": GlobalMapParams(),
+    "v1": GlobalMapParams(
+        enlarge="all_round",
+        current_map="touch",
+        facing_test="midpoint",
+        could_see="half_plane",
+        expand="contiguous",
+        current_in_group=False,
+    ),
+    "original": GlobalMapParams(
+        enlarge_m=0.30,
+        enlarge="radial",
+        could_see="half_plane",
+        forward_ray_m=3.0,
+        keep_if_all=True,
+    ),
+}
+
+
+def _forward_coords(points: FloatArray, robot: Pose) -> tuple[FloatArray, FloatArray]:
+    """Coordinates of ``(N, 2)`` points along the robot's heading and to its left."""
+    c, s = math.cos(robot.theta), math.sin(robot.theta)
+    dx, dy = points[:, 0] - robot.x, points[:, 1] - robot.y
+    return c * dx + s * dy, -s * dx + c * dy
+
+
+def view_polygon(
+    segments: FloatArray,
+    robot: Pose,
+    enlarge_m: float = 0.5,
+    enlarge: EnlargeMode = "forward",
+    *,
+    include_viewpoint: bool = True,
+) -> shapely.Geometry:
+    """The enlarged polygon P of a view seen from ``robot`` (surfaces in the same frame,
+    scan order): the surfaces' endpoints joined in order (through the viewpoint when
+    ``include_viewpoint``), enlarged as ``enlarge`` says."""
+    segs = as_segments(segments)
+    pts = segs.reshape(-1, 2)
+    origin = np.array([[robot.x, robot.y]])
+    if enlarge == "radial" and len(pts):
+        off = pts - origin
+        norm = np.hypot(off[:, 0], off[:, 1])
+        scale = np.where(norm > 1e-9, enlarge_m / np.maximum(norm, 1e-9), 0.0)
+        pts = pts + off * scale[:, None]
+    if include_viewpoint:
+        pts = np.vstack([origin, pts])
+    if len(pts) == 0:
+        return shapely.Polygon()
+    buffer_m = 0.0 if enlarge == "radial" else enlarge_m
+    if len(pts) < 3:
+        poly = shapely.MultiPoint(pts).buffer(max(buffer_m, 1e-6))
+    else:
+        poly = shapely.make_valid(shapely.Polygon(pts))
+        if buffer_m > 0:
+            poly = poly.buffer(buffer_m)
+    if enlarge == "forward":
+        poly = poly.intersection(_front_half_plane(pts, robot, buffer_m))
+    return poly
+
+
+def _front_half_plane(points: FloatArray, robot: Pose, margin_m: float) -> shapely.Geometry:
+    """A rectangle covering everything of ``points`` (+ margin) in front of the robot."""
+    reach = float(np.max(np.hypot(points[:, 0] - robot.x, points[:, 1] - robot.y)))
+    r = reach + margin_m + 1.0
+    c, s = math.cos(robot.theta), math.sin(robot.theta)
+    local = np.array([[0.0, -r], [r, -r], [r, r], [0.0, r]])
+    world = np.column_stack(
+        [robot.x + c * local[:, 0] - s * local[:, 1], robot.y + s * local[:, 0] + c * local[:, 1]]
+    )
+    return shapely.Polygon(world)
+
+
+def facing_mask(segments: FloatArray, robot: Pose, test: FacingTest) -> BoolArray:
+    """``(N,)``: the surface lies on the robot's facing side (in front of its lateral axis)."""
+    segs = as_segments(segments)
+    fwd0, _ = _forward_coords(segs[:, :2], robot)
+    fwd1, _ = _forward_coords(segs[:, 2:], robot)
+    if test == "midpoint":
+        return (fwd0 + fwd1) > 0.0
+    if test == "any_endpoint":
+        return (fwd0 > 0.0) | (fwd1 > 0.0)
+    return (fwd0 > 0.0) & (fwd1 > 0.0)
+
+
+def touching_mask(
+    polygon: shapely.Geometry, segments: FloatArray, robot: Pose, forward_ray_m: float = 0.0
+) -> BoolArray:
+    """``(N,)``: the surface is inside or crosses P (or the forward ray, when > 0)."""
+    segs = as_segments(segments)
+    if len(segs) == 0 or polygon.is_empty:
+        return np.zeros(len(segs), bool)
+    lines = shapely.linestrings(segs.reshape(-1, 2, 2))
+    shapely.prepare(polygon)
+    hit = shapely.intersects(polygon, lines)
+    if forward_ray_m > 0:
+        tip = (
+            robot.x + forward_ray_m * math.cos(robot.theta),
+            robot.y + forward_ray_m * math.sin(robot.theta),
+        )
+        ray = shapely.LineString([(robot.x, robot.y), tip])
+        hit |= shapely.intersects(ray, lines)
+    return np.asarray(hit, bool)
+
+
+def in_range_mask(segments: FloatArray, robot: Pose, reach_m: float) -> BoolArray:
+    """``(N,)``: both endpoints within ``reach_m`` of the robot."""
+    segs = as_segments(segments)
+    d0 = np.hypot(segs[:, 0] - robot.x, segs[:, 1] - robot.y)
+    d1 = np.hypot(segs[:, 2] - robot.x, segs[:, 3] - robot.y)
+    return (d0 <= reach_m) & (d1 <= reach_m)
+
+
+def group_maps(
+    affected: tuple[int, ...], rule: GroupRule, gap_maps: int, existing: set[int] | dict[int, Any]
+) -> tuple[int, ...]:
+    """Expand: the map ids whose surfaces are candidates for deletion as a group.
+
+    ``affected`` is sorted. ``"split"``: runs of affected ids whose consecutive differences
+    are at most ``gap_maps``, each filled in (25, 28 → 25…28); ``"contiguous"``: one run
+    from the first to the last; ``"none"``: the affected ids. Only ids in ``existing``.
+    """
+    if not affected:
+        return ()
+    if rule == "none":
+        return tuple(m for m in affected if m in existing)
+    if rule == "contiguous":
+        runs = [(affected[0], affected[-1])]
+    else:
+        runs = []
+        start = prev = affected[0]
+        for m in affected[1:]:
+            if m - prev > gap_maps:
+                runs.append((start, prev))
+                start = m
+            prev = m
+        runs.append((start, prev))
+    return tuple(m for lo, hi in runs for m in range(lo, hi + 1) if m in existing)
