@@ -213,3 +213,25 @@ def test_grid_index_returns_a_superset_of_box_hits(segments, box, cell) -> None:
     lines = shapely.linestrings(segs.reshape(-1, 2, 2))
     truth = set(np.flatnonzero(shapely.intersects(shapely.box(x, y, x + w, y + h), lines)))
     assert truth <= found
+
+
+def test_a_revisit_deletes_old_surfaces_in_view_and_rebuilds_them() -> None:
+    """Fig. 10 on a constructed loop: map 0 sees a wall ahead from the start; maps 1–39 are
+    along the rest of a loop far away; map 40, back at the start and facing the same way,
+    deletes map 0's wall (it is in view) and puts its own in its place, while the walls of
+    the rest of the loop (out of view) stay."""
+    g = GlobalMap()
+    start_wall = np.array([[4.0, -1.0, 4.0, 1.0]])
+    g.add_view(start_wall, 0, Pose())
+    for m in range(1, 40):
+        g.add_view(np.array([[10.0 + m, 30.0, 10.5 + m, 30.0]]), m, Pose(10.0 + m, 28.0, 0.0))
+    assert len(g) == 40
+    rebuilt = start_wall + np.array([0.05, 0.0, 0.05, 0.0])  # seen again, slightly off
+    report = g.add_view(rebuilt, 40, Pose(0.02, 0.0, 0.0))
+    assert report.affected_maps == (0,)
+    assert report.deleted_older == 1
+    snap = g.snapshot()
+    assert 0 not in snap.map_ids.tolist() and len(g) == 40
+    np.testing.assert_array_equal(snap.segments[snap.map_ids == 40], rebuilt)
+    # The history still has the map before the revisit (the "before" panel of Fig. 10).
+    assert 0 in g.snapshot(at_update=40).map_ids.tolist()

@@ -16,10 +16,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.errors import InputError
+from albot2d.evaluation.egocentric import EgocentricQuality, egocentric_quality
 from albot2d.evaluation.homing import homing
 from albot2d.evaluation.map_quality import MapQualityParams, map_quality
 from albot2d.evaluation.rpe import relative_pose_error
-from albot2d.evaluation.trace import HomingParams, Trace
+from albot2d.evaluation.trace import HomingParams, Stop, Trace
 from albot2d.geometry import Pose, between_arrays, wrap_angle
 from albot2d.logs.relations import Relations, RelationsOptions
 from albot2d.mapping.protocol import Mapper
@@ -38,6 +39,9 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+# A view touching a map this many local maps back counts as a revisit (the authors' code
+# splits deletion groups at gaps of 20 views; a revisit is what crosses such a gap).
+REVISIT_GAP_MAPS = 20
 _MAP_FIELDS = ("accuracy_m_mean", "accuracy_m_p95", "accuracy_m_max", "completeness")
 
 
@@ -65,6 +69,25 @@ def route_of(mapper: Mapper) -> RouteMap | None:
     """The mapper's route map when it is view-based like Albot1, else None."""
     route = getattr(mapper, "route", None)
     return route if isinstance(route, RouteMap) else None
+
+
+def revisits_section(mapper: Mapper, min_gap_maps: int) -> dict[str, Any] | None:
+    """Transience on revisits (paper Fig. 10): updates whose view touched a map more than
+    ``min_gap_maps`` maps back in the route, and how many surfaces each deleted."""
+    log = getattr(mapper, "update_log", None)
+    if not isinstance(log, list):
+        return None
+    events = [
+        {"map_id": u.map_id, "view": u.frame_index, "oldest_map": u.oldest_affected,
+         "deleted": u.deleted_current + u.deleted_older}
+        for u in log if u.oldest_affected >= 0 and u.map_id - u.oldest_affected > min_gap_maps
+    ]  # fmt: skip
+    return {
+        "min_gap_maps": min_gap_maps,
+        "updates": len(events),
+        "deleted_surfaces": int(sum(e["deleted"] for e in events)),
+        "events": events,
+    }
 
 
 def trajectory_of(name: str, mapper: Mapper, n_frames: int) -> FloatArray:
@@ -195,18 +218,41 @@ def snapshots_section(trace: Trace, mapper: Mapper, n: int) -> list[dict[str, An
     return out
 
 
+def egocentric_at(
+    trace: Trace, stop: Stop | None, name: str, world_segments: FloatArray | None
+) -> EgocentricQuality | None:
+    """Egocentric map quality of mapper ``name`` at a captured stop (None without truth)."""
+    if (
+        stop is None or stop.seen is None or name not in stop.maps
+        or world_segments is None or trace.true_poses is None
+    ):  # fmt: skip
+        return None
+    local, surfaces = stop.maps[name]
+    return egocentric_quality(
+        stop.seen, local, world_segments, trace.true_poses[stop.row], trace.egocentric,
+        surfaces=surfaces,
+    )  # fmt: skip
+
+
 def map_section(
-    trace: Trace, mapper: Mapper, world_segments: FloatArray | None, params: MapQualityParams
+    trace: Trace,
+    mapper: Mapper,
+    world_segments: FloatArray | None,
+    params: MapQualityParams,
+    name: str | None = None,
 ) -> dict[str, Any]:
-    """Map accuracy and completeness against the true walls (None fields on real logs)."""
+    """Map accuracy and completeness against the true walls (None fields on real logs),
+    anchored at the start, and egocentric (from the robot's place at the end)."""
     segments = mapper.global_map().segments
+    ego = egocentric_at(trace, trace.final, name or mapper.name, world_segments)
+    ego_dict = ego.to_dict() if ego is not None else None
     if world_segments is None or trace.true_poses is None:
-        return dict.fromkeys(_MAP_FIELDS) | {"surfaces": len(segments)}
+        return dict.fromkeys(_MAP_FIELDS) | {"surfaces": len(segments), "egocentric": ego_dict}
     quality = map_quality(
         segments, world_segments, start_pose=Pose.from_array(trace.true_poses[0]),
         seen_points=trace.seen_points, params=params,
     )  # fmt: skip
-    return quality.to_dict()
+    return quality.to_dict() | {"egocentric": ego_dict}
 
 
 def odometry_section(
@@ -230,6 +276,10 @@ def score_mappers(
     for name, mapper in trace.mappers.items():
         poses = trajectory_of(name, mapper, trace.n_frames)
         entries = homing_section(trace, name)
+        for entry, stop in zip(entries, trace.stops, strict=True):
+            ego = egocentric_at(trace, stop, name, world_segments)
+            entry["egocentric_completeness"] = None if ego is None else ego.completeness
+            entry["egocentric_accuracy_m_p95"] = None if ego is None else ego.accuracy_m_p95
         timing = dict(mapper.timings_ms())
         timing["total"] = trace.wall_ms.get(name, 0.0) / max(trace.n_frames, 1)
         out[name] = {
@@ -238,8 +288,9 @@ def score_mappers(
             "homing_summary": homing_summary(entries),
             "rpe": rpe_section(trace, poses, relations, params.rpe_split_s),
             "end_pose_error": end_pose_error(trace, poses),
-            "map": map_section(trace, mapper, world_segments, params.map_quality),
+            "map": map_section(trace, mapper, world_segments, params.map_quality, name),
             "snapshots": snapshots_section(trace, mapper, params.snapshots),
+            "revisits": revisits_section(mapper, REVISIT_GAP_MAPS),
             "timing_ms": timing,
         }
     return out

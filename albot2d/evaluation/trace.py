@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.errors import InputError
+from albot2d.evaluation.egocentric import EgocentricParams, in_robot_frame, seen_window_local
 from albot2d.frames import Frame
 from albot2d.geometry import transform_points
 from albot2d.mapping.protocol import Mapper
@@ -59,11 +60,19 @@ class HomingParams:
 
 @dataclass(frozen=True, slots=True)
 class Stop:
-    """A homing stop: trace row, odometer distance, and each mapper's (pose, start) then."""
+    """A homing stop: trace row, odometer distance, and each mapper's (pose, start) then.
+
+    In simulation it also keeps what the egocentric map quality is computed from
+    (``albot2d.evaluation.egocentric``): ``seen``, the laser hits of the last window of
+    travel relative to the true pose, and ``maps``, each mapper's global-map surfaces near
+    the robot relative to its own pose estimate, with its total surface count.
+    """
 
     row: int
     travelled_m: float
     estimates: dict[str, tuple[FloatArray, FloatArray]]
+    seen: FloatArray | None = None
+    maps: dict[str, tuple[FloatArray, int]] = field(default_factory=dict)
 
 
 @dataclass(eq=False)
@@ -80,6 +89,8 @@ class Trace:
     stops: list[Stop]
     mappers: dict[str, Mapper]
     wall_ms: dict[str, float] = field(default_factory=dict)
+    final: Stop | None = None
+    egocentric: EgocentricParams = field(default_factory=EgocentricParams)
 
     @property
     def n_frames(self) -> int:
@@ -93,7 +104,7 @@ class Trace:
 class _Recorder:
     """Accumulates the per-frame rows of a Trace."""
 
-    def __init__(self, last_k_views: int) -> None:
+    def __init__(self, last_k_views: int, window_m: float = 30.0) -> None:
         self.indices: list[int] = []
         self.stamps: list[float] = []
         self.odom: list[FloatArray] = []
@@ -101,6 +112,8 @@ class _Recorder:
         self.collided: list[bool] = []
         self.travelled: list[float] = []
         self.recent: deque[FloatArray] = deque(maxlen=last_k_views)
+        self.window_m = window_m
+        self.window: deque[tuple[float, FloatArray]] = deque()
         self.with_truth: bool | None = None
 
     def add(self, frame: Frame) -> None:
@@ -122,12 +135,29 @@ class _Recorder:
         if frame.true_pose is not None:
             pose = frame.true_pose.as_array()
             self.truth.append(pose)
-            self.recent.append(transform_points(pose, frame.scan.points()))
+            hits = transform_points(pose, frame.scan.points())
+            self.recent.append(hits)
+            self.window.append((self.travelled[-1], hits))
+            while self.window and self.window[0][0] < self.travelled[-1] - self.window_m:
+                self.window.popleft()
+
+    def seen_window(self, grid_m: float) -> FloatArray | None:
+        """The last window's laser hits relative to the true pose now (None without truth)."""
+        if not self.with_truth or not self.window:
+            return None
+        return seen_window_local(np.vstack([h for _, h in self.window]), self.truth[-1], grid_m)
 
     def reference_distance(self) -> float:
         """Straight-line distance from the start now (truth if known, else odometry)."""
         track = self.truth if self.with_truth else self.odom
         return float(math.hypot(*(track[-1][:2] - track[0][:2])))
+
+
+def _egocentric_map(mapper: Mapper, seen: FloatArray) -> tuple[FloatArray, int]:
+    """The mapper's map surfaces near it, relative to its own pose, and its surface count."""
+    segments = mapper.global_map().segments
+    reach = float(np.max(np.hypot(seen[:, 0], seen[:, 1]), initial=0.0)) + 1.0
+    return in_robot_frame(mapper.pose().as_array(), segments, reach), len(segments)
 
 
 def _estimate(mapper: Mapper) -> tuple[FloatArray, FloatArray]:
@@ -146,23 +176,31 @@ def drive_mappers(
     max_frames: int | None = None,
     on_frame: Callable[[Frame, float], None] | None = None,
     source: str = "the run",
+    egocentric: EgocentricParams | None = None,
 ) -> Trace:
     """Feed ``frames`` (at most ``max_frames``) to every mapper; see the module docstring.
 
     ``on_frame(frame, travelled_m)`` is called after each frame (e.g. a progress bar);
-    ``source`` names the frames' origin in errors.
+    ``source`` names the frames' origin in errors; ``egocentric`` sets the window kept for
+    the egocentric map quality at each stop and at the end.
     """
     params = homing or HomingParams()
-    rec = _Recorder(last_k_views)
+    ego = egocentric or EgocentricParams()
+    rec = _Recorder(last_k_views, ego.window_m)
     wall_ns = dict.fromkeys(mappers, 0)
     stops: list[Stop] = []
     passed = 0  # multiples of stop_every_m passed so far
 
+    def capture() -> Stop:
+        estimates = {name: _estimate(m) for name, m in mappers.items()}
+        seen = rec.seen_window(ego.grid_m)
+        maps = {} if seen is None else {n: _egocentric_map(m, seen) for n, m in mappers.items()}
+        return Stop(len(rec.stamps) - 1, rec.travelled[-1], estimates, seen, maps)
+
     def stop_here() -> None:
         if rec.reference_distance() < params.min_start_distance_m:
             return
-        estimates = {name: _estimate(m) for name, m in mappers.items()}
-        stops.append(Stop(len(rec.stamps) - 1, rec.travelled[-1], estimates))
+        stops.append(capture())
 
     for frame in frames:
         if max_frames is not None and len(rec.stamps) >= max_frames:
@@ -184,6 +222,7 @@ def drive_mappers(
         raise InputError(f"no frames to map: {source} has no laser scans")
     if params.include_last and (not stops or stops[-1].row != len(rec.stamps) - 1):
         stop_here()
+    final = stops[-1] if stops and stops[-1].row == len(rec.stamps) - 1 else capture()
     n = len(rec.stamps)
     truth = np.asarray(rec.truth, dtype=np.float64).reshape(n, 3) if rec.with_truth else None
     seen = np.vstack(list(rec.recent)) if rec.with_truth and rec.recent else None
@@ -198,4 +237,6 @@ def drive_mappers(
         stops=stops,
         mappers=mappers,
         wall_ms={name: ns / 1e6 for name, ns in wall_ns.items()},
+        final=final,
+        egocentric=ego,
     )

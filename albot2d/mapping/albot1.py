@@ -22,15 +22,18 @@ pose of its local map ⊕ that offset.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.errors import InputError
 from albot2d.frames import Frame
-from albot2d.geometry import Pose, compose_arrays, transform_segments
+from albot2d.geometry import Pose, compose_arrays, transform_segments, wrap_angle
 from albot2d.mapping.global_map import GlobalMap, GlobalMapParams, MapSnapshot, UpdateReport
 from albot2d.mapping.protocol import MapperCounts, StageTimer
 from albot2d.mapping.route_map import LocalMap, Method, RouteMap
@@ -44,9 +47,9 @@ from albot2d.perception import (
     start_tracking,
 )
 from albot2d.perception.surfaces import Surfaces
-from albot2d.validation import check_positive_int
+from albot2d.validation import check_positive, check_positive_int
 
-__all__ = ["Albot1", "Albot1Params", "StepRecord"]
+__all__ = ["Albot1", "Albot1Params", "StepRecord", "UpdateSummary"]
 
 
 class StepRecord(NamedTuple):
@@ -65,12 +68,36 @@ class StepRecord(NamedTuple):
     methods: tuple[Method, ...]
 
 
+class UpdateSummary(NamedTuple):
+    """What one global-map update deleted (kept per update; the figures of transience).
+
+    ``oldest_affected`` is the oldest map whose surfaces the view touched (-1: none); an
+    update whose oldest affected map is far back in the route is a *revisit*.
+    """
+
+    map_id: int
+    frame_index: int
+    deleted_current: int
+    deleted_older: int
+    oldest_affected: int
+
+
 @dataclass(frozen=True, slots=True)
 class Albot1Params:
     """All of Albot1's parameters; defaults are the paper's values where it gives them.
 
-    ``min_tracked``: a new local map is remembered when fewer than this many tracked
-    surfaces remain (paper: four).
+    - ``min_tracked``: a new local map is remembered when fewer than this many tracked
+      surfaces remain (paper: four; the authors' code: three).
+    - ``localise_every_view``: between updates, triangulate every view in the current
+      local map too (the authors' start–stop programs), keeping the odometric pose when the
+      result is more than ``odometry_fallback_m`` / ``odometry_fallback_deg`` away from it;
+      off (the paper): views between updates are placed by path integration.
+
+    ``Albot1Params.preset("paper")`` (the defaults) and ``preset("original")`` (the
+    authors' C++ code where it differs from the paper: key-endpoint matching with a fitness
+    floor, no 3° viewing-angle test, update at < 3, heuristic 2 by fitness with the chosen
+    surface's own heading, every view localised with the odometry fallback, and the code's
+    global-map deletion rule) select consistent sets; keyword overrides apply on top.
     """
 
     extraction: ExtractionParams = field(default_factory=ExtractionParams)
@@ -78,9 +105,38 @@ class Albot1Params:
     triangulation: TriangulationParams = field(default_factory=TriangulationParams)
     global_map: GlobalMapParams = field(default_factory=GlobalMapParams)
     min_tracked: int = 4
+    localise_every_view: bool = False
+    odometry_fallback_m: float = 0.40
+    odometry_fallback_deg: float = 5.0
 
     def __post_init__(self) -> None:
         check_positive_int(self, "min_tracked")
+        check_positive(self, "odometry_fallback_m", "odometry_fallback_deg")
+        if not isinstance(self.localise_every_view, bool):
+            raise InputError(
+                "Albot1Params.localise_every_view must be true or false, "
+                f"got {self.localise_every_view!r}"
+            )
+
+    @classmethod
+    def preset(cls, name: str, **overrides: Any) -> Albot1Params:
+        """``"paper"`` or ``"original"`` (see the class doc), with field overrides."""
+        if name == "paper":
+            base = cls()
+        elif name == "original":
+            base = cls(
+                tracking=TrackingParams(
+                    min_view_angle_deg=0.0, match_endpoint="key", match_order="fitness",
+                    fitness_floor=80.0,
+                ),
+                triangulation=TriangulationParams(choose="fitness", heading="selected"),
+                global_map=GlobalMapParams.preset("original"),
+                min_tracked=3,
+                localise_every_view=True,
+            )
+        else:
+            raise InputError(f"unknown Albot1 preset {name!r}; valid: paper, original")
+        return dataclasses.replace(base, **overrides)
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,6 +179,7 @@ class Albot1:
         self._frame_offsets: list[NDArray[np.float64]] = []
         self._views = self._triangulations = self._path_integrations = 0
         self.steps: list[StepRecord] = []
+        self.update_log: list[UpdateSummary] = []
 
     # -- the protocol -------------------------------------------------------------
     def observe(self, frame: Frame) -> None:
@@ -191,6 +248,9 @@ class Albot1:
             tracked, _ = rtsv(self._tracked, view, increment, tparams)
         tracked_after = len(tracked)
         if len(tracked) >= need:
+            if self.params.localise_every_view:
+                with self.timer.stage("localization"):
+                    pi_pose = self._localise_between_updates(tracked, pi_pose, steps)
             self._continue(frame_index, timestamp, view, pi_pose, tracked, steps)
             return tracked_after
 
@@ -229,6 +289,24 @@ class Albot1:
         self._frame_maps.append(len(self.route) - 1)
         self._frame_offsets.append(pose.as_array())
 
+    def _localise_between_updates(
+        self, tracked: TrackedSurfaces, odometric: Pose, steps: int
+    ) -> Pose:
+        """The authors' per-view localisation: triangulate, but keep the odometric pose when
+        the result is farther from it than the fallback thresholds."""
+        pose = triangulate(
+            tracked.local, tracked.current, odometric, self.params.triangulation, steps=steps
+        )
+        if pose is None:
+            return odometric
+        far = math.hypot(pose.x - odometric.x, pose.y - odometric.y)
+        turn = abs(float(wrap_angle(pose.theta - odometric.theta)))
+        if far > self.params.odometry_fallback_m or turn > math.radians(
+            self.params.odometry_fallback_deg
+        ):
+            return odometric
+        return pose
+
     def _localise(
         self, tracked: TrackedSurfaces, pi_pose: Pose, steps: int
     ) -> tuple[Pose, Method]:
@@ -265,6 +343,12 @@ class Albot1:
             segs = transform_segments(lm.pose.as_array(), view.segments)
             report = self.map.add_view(segs, lm.map_id, lm.pose)
         self.last_update = report
+        self.update_log.append(
+            UpdateSummary(
+                lm.map_id, frame_index, report.deleted_current, report.deleted_older,
+                min(report.affected_maps, default=-1),
+            )
+        )
         if self.on_update is not None:
             self.on_update(report, lm)
         with self.timer.stage("tracking"):

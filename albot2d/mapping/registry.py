@@ -50,10 +50,51 @@ BUILTIN_MAPPERS: dict[str, Callable[[], Mapper]] = {
 _REQUIRED = ("observe", "pose", "global_map", "trajectory", "counts", "timings_ms")
 
 
+_ALBOT1_OPTIONS = ("preset", "deletion", "min_tracked")
+
+
+def _albot1_variant(spec: str) -> Callable[[], Mapper]:
+    """``albot1[preset=original,deletion=v1,min_tracked=3]``: Albot1 with named options, so
+    readings of the paper can be compared side by side in one run."""
+    body = spec[len("albot1[") : -1]
+    options: dict[str, str] = {}
+    for item in filter(None, (part.strip() for part in body.split(","))):
+        key, eq, value = item.partition("=")
+        if not eq or key.strip() not in _ALBOT1_OPTIONS:
+            raise InputError(
+                f"mapper {spec!r}: options are key=value with keys {', '.join(_ALBOT1_OPTIONS)}"
+            )
+        options[key.strip()] = value.strip()
+    from albot2d.mapping.albot1 import Albot1, Albot1Params
+    from albot2d.mapping.deletion import GlobalMapParams
+
+    overrides: dict[str, object] = {}
+    if "deletion" in options:
+        overrides["global_map"] = GlobalMapParams.preset(options["deletion"])
+    if "min_tracked" in options:
+        try:
+            overrides["min_tracked"] = int(options["min_tracked"])
+        except ValueError:
+            raise InputError(
+                f"mapper {spec!r}: min_tracked must be an integer, got {options['min_tracked']!r}"
+            ) from None
+    params = Albot1Params.preset(options.get("preset", "paper"), **overrides)
+
+    def make() -> Mapper:
+        mapper = Albot1(params)
+        mapper.name = spec
+        return mapper
+
+    return make
+
+
 def mapper_factory(spec: str) -> Callable[[], Mapper]:
-    """A factory for a built-in name or a ``module:Class`` that implements the protocol."""
+    """A factory for a built-in name, ``albot1[key=value,…]`` or a ``module:Class`` that
+    implements the protocol."""
     if spec in BUILTIN_MAPPERS:
         return BUILTIN_MAPPERS[spec]
+    if spec.startswith("albot1[") and spec.endswith("]"):
+        return _albot1_variant(spec)
     if ":" not in spec:
         raise InputError(
             f"unknown mapper {spec!r}; built-in mappers: {', '.join(sorted(BUILTIN_MAPPERS))}; "
@@ -80,7 +121,8 @@ def resolve_mappers(specs: list[str]) -> dict[str, Callable[[], Mapper]]:
     out: dict[str, Callable[[], Mapper]] = {}
     for spec in specs:
         factory = mapper_factory(spec)
-        name = spec if spec in BUILTIN_MAPPERS else spec.partition(":")[2]
+        builtin = spec in BUILTIN_MAPPERS or spec.startswith("albot1[")
+        name = spec if builtin else spec.partition(":")[2]
         if name in out:
             raise InputError(f"mapper {name!r} given twice")
         out[name] = factory

@@ -57,6 +57,10 @@ class TriangulationParams:
       deviation from the mean); the spec reports that dropping it measurably hurts.
     - ``prefer_nearer_endpoint``: when both endpoints are usable, take the one nearer the
       robot (range errors grow with distance).
+    - ``choose``: heuristic 2, the affordance ``"nearest_to_pi"`` (the paper's text) or the
+      one of highest ``"fitness"`` (the authors' code: the surface's length, how well its
+      corner and direction agree with path integration, and its range; see
+      ``albot2d.perception.tracking.match_fitness``).
     """
 
     use_outlier_heuristic: bool = True
@@ -65,6 +69,7 @@ class TriangulationParams:
     heading_consensus_deg: float = 1.0
     max_pi_deviation_m: float = 0.40
     max_pi_deviation_deg: float = 5.0
+    choose: Literal["nearest_to_pi", "fitness"] = "nearest_to_pi"
 
     def __post_init__(self) -> None:
         check_non_negative(self, "heading_consensus_deg")
@@ -74,7 +79,13 @@ class TriangulationParams:
                 raise InputError(f"TriangulationParams.{name} must be > 0, got {value!r}")
         if self.heading not in ("weighted", "inlier_mean", "selected"):
             raise InputError(
-                f"TriangulationParams.heading must be inlier_mean or selected, got {self.heading!r}"
+                "TriangulationParams.heading must be weighted, inlier_mean or selected, "
+                f"got {self.heading!r}"
+            )
+        if self.choose not in ("nearest_to_pi", "fitness"):
+            raise InputError(
+                "TriangulationParams.choose must be nearest_to_pi or fitness, "
+                f"got {self.choose!r}"
             )
 
 
@@ -189,6 +200,26 @@ def _fit_weight(surfaces: Surfaces, index: NDArray[np.int64]) -> NDArray[np.floa
     return np.maximum(n * length**2, 1e-12)
 
 
+def _pi_fitness(aff: Affordances, current: Surfaces, path_integration: Pose) -> NDArray:
+    """The authors' fitness of each affordance's surface under path integration:
+    length_mm · (400 − d_mm) · (5 − Δθ_deg) / max(range_mm, 2000), where d and Δθ are how far
+    its corner and heading land from the local map's when moved by path integration."""
+    pts = aff.current_points
+    c, s = np.cos(path_integration.theta), np.sin(path_integration.theta)
+    moved = np.column_stack([
+        path_integration.x + c * pts[:, 0] - s * pts[:, 1],
+        path_integration.y + s * pts[:, 0] + c * pts[:, 1],
+    ])
+    d_mm = 1000.0 * np.hypot(*(moved - aff.local_points).T)
+    dth_deg = np.degrees(np.abs(wrap_angle(aff.poses[:, 2] - path_integration.theta)))
+    length_mm = 1000.0 * current.lengths_m[aff.surface]
+    range_mm = 1000.0 * np.hypot(pts[:, 0], pts[:, 1])
+    return (
+        length_mm * np.maximum(400.0 - d_mm, 0.0) * np.maximum(5.0 - dth_deg, 0.0)
+        / np.maximum(range_mm, 2000.0)
+    )
+
+
 def triangulate(
     local: Surfaces,
     current: Surfaces,
@@ -224,8 +255,11 @@ def triangulate(
         if not keep.any():
             keep = d == d.min()
     kept = np.flatnonzero(keep)
-    d_pi = np.hypot(poses[kept, 0] - path_integration.x, poses[kept, 1] - path_integration.y)
-    best = int(kept[np.argmin(d_pi)])
+    if params.choose == "fitness":
+        best = int(kept[np.argmax(_pi_fitness(aff, current, path_integration)[kept])])
+    else:
+        d_pi = np.hypot(poses[kept, 0] - path_integration.x, poses[kept, 1] - path_integration.y)
+        best = int(kept[np.argmin(d_pi)])
     if params.heading == "selected":
         return Pose.from_array(poses[best])
     gate = np.radians(params.heading_consensus_deg)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -41,6 +42,8 @@ __all__ = [
     "MatchInfo",
     "TrackedSurfaces",
     "TrackingParams",
+    "key_endpoints",
+    "match_fitness",
     "match_surfaces",
     "rtsv",
     "start_tracking",
@@ -64,6 +67,15 @@ class TrackingParams:
     - ``line_distance_fallback``: pairs without an endpoint unoccluded in both views are
       compared by endpoint-to-segment distance instead of being rejected (off: the paper's
       "distance between occluding points" needs a shared real corner).
+    - ``match_endpoint``: ``"corresponding"`` (the nearest pair of corresponding endpoints
+      unoccluded in both) or ``"key"`` (the authors' code: only the tracked surface's key
+      endpoint — its real one, the nearer if both are real — against the candidate's same
+      endpoint, whether or not that one is real).
+    - ``match_order``: resolve conflicts greedily by smallest ``"distance"`` or by highest
+      ``"fitness"`` (the authors' code: length_mm · (400 − d_mm) · (5 − Δθ_deg) /
+      max(range_mm, 2000), see ``match_fitness``).
+    - ``fitness_floor``: when the best match's fitness is below this, no surface counts as
+      tracked (the authors' code: 80, forcing an update); 0 disables it.
     """
 
     min_length_m: float = 0.40
@@ -71,9 +83,21 @@ class TrackingParams:
     match_angle_deg: float = 5.0
     match_distance_m: float = 0.40
     line_distance_fallback: bool = False
+    match_endpoint: Literal["corresponding", "key"] = "corresponding"
+    match_order: Literal["distance", "fitness"] = "distance"
+    fitness_floor: float = 0.0
 
     def __post_init__(self) -> None:
-        check_non_negative(self, "min_length_m")
+        check_non_negative(self, "min_length_m", "fitness_floor")
+        if self.match_endpoint not in ("corresponding", "key"):
+            raise InputError(
+                "TrackingParams.match_endpoint must be corresponding or key, "
+                f"got {self.match_endpoint!r}"
+            )
+        if self.match_order not in ("distance", "fitness"):
+            raise InputError(
+                f"TrackingParams.match_order must be distance or fitness, got {self.match_order!r}"
+            )
         check_in_range(self, "min_view_angle_deg", 0.0, 180.0)
         check_in_range(self, "match_angle_deg", 0.0, 90.0)
         check_positive(self, "match_angle_deg", "match_distance_m")
@@ -187,11 +211,42 @@ class MatchInfo:
         return len(self.tracked_index)
 
 
-def _endpoint_distances(predicted: Surfaces, view: Surfaces, fallback: bool) -> FloatArray:
-    """``(K, N)`` distance between corresponding endpoints unoccluded in both (inf if none)."""
+def key_endpoints(surfaces: Surfaces) -> IntArray:
+    """``(K,)`` index (0/1) of each surface's key endpoint: its real (unoccluded) end, the
+    nearer to the robot if both are real (or both occluded)."""
+    pts = surfaces.segments.reshape(-1, 2, 2)
+    rng = np.hypot(pts[..., 0], pts[..., 1])
+    score = np.where(surfaces.occluded, rng + 1e9, rng)
+    return np.argmin(score, axis=1).astype(np.int64)
+
+
+def match_fitness(
+    predicted: Surfaces, view: Surfaces, distance_m: FloatArray, angle_rad: FloatArray
+) -> FloatArray:
+    """The authors' match fitness for pairs broadcast as ``distance_m``/``angle_rad``:
+    length_mm · (400 − d_mm) · (5 − Δθ_deg) / max(range_mm, 2000) (code units: mm, degrees;
+    length and range of the view's surface)."""
+    seg = view.segments
+    length_mm = 1000.0 * view.lengths_m
+    mid = 0.5 * (seg[:, :2] + seg[:, 2:])
+    range_mm = 1000.0 * np.hypot(mid[:, 0], mid[:, 1])
+    return (
+        length_mm * (400.0 - 1000.0 * distance_m) * (5.0 - np.degrees(angle_rad))
+        / np.maximum(range_mm, 2000.0)
+    )
+
+
+def _endpoint_distances(
+    predicted: Surfaces, view: Surfaces, fallback: bool, mode: str = "corresponding"
+) -> FloatArray:
+    """``(K, N)`` distance between corresponding endpoints unoccluded in both (inf if none),
+    or (``mode="key"``) between each predicted surface's key endpoint and the same end."""
     p = predicted.segments.reshape(-1, 1, 2, 2)
     v = view.segments.reshape(1, -1, 2, 2)
     d = np.hypot(p[..., 0] - v[..., 0], p[..., 1] - v[..., 1])  # (K, N, 2)
+    if mode == "key":
+        key = key_endpoints(predicted)
+        return np.take_along_axis(d, key[:, None, None], axis=2)[..., 0]
     shared = ~predicted.occluded[:, None, :] & ~view.occluded[None, :, :]
     dist = np.where(shared, d, np.inf).min(axis=2)
     if fallback:
@@ -229,14 +284,23 @@ def match_surfaces(
     angle = undirected_angle_difference(
         segment_angles(predicted.segments)[:, None], segment_angles(view.segments)[None, :]
     )
-    dist = _endpoint_distances(predicted, view, params.line_distance_fallback)
+    dist = _endpoint_distances(
+        predicted, view, params.line_distance_fallback, params.match_endpoint
+    )
     ok = (
         cand[None, :]
         & (angle < math.radians(params.match_angle_deg))
         & (dist < params.match_distance_m)
     )
     pi, vj = np.nonzero(ok)
-    order = np.lexsort((vj, pi, dist[pi, vj]))
+    if params.match_order == "fitness" or params.fitness_floor > 0:
+        fitness = match_fitness(predicted, view, dist, angle)[pi, vj] if len(pi) else np.zeros(0)
+        if params.fitness_floor > 0 and (not len(pi) or fitness.max() < params.fitness_floor):
+            return empty_i, empty_i.copy(), np.zeros(0), np.zeros(0)
+    if params.match_order == "fitness":
+        order = np.lexsort((vj, pi, -fitness))
+    else:
+        order = np.lexsort((vj, pi, dist[pi, vj]))
     used_p = np.zeros(len(predicted), bool)
     used_v = np.zeros(len(view), bool)
     chosen: list[int] = []

@@ -1,0 +1,71 @@
+"""Egocentric map quality on hand-built maps whose answer is known."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from albot2d.evaluation.egocentric import (
+    EgocentricParams,
+    egocentric_quality,
+    in_robot_frame,
+    seen_window_local,
+    unique_on_grid,
+)
+from albot2d.evaluation.map_quality import sample_segments
+from albot2d.geometry import Pose, transform_segments
+
+# A corridor 2 m wide along +x in the world, the robot at (10, 0) facing +x.
+WALLS = np.array([[0.0, -1.0, 20.0, -1.0], [0.0, 1.0, 20.0, 1.0]])
+ROBOT = np.array([10.0, 0.0, 0.0])
+
+
+def seen_behind() -> np.ndarray:
+    """What the robot saw over the last 10 m: both walls from x = 0 to 10, world frame."""
+    pts = sample_segments(np.array([[0.0, -1.0, 10.0, -1.0], [0.0, 1.0, 10.0, 1.0]]), 0.05)
+    return seen_window_local(pts, ROBOT, 0.05)
+
+
+def test_a_perfect_map_is_complete_and_exact() -> None:
+    seen = seen_behind()
+    local = in_robot_frame(ROBOT, WALLS, 30.0)
+    q = egocentric_quality(seen, local, WALLS, ROBOT)
+    assert q.completeness == 1.0
+    assert q.accuracy_m_p95 == pytest.approx(0.0, abs=1e-9)
+    assert q.surfaces == 2 and q.window_m == 30.0
+
+
+def test_a_map_with_one_wall_is_half_complete() -> None:
+    q = egocentric_quality(seen_behind(), in_robot_frame(ROBOT, WALLS[:1], 30.0), WALLS, ROBOT)
+    assert q.completeness == pytest.approx(0.5, abs=0.01)
+
+
+def test_the_map_is_judged_from_the_mappers_own_pose() -> None:
+    """A map placed 3 m off in its own frame, with the mapper's pose off by the same 3 m,
+    is as good as the truth: only relative placement counts. A 2° heading error shows up."""
+    offset = Pose(3.0, -2.0, 0.0)
+    map_frame = transform_segments(offset.inverse().as_array(), WALLS)
+    est_pose = (offset.inverse() @ Pose.from_array(ROBOT)).as_array()
+    q = egocentric_quality(seen_behind(), in_robot_frame(est_pose, map_frame, 30.0), WALLS, ROBOT)
+    assert q.completeness == 1.0 and q.accuracy_m_p95 == pytest.approx(0.0, abs=1e-9)
+    turned = est_pose + np.array([0.0, 0.0, math.radians(2.0)])
+    q2 = egocentric_quality(seen_behind(), in_robot_frame(turned, map_frame, 30.0), WALLS, ROBOT)
+    # 10 m behind the robot a 2° error is 0.35 m: beyond the 0.25 m tolerance.
+    assert q2.completeness is not None and 0.5 < q2.completeness < 0.9
+    assert q2.accuracy_m_p95 is not None and 0.2 < q2.accuracy_m_p95 < 0.5
+
+
+def test_empty_inputs() -> None:
+    q = egocentric_quality(np.zeros((0, 2)), np.zeros((0, 4)), WALLS, ROBOT)
+    assert q.completeness is None and q.accuracy_m_p95 is None and q.surfaces == 0
+    q = egocentric_quality(seen_behind(), np.zeros((0, 4)), WALLS, ROBOT)
+    assert q.completeness == 0.0 and q.accuracy_m_p95 is None
+
+
+def test_grid_keeps_one_point_per_cell_and_params_are_checked() -> None:
+    pts = np.array([[0.01, 0.01], [0.02, 0.03], [0.5, 0.5]])
+    assert len(unique_on_grid(pts, 0.05)) == 2
+    with pytest.raises(Exception, match="window_m"):
+        EgocentricParams(window_m=0.0)
