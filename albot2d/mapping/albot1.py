@@ -173,7 +173,7 @@ class Albot1:
         self.last_update: UpdateReport | None = None
         self._tracked: TrackedSurfaces | None = None
         self._prev: _ViewState | None = None
-        self._prev_is_map = False
+        self._use_vc = False  # the paper's Use-V(c) switch
         self._next_surface_id = 0
         self._frame_maps: list[int] = []
         self._frame_offsets: list[NDArray[np.float64]] = []
@@ -212,7 +212,7 @@ class Albot1:
     def timings_ms(self) -> dict[str, float]:
         return self.timer.mean_ms_per(self._views)
 
-    # -- algorithms #2-#4 ----------------------------------------------------------
+    # -- algorithm #2 (main loop), #3 (update-maps), #4 (move-using-PI) --------------
     def observe_view(
         self, frame_index: int, timestamp: float, view: Surfaces, increment: Pose
     ) -> None:
@@ -221,11 +221,12 @@ class Albot1:
         n_maps = len(self.route)
         prev = self._prev
         if prev is None or self._tracked is None:
-            self._remember(frame_index, timestamp, view, Pose(), "start", tracked=0)
+            # Algorithm #2, initialisation: the first view starts the route map and M_G.
+            self._update_maps(frame_index, timestamp, view, Pose(), "start", tracked=0)
             self.steps.append(StepRecord(frame_index, 0, False, (frame_index,), ("start",)))
             return
-        use_vc = self._prev_is_map
-        tracked_after = self._step(frame_index, timestamp, view, increment, prev)
+        use_vc = self._use_vc
+        tracked_after = self._main_loop_step(frame_index, timestamp, view, increment, prev)
         new = self.route.maps[n_maps:]
         self.steps.append(
             StepRecord(
@@ -234,69 +235,76 @@ class Albot1:
             )
         )
 
-    def _step(
+    def _main_loop_step(
         self, frame_index: int, timestamp: float, view: Surfaces, increment: Pose,
         prev: _ViewState,
     ) -> int:
-        """One pass of the main loop; returns the tracked count after the first RTSV."""
+        """Algorithm #2, lines 3–16, for the new view V(c); returns |S_t| after line 4."""
         assert self._tracked is not None
         need = self.params.min_tracked
         tparams = self.params.tracking
         pi_pose = prev.pose_in_map @ increment
         steps = prev.steps_in_map + 1
+        # Line 4: S_t ← RTSV(V_c, S_t, α, δ).
         with self.timer.stage("tracking"):
             tracked, _ = rtsv(self._tracked, view, increment, tparams)
         tracked_after = len(tracked)
         if len(tracked) >= need:
+            # Line 5 does not fire: go on with views (lines 15–16).
             if self.params.localise_every_view:
                 with self.timer.stage("localization"):
                     pi_pose = self._localise_between_updates(tracked, pi_pose, steps)
-            self._continue(frame_index, timestamp, view, pi_pose, tracked, steps)
+            self._keep_tracking(frame_index, timestamp, view, pi_pose, tracked, steps)
             return tracked_after
 
-        if not self._prev_is_map:
-            # Remember V(c-1): it still had >= 4 tracked surfaces to triangulate from.
+        if not self._use_vc:
+            # Lines 6–7 with Use-V(c) false: triangulate V(c-1) from the surfaces tracked
+            # at c-1 (there were >= 4) and remember it.
             with self.timer.stage("localization"):
-                pose_prev, method = self._localise(
+                pose_prev, method = self._triangulate_or_move_using_pi(
                     prev.tracked, prev.pose_in_map, prev.steps_in_map
                 )
-            self._remember(
+            self._update_maps(
                 prev.frame_index, prev.timestamp, prev.view, pose_prev, method,
                 tracked=len(prev.tracked), replaces_last_frame=True,
             )
-            assert self._tracked is not None  # set by _remember
+            assert self._tracked is not None  # set by _update_maps
+            # Line 12 (goto 4): re-track V(c-1)'s surfaces into V(c).
             with self.timer.stage("tracking"):
                 tracked, _ = rtsv(self._tracked, view, increment, tparams)
             pi_pose = increment
             steps = 1
             if len(tracked) >= need:
-                self._continue(frame_index, timestamp, view, pi_pose, tracked, steps)
+                self._keep_tracking(frame_index, timestamp, view, pi_pose, tracked, steps)
                 return tracked_after
 
-        # Use-Vc: V(c-1) is the current local map, so remember V(c) itself.
+        # Lines 6–11 with Use-V(c) true (V(c-1) is already the current local map): remember
+        # V(c) itself, triangulated from its 1–3 tracked surfaces, or, with none left, by
+        # path integration (line 9: algorithm #4).
         with self.timer.stage("localization"):
-            pose_c, method = self._localise(tracked, pi_pose, steps)
-        self._remember(frame_index, timestamp, view, pose_c, method, tracked=len(tracked))
+            pose_c, method = self._triangulate_or_move_using_pi(tracked, pi_pose, steps)
+        self._update_maps(frame_index, timestamp, view, pose_c, method, tracked=len(tracked))
         return tracked_after
 
-    def _continue(
+    def _keep_tracking(
         self, frame_index: int, timestamp: float, view: Surfaces, pose: Pose,
         tracked: TrackedSurfaces, steps: int,
     ) -> None:
+        """Algorithm #2, lines 15–16: Use-V(c) ← false, V(c-1) ← V(c), next view."""
         self._tracked = tracked
         self._prev = _ViewState(frame_index, timestamp, view, pose, tracked, steps)
-        self._prev_is_map = False
-        self._frame_maps.append(len(self.route) - 1)
-        self._frame_offsets.append(pose.as_array())
+        self._use_vc = False
+        self._place_frame(len(self.route) - 1, pose, replaces_last_frame=False)
 
     def _localise_between_updates(
         self, tracked: TrackedSurfaces, odometric: Pose, steps: int
     ) -> Pose:
-        """The authors' per-view localisation: triangulate, but keep the odometric pose when
-        the result is farther from it than the fallback thresholds."""
+        """The authors' per-view localisation (not in the paper): triangulate, but keep the
+        odometric pose when the result is farther from it than the fallback thresholds."""
         pose = triangulate(
-            tracked.local, tracked.current, odometric, self.params.triangulation, steps=steps
-        )
+            tracked.local, tracked.current, odometric, self.params.triangulation, steps=steps,
+            gate=self._pi_gate,
+        )  # fmt: skip
         if pose is None:
             return odometric
         far = math.hypot(pose.x - odometric.x, pose.y - odometric.y)
@@ -307,19 +315,29 @@ class Albot1:
             return odometric
         return pose
 
-    def _localise(
+    def _triangulate_or_move_using_pi(
         self, tracked: TrackedSurfaces, pi_pose: Pose, steps: int
     ) -> tuple[Pose, Method]:
-        """Triangulate from tracked surfaces; fall back to path integration (algorithm #4)."""
+        """Algorithm #2 line 6 (triangulate from the tracked surfaces) or, when none affords
+        a pose, algorithm #4 line 1 (the pose reached by path integration)."""
         if len(tracked):
             pose = triangulate(
-                tracked.local, tracked.current, pi_pose, self.params.triangulation, steps=steps
-            )
+                tracked.local, tracked.current, pi_pose, self.params.triangulation,
+                steps=steps, gate=self._pi_gate,
+            )  # fmt: skip
             if pose is not None:
                 return pose, "triangulation"
         return pi_pose, "path_integration"
 
-    def _remember(
+    @property
+    def _pi_gate(self) -> tuple[float, float]:
+        """Affordances farther from path integration than RTSV's own recognition thresholds
+        per step are dropped (``TriangulationParams.max_pi_deviation_*``; ``None`` there
+        means these)."""
+        t = self.params.tracking
+        return t.match_distance_m, t.match_angle_deg
+
+    def _update_maps(
         self,
         frame_index: int,
         timestamp: float,
@@ -330,8 +348,9 @@ class Albot1:
         tracked: int,
         replaces_last_frame: bool = False,
     ) -> None:
-        """Algorithm #3 (update-maps): add the view to the route map and the global map,
-        and start tracking its trackable surfaces."""
+        """Algorithm #3 (update-maps): add the view to the route map (line 1), start tracking
+        its trackable surfaces (line 2), and add it to the global map (lines 3–4: algorithm
+        #5, update-global-map)."""
         lm = self.route.append(
             frame_index, view, pose_in_previous, method, tracked=tracked, timestamp=timestamp
         )
@@ -355,10 +374,16 @@ class Albot1:
             self._tracked = start_tracking(view, self.params.tracking, self._next_surface_id)
         self._next_surface_id += len(self._tracked)
         self._prev = _ViewState(frame_index, timestamp, view, Pose(), self._tracked)
-        self._prev_is_map = True
+        # Algorithm #2 line 11 / #4 line 12: the next update, if any, uses V(c).
+        self._use_vc = True
+        self._place_frame(lm.map_id, Pose(), replaces_last_frame=replaces_last_frame)
+
+    def _place_frame(self, map_id: int, pose_in_map: Pose, *, replaces_last_frame: bool) -> None:
+        """Record a frame's place for ``trajectory()``: its local map and pose in it. A view
+        remembered one frame late (V(c-1)) replaces that frame's earlier placement."""
         if replaces_last_frame and self._frame_maps:
-            self._frame_maps[-1] = lm.map_id
-            self._frame_offsets[-1] = np.zeros(3)
+            self._frame_maps[-1] = map_id
+            self._frame_offsets[-1] = pose_in_map.as_array()
         else:
-            self._frame_maps.append(lm.map_id)
-            self._frame_offsets.append(np.zeros(3))
+            self._frame_maps.append(map_id)
+            self._frame_offsets.append(pose_in_map.as_array())

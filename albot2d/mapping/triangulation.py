@@ -10,8 +10,9 @@ heuristics pick one affordance:
 2. of the rest, take the one nearest the path-integration estimate.
 
 Before the heuristics, an affordance that disagrees with the path-integration estimate by
-more than the paper's own recognition thresholds (``max_pi_deviation_m`` = 40 cm,
-``max_pi_deviation_deg`` = 5°) per step since the local map's origin is discarded: at each
+more than the paper's own recognition thresholds (RTSV's ``match_distance_m`` = 40 cm and
+``match_angle_deg`` = 5°, read from ``TrackingParams`` unless ``max_pi_deviation_m`` /
+``max_pi_deviation_deg`` are set) per step since the local map's origin is discarded: at each
 step the surface was recognised as the same precisely because its prediction by the
 odometry increment agreed that well, so after ``k`` steps a pose that disagrees with path
 integration by more than ``k`` times that is a bad fit (typically a short surface seen
@@ -44,6 +45,7 @@ from numpy.typing import NDArray
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, segment_angles, wrap_angle
 from albot2d.perception.surfaces import Surfaces
+from albot2d.perception.tracking import TrackingParams
 from albot2d.validation import check_non_negative
 
 __all__ = ["Affordances", "TriangulationParams", "pose_affordances", "triangulate"]
@@ -67,14 +69,16 @@ class TriangulationParams:
     prefer_nearer_endpoint: bool = True
     heading: Literal["weighted", "inlier_mean", "selected"] = "weighted"
     heading_consensus_deg: float = 1.0
-    max_pi_deviation_m: float = 0.40
-    max_pi_deviation_deg: float = 5.0
+    max_pi_deviation_m: float | None = None
+    max_pi_deviation_deg: float | None = None
     choose: Literal["nearest_to_pi", "fitness"] = "nearest_to_pi"
 
     def __post_init__(self) -> None:
         check_non_negative(self, "heading_consensus_deg")
         for name in ("max_pi_deviation_m", "max_pi_deviation_deg"):
             value = getattr(self, name)
+            if value is None:
+                continue
             if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
                 raise InputError(f"TriangulationParams.{name} must be > 0, got {value!r}")
         if self.heading not in ("weighted", "inlier_mean", "selected"):
@@ -227,19 +231,27 @@ def triangulate(
     params: TriangulationParams = TriangulationParams(),
     *,
     steps: int = 1,
+    gate: tuple[float, float] | None = None,
 ) -> Pose | None:
     """The view's pose in the local map, or ``None`` when no surface affords one.
 
     ``steps``: odometry steps integrated since the local map's origin (scales the gate).
+    ``gate``: the per-step (metres, degrees) used where ``max_pi_deviation_*`` is ``None``;
+    by default RTSV's recognition thresholds (``TrackingParams`` defaults).
     """
+    if gate is None:
+        defaults = TrackingParams()
+        gate = (defaults.match_distance_m, defaults.match_angle_deg)
+    gate_m = params.max_pi_deviation_m if params.max_pi_deviation_m is not None else gate[0]
+    gate_deg = params.max_pi_deviation_deg if params.max_pi_deviation_deg is not None else gate[1]
     aff = pose_affordances(local, current, path_integration.theta, params)
     k = max(int(steps), 1)
     consistent = (
         np.hypot(aff.poses[:, 0] - path_integration.x, aff.poses[:, 1] - path_integration.y)
-        <= k * params.max_pi_deviation_m
+        <= k * gate_m
     ) & (
         np.abs(wrap_angle(aff.poses[:, 2] - path_integration.theta))
-        <= k * np.radians(params.max_pi_deviation_deg)
+        <= k * np.radians(gate_deg)
     )
     if not consistent.all():
         aff = Affordances(*(field[consistent] for field in aff))
@@ -271,7 +283,7 @@ def triangulate(
     else:
         offset = _weighted_heading_offset(
             local, current, path_integration, float(poses[best, 2]), gate,
-            k * np.radians(params.max_pi_deviation_deg),
+            k * np.radians(gate_deg),
         )
     heading = float(wrap_angle(poses[best, 2] + offset))
     x, y = _position_for(heading, aff.local_points[best], aff.current_points[best])
