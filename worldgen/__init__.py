@@ -10,7 +10,7 @@ from worldgen.houseexpo import from_houseexpo
 from worldgen.io import load, save, world_from_json, world_to_json
 from worldgen.roadmap import build_roadmap
 from worldgen.space import build_space
-from worldgen.tours import TOUR_KINDS, make_tour
+from worldgen.tours import TOUR_KINDS, make_tour, plan_tour
 from worldgen.world import DynamicObstacle, Roadmap, Tour, World
 
 __all__ = [
@@ -28,6 +28,7 @@ __all__ = [
     "make_params",
     "make_tour",
     "make_world",
+    "plan_tour",
     "save",
     "world_from_json",
     "world_to_json",
