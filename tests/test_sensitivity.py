@@ -7,8 +7,9 @@ import pytest
 from albot2d.errors import InputError
 from albot2d.evaluation.sensitivity import SensitivitySetup, format_table, homing_sensitivity
 
-SMALL = SensitivitySetup(kind="office", world_params={"width_m": 30.0, "height_m": 24.0},
-                         tour_length_m=40.0)
+SMALL = SensitivitySetup(
+    kind="office", world_params={"width_m": 30.0, "height_m": 24.0}, tour_length_m=40.0
+)
 
 
 def test_sensitivity_counts_stops_within_the_bound():

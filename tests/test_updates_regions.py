@@ -7,12 +7,12 @@ import pytest
 import shapely
 
 from albot2d.errors import InputError
-from albot2d.geometry import Pose
 from albot2d.evaluation.updates import (
     albot1_update_flags,
     update_counts,
     updates_by_region,
 )
+from albot2d.geometry import Pose
 from albot2d.mapping.albot1 import StepRecord
 from worldgen import make_world
 from worldgen.regions import RegionParams, isovist_ranges, region_kind_at
@@ -55,8 +55,9 @@ def test_region_params_validated():
 
 def test_update_counts_by_region_known_answer():
     # 9 frames: moves of 3 m along x, then two turn-only frames in the hall
-    xy = np.array([[0, 0], [3, 0], [6, 0], [9, 0], [12, 0], [12, 0], [12, 0], [15, 0],
-                   [18, 0]], float)
+    xy = np.array(
+        [[0, 0], [3, 0], [6, 0], [9, 0], [12, 0], [12, 0], [12, 0], [15, 0], [18, 0]], float
+    )
     updated = np.array([1, 0, 1, 1, 0, 0, 1, 0, 1], bool)
     regions = np.array(["corridor"] * 4 + ["hall"] * 5)
     instructions, moves = update_counts(xy, updated, regions)
@@ -73,8 +74,10 @@ def test_update_counts_by_region_known_answer():
 
 
 def test_albot1_update_flags_follow_the_step_records():
-    steps = [StepRecord(10, 0, False, (10,), ("start",)),
-             StepRecord(11, 5, False, (), ()),
-             StepRecord(12, 2, False, (11, 12), ("triangulation", "triangulation"))]
+    steps = [
+        StepRecord(10, 0, False, (10,), ("start",)),
+        StepRecord(11, 5, False, (), ()),
+        StepRecord(12, 2, False, (11, 12), ("triangulation", "triangulation")),
+    ]
     flags = albot1_update_flags(steps, [10, 11, 12, 13])
     assert flags.tolist() == [True, False, True, False]

@@ -51,14 +51,16 @@ class RegionParams:
 
     def __post_init__(self) -> None:
         check_positive_int(self, "rays")
-        check_positive(self, "max_range_m", "corridor_max_width_m", "corridor_min_aspect",
-                       "hall_min_area_m2")
+        check_positive(
+            self, "max_range_m", "corridor_max_width_m", "corridor_min_aspect", "hall_min_area_m2"
+        )
         if self.rays % 2:
             raise InputError(f"RegionParams.rays must be even (opposite pairs), got {self.rays}")
 
 
-def isovist_ranges(segments: np.ndarray, xy: ArrayLike, rays: int,
-                   max_range_m: float) -> NDArray[np.float64]:
+def isovist_ranges(
+    segments: np.ndarray, xy: ArrayLike, rays: int, max_range_m: float
+) -> NDArray[np.float64]:
     """Distance from ``xy`` to the first segment along ``rays`` evenly spaced directions
     (the first along +x), capped at ``max_range_m``."""
     p = np.asarray(xy, dtype=np.float64).reshape(2)
@@ -78,8 +80,9 @@ def isovist_ranges(segments: np.ndarray, xy: ArrayLike, rays: int,
     return np.minimum(t, max_range_m)
 
 
-def region_kind_at(world: World, xy: ArrayLike,
-                   params: RegionParams | None = None) -> NDArray[np.str_]:
+def region_kind_at(
+    world: World, xy: ArrayLike, params: RegionParams | None = None
+) -> NDArray[np.str_]:
     """The region kind (``corridor``, ``room``, ``hall``; ``outside`` off the free space)
     at each of the ``(N, 2)`` points ``xy`` (or one point)."""
     params = params or RegionParams()

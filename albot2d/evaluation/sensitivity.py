@@ -55,28 +55,42 @@ def run_one(seed: int, preset: str, setup: SensitivitySetup) -> dict[str, Any]:
     """One run: its homing errors per stop and Albot1's update counts per region kind."""
     from albot2d.evaluation.experiment import RunSpec, run_experiment
 
-    spec = RunSpec(seed=seed, kind=setup.kind, world_params=setup.world_params,
-                   profile=setup.profile, noise=preset,
-                   tour_kind=setup.tour_kind, tour_length_m=setup.tour_length_m,
-                   mappers=("albot1",))
+    spec = RunSpec(
+        seed=seed,
+        kind=setup.kind,
+        world_params=setup.world_params,
+        profile=setup.profile,
+        noise=preset,
+        tour_kind=setup.tour_kind,
+        tour_length_m=setup.tour_length_m,
+        mappers=("albot1",),
+    )
     result = run_experiment(spec)
     albot1 = result.report["mappers"]["albot1"]
-    stops = [(float(h["bearing_error_deg"]), float(h["distance_error_m"]))
-             for h in albot1["homing"]]
+    stops = [
+        (float(h["bearing_error_deg"]), float(h["distance_error_m"])) for h in albot1["homing"]
+    ]
     trace = result.trace
     assert trace.true_poses is not None  # simulated runs always have the truth
     flags = albot1_update_flags(trace.mappers["albot1"].steps, trace.frame_indices)
     xy = trace.true_poses[:, :2]
     instructions, moves = update_counts(xy, flags, region_labels(result.world, xy))
-    return {"seed": seed, "preset": preset, "frames": trace.n_frames,
-            "tour_m": float(result.tour.length_m) if result.tour is not None else 0.0,
-            "stops": stops, "instructions": instructions, "moves": moves}
+    return {
+        "seed": seed,
+        "preset": preset,
+        "frames": trace.n_frames,
+        "tour_m": float(result.tour.length_m) if result.tour is not None else 0.0,
+        "stops": stops,
+        "instructions": instructions,
+        "moves": moves,
+    }
 
 
 def _summarise(runs: list[dict[str, Any]], setup: SensitivitySetup) -> dict[str, Any]:
     stops = [s for run in runs for s in run["stops"]]
-    within = [abs(b) <= setup.bearing_bound_deg and abs(d) <= setup.distance_bound_m
-              for b, d in stops]
+    within = [
+        abs(b) <= setup.bearing_bound_deg and abs(d) <= setup.distance_bound_m for b, d in stops
+    ]
     instructions: dict[str, list[int]] = {}
     moves: dict[str, list[int]] = {}
     for run in runs:
@@ -110,8 +124,7 @@ def homing_sensitivity(
     if not seeds or not presets:
         raise InputError("homing_sensitivity: give at least one seed and one preset")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise InputError(f"homing_sensitivity: workers must be a positive integer, "
-                         f"got {workers!r}")
+        raise InputError(f"homing_sensitivity: workers must be a positive integer, got {workers!r}")
     jobs = [(seed, preset) for preset in presets for seed in seeds]
     if workers == 1:
         runs = [run_one(seed, preset, setup) for seed, preset in jobs]
@@ -121,8 +134,7 @@ def homing_sensitivity(
             runs = [f.result() for f in futures]
     return {
         "setup": {**setup.__dict__, "world_params": dict(setup.world_params), "seeds": seeds},
-        "presets": {p: _summarise([r for r in runs if r["preset"] == p], setup)
-                    for p in presets},
+        "presets": {p: _summarise([r for r in runs if r["preset"] == p], setup) for p in presets},
         "runs": runs,
     }
 
@@ -130,25 +142,32 @@ def homing_sensitivity(
 def format_table(result: dict[str, Any]) -> str:
     """The sensitivity table as text: one line per preset, then moves per update."""
     s = result["setup"]
-    lines = [f"{s['kind']} {s['profile']} {s['tour_kind']} ≥{s['tour_length_m']:g} m, "
-             f"{len(s['seeds'])} seeds; bound ±{s['bearing_bound_deg']:g}° and "
-             f"±{s['distance_bound_m']:g} m",
-             f"{'preset':<11} {'stops':>5} {'within':>6} {'share':>6} {'worst °':>8} "
-             f"{'worst m':>8}"]
+    lines = [
+        f"{s['kind']} {s['profile']} {s['tour_kind']} ≥{s['tour_length_m']:g} m, "
+        f"{len(s['seeds'])} seeds; bound ±{s['bearing_bound_deg']:g}° and "
+        f"±{s['distance_bound_m']:g} m",
+        f"{'preset':<11} {'stops':>5} {'within':>6} {'share':>6} {'worst °':>8} {'worst m':>8}",
+    ]
     for name, p in result["presets"].items():
         share = "-" if p["fraction_within_bound"] is None else f"{p['fraction_within_bound']:.2f}"
-        worst_b = "-" if p["worst_bearing_error_deg"] is None else (
-            f"{p['worst_bearing_error_deg']:.1f}")
-        worst_d = "-" if p["worst_distance_error_m"] is None else (
-            f"{p['worst_distance_error_m']:.2f}")
-        lines.append(f"{name:<11} {p['stops']:>5} {p['within_bound']:>6} {share:>6} "
-                     f"{worst_b:>8} {worst_d:>8}")
+        worst_b = (
+            "-" if p["worst_bearing_error_deg"] is None else (f"{p['worst_bearing_error_deg']:.1f}")
+        )
+        worst_d = (
+            "-" if p["worst_distance_error_m"] is None else (f"{p['worst_distance_error_m']:.2f}")
+        )
+        lines.append(
+            f"{name:<11} {p['stops']:>5} {p['within_bound']:>6} {share:>6} "
+            f"{worst_b:>8} {worst_d:>8}"
+        )
     lines.append("instructions (moves) per update, mean [share ≤2 / ≥2], by region:")
     for name, p in result["presets"].items():
         parts = []
         for kind, u in p["updates_by_region"].items():
             ins, mv = u["instructions_per_update"], u["moves_per_update"]
-            parts.append(f"{kind} n={u['updates']} {ins['mean']:.2f} ({mv['mean']:.2f}) "
-                         f"[{ins['share_at_most_2']:.2f}/{ins['share_at_least_2']:.2f}]")
+            parts.append(
+                f"{kind} n={u['updates']} {ins['mean']:.2f} ({mv['mean']:.2f}) "
+                f"[{ins['share_at_most_2']:.2f}/{ins['share_at_least_2']:.2f}]"
+            )
         lines.append(f"  {name:<11} " + "; ".join(parts))
     return "\n".join(lines)

@@ -25,7 +25,10 @@ from numpy.typing import ArrayLike
 from albot2d.errors import InputError
 
 __all__ = [
-    "albot1_update_flags", "region_labels", "summarise_counts", "update_counts",
+    "albot1_update_flags",
+    "region_labels",
+    "summarise_counts",
+    "update_counts",
     "updates_by_region",
 ]
 
