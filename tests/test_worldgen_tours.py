@@ -43,7 +43,7 @@ def test_every_tour_leg_is_collision_free(world, kind, length, seed):
     assert len(tour.waypoints) >= 2
     assert (np.hypot(*np.diff(tour.waypoints, axis=0).T) > 0).all()  # no zero-length legs
     assert_legs_safe(world, tour)
-    if kind in ("loop", "out_and_back"):
+    if kind in ("loop", "out_and_back", "circuit"):
         assert np.array_equal(tour.waypoints[-1], tour.waypoints[0])
     if kind == "out_and_back":
         assert tour.node_ids == tour.node_ids[::-1]  # back exactly the way it came
