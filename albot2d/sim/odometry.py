@@ -137,9 +137,11 @@ wheels' contact lines) on a hard office floor, uncalibrated, derived as follows:
   heading drift while driving straight); their calibration cuts the systematic error by
   at least an order of magnitude, so an uncalibrated robot's errors are of the order of
   a percent. ``turn_scale_error = 0.01`` (the wheelbase 1 % off);
-  ``heading_drift_deg_per_m = 0.15`` is a wheel-diameter ratio of 1.001 on a 0.33 m
-  wheelbase (0.001 / 0.33 m rad per metre = 0.17°/m; Borenstein & Feng show a 0.1 %
-  difference already bends a straight run visibly); ``distance_scale_error = 0.01``.
+  ``heading_drift_deg_per_m = 0.15`` is a wheel-diameter ratio E_d = 1.001 on the
+  P3-DX's ~0.33 m wheelbase (0.001 / 0.33 m = 3.0e-3 rad/m = 0.17°/m); E_d = 1.001 is
+  an assumption (a 0.1 % mismatch, the order UMBmark calibrations correct), not a
+  measured P3-DX value; ``distance_scale_error = 0.01``. Of all the numbers here this one
+  matters most: over a 200 m office circuit it alone is 30° of heading.
 - Cross-check against the maker's own statement. Pioneer 3 Operations Manual
   (MobileRobots Inc., 2006, "Position integration"): "you can rely on the dead-reckoning
   ability of the robot for just a short range - on the order of several meters and one or
