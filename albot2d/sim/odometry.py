@@ -110,8 +110,8 @@ class OdometryNoise:
 NOISE_PRESETS: dict[str, OdometryNoise] = {
     "none": OdometryNoise(),
     "low": OdometryNoise(alpha1=0.01, alpha2=0.002, alpha3=0.01, alpha4=0.001),
-    # Roughly a Pioneer 3-DX on a smooth floor: a few percent of random error, a 2 % wheel
-    # base error on turns (3-5 % is commonly measured before calibration) and a small drift.
+    # A round-number middle setting: a few percent of random error, a 2 % wheel base error
+    # on turns and a small drift (no single source; "pioneer3dx" is the derived preset).
     "typical": OdometryNoise(
         alpha1=0.05, alpha2=0.01, alpha3=0.03, alpha4=0.005,
         distance_scale_error=0.01, heading_drift_deg_per_m=0.1, turn_scale_error=0.02,
