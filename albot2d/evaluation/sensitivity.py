@@ -24,6 +24,8 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from albot2d.errors import InputError
 from albot2d.evaluation.updates import (
     albot1_update_flags,
@@ -74,7 +76,9 @@ def run_one(seed: int, preset: str, setup: SensitivitySetup) -> dict[str, Any]:
     assert trace.true_poses is not None  # simulated runs always have the truth
     flags = albot1_update_flags(trace.mappers["albot1"].steps, trace.frame_indices)
     xy = trace.true_poses[:, :2]
-    instructions, moves = update_counts(xy, flags, region_labels(result.world, xy))
+    labels = np.full(len(xy), "", dtype="<U8")  # only update rows are read
+    labels[flags] = region_labels(result.world, xy[flags])
+    instructions, moves = update_counts(xy, flags, labels)
     return {
         "seed": seed,
         "preset": preset,

@@ -75,7 +75,9 @@ def update_counts(
     """(instructions, moves) before each update, as lists per region kind.
 
     ``true_xy`` ``(N, 2)`` true positions per frame, ``updated`` ``(N,)`` whether the mapper
-    remembered a view at that frame, ``regions`` ``(N,)`` region kind per frame.
+    remembered a view at that frame, ``regions`` ``(N,)`` region kind per frame. Only the
+    labels of update rows are read, so on long runs label just those (the others may be
+    empty strings): labelling costs ~1 ms per point on an office world.
     """
     xy = np.asarray(true_xy, dtype=np.float64).reshape(-1, 2)
     flags = np.asarray(updated, dtype=bool).reshape(-1)
