@@ -202,7 +202,7 @@ def test_resume_redoes_only_the_missing_and_the_cut_off_episodes(reference, tmp_
     assert sorted(read_episodes(path)[0]) == [0, 1]
     with pytest.raises(InputError, match="already holds a campaign"):
         run_campaign(params, tmp_path)
-    with pytest.raises(InputError, match="seed differ"):
+    with pytest.raises(InputError, match=r"other parameters \(seed 11 there, 12 here\)"):
         run_campaign(CampaignParams(**{**params.to_dict(), "seed": 12, "kinds": params.kinds}),
                      tmp_path, resume=True)
     ran: list[int] = []
@@ -240,8 +240,11 @@ def test_a_violation_is_saved_as_a_reproducer_that_replays(plugins: Path, tmp_pa
         env={**os.environ, "PYTHONPATH": os.pathsep.join([str(plugins), str(ROOT)])},
         timeout=120, check=False,
     )  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert "reproduce: identical to" in done.stdout
+    assert done.returncode == 1, done.stderr  # the failure reproduces
+    assert "reproduce: run identical to" in done.stdout
+    assert "reproduce: route_connected violated: local map 1 (frame 1) has no pose" in done.stdout
+    assert "reproduce: the recorded failure reproduces" in done.stdout
+    assert (tmp_path / "again" / "report.json").is_file()
 
 
 def test_a_crashing_mapper_is_recorded_and_the_campaign_goes_on(plugins: Path,

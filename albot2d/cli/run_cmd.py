@@ -276,6 +276,10 @@ def run(args: argparse.Namespace) -> int:
             flags = ", ".join("--" + n.replace("_", "-") for n in given)
             raise InputError(f"--reproduce takes the run's settings from the report; drop {flags}")
         recorded = read_report(args.reproduce)
+        if "reproducer" in recorded:  # a fuzzing reproducer: its invariant checks run too
+            from albot2d.cli.fuzz_cmd import reproduce_failure
+
+            return reproduce_failure(args, recorded)
         spec = RunSpec.from_report(recorded, where=args.reproduce)
         params = evaluation_params_from_report(recorded)
     else:
