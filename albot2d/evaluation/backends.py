@@ -161,8 +161,11 @@ class LocalBackend:
                     pending.clear()
                     self._restart()
         finally:
-            for future in pending:
-                future.cancel()
+            # Tasks still in flight when the caller stops early are not cancelled here:
+            # close() cancels the queued ones, abort() ends them all. (A future cancelled
+            # here would break the pool's own clean-up if abort() followed: CPython's
+            # manager thread then fails to mark it broken, with a traceback.)
+            pending.clear()
 
     def abort(self) -> None:
         """Stop now: terminate the worker processes, drop every task (a second Ctrl-C)."""

@@ -1,0 +1,195 @@
+"""Campaigns as real processes: ``kill -9`` at random moments then ``--resume``, pool workers
+that must not outlive the campaign, Ctrl-C once and twice, two campaigns on one folder.
+
+Every campaign here is an ``albot2d fuzz`` subprocess with two pool workers on tiny
+corridor worlds (``dataset3``: a view per metre), so an episode takes a fraction of a
+second and each test a few seconds. The random kill moments come from a seeded generator
+printed on failure, so a failing sequence can be replayed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from albot2d.errors import InputError
+from albot2d.evaluation.campaign import (
+    CAMPAIGN_NAME,
+    EPISODES_NAME,
+    CampaignParams,
+    read_episodes,
+    run_campaign,
+)
+from albot2d.evaluation.campaign_lock import LOCK_NAME
+
+psutil = pytest.importorskip("psutil")
+
+ROOT = Path(__file__).resolve().parents[1]
+EPISODES = 6
+TINY = {"kinds": ("corridors",), "world_size_min_m": 12.0, "world_size_max_m": 14.0,
+        "tour_length_min_m": 8.0, "tour_length_max_m": 12.0}
+TINY_ARGS = ["--kinds", "corridors", "--world-size", "12", "14", "--tour-length", "8", "12",
+             "--profile", "dataset3"]
+# How long the workers of a killed campaign may live on (they poll every 0.25 s).
+ORPHAN_GRACE_S = 5.0
+# How long a campaign may take to stop after a second Ctrl-C.
+SECOND_INTERRUPT_GRACE_S = 10.0
+
+
+def start_fuzz(out: Path, *extra: str, episodes: int = EPISODES, seed: int = 21,
+               ) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "albot2d", "fuzz", "--episodes", str(episodes), "--seed",
+         str(seed), "--workers", "2", *TINY_ARGS, "--no-figures", "--out", str(out), *extra],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )  # fmt: skip
+
+
+def wait_for(predicate, timeout_s: float, what: str) -> None:  # type: ignore[no-untyped-def]
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+        time.sleep(0.05)
+
+
+def descendants(pid: int) -> list:  # type: ignore[type-arg]
+    try:
+        return psutil.Process(pid).children(recursive=True)
+    except psutil.NoSuchProcess:
+        return []
+
+
+def alive(processes: list) -> list:  # type: ignore[type-arg]
+    """Those still running (a zombie waiting for init to reap it has exited)."""
+    out = []
+    for p in processes:
+        try:
+            if p.status() != psutil.STATUS_ZOMBIE:
+                out.append(p)
+        except psutil.NoSuchProcess:
+            pass
+    return out
+
+
+def assert_whole_lines(path: Path) -> list[dict]:
+    data = path.read_bytes()
+    assert data == b"" or data.endswith(b"\n"), f"a cut-off line in {path}: {data[-80:]!r}"
+    return [json.loads(line) for line in data.splitlines()]
+
+
+def comparable(records: list[dict]) -> list[dict]:
+    return [{k: v for k, v in r.items() if k != "timings"}
+            for r in sorted(records, key=lambda r: r["episode"])]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
+    """The same campaign uninterrupted, in this process."""
+    out = tmp_path_factory.mktemp("uninterrupted")
+    run_campaign(CampaignParams(episodes=EPISODES, seed=21, **TINY), out)
+    return assert_whole_lines(out / EPISODES_NAME)
+
+
+def test_kill_9_at_random_moments_then_resume_gives_the_uninterrupted_campaign(
+    reference: list[dict], tmp_path: Path,
+) -> None:
+    seed = int.from_bytes(os.urandom(4), "little")
+    rng = random.Random(seed)
+    out = tmp_path / "fuzz"
+    kills = []
+    for attempt in range(2):
+        resume = ("--resume",) if (out / CAMPAIGN_NAME).exists() else ()
+        proc = start_fuzz(out, *resume)
+        wait_for(lambda p=proc: (out / LOCK_NAME).exists() or p.poll() is not None, 60,
+                 "the campaign to start")
+        if attempt == 0:
+            # While it runs, no second campaign may write the folder.
+            with pytest.raises(InputError, match=f"in use by another campaign \\(pid {proc.pid}"):
+                run_campaign(CampaignParams(episodes=EPISODES, seed=21, **TINY), out,
+                             resume=True)
+        delay = rng.uniform(0.0, 2.5)
+        time.sleep(delay)
+        if proc.poll() is not None:  # finished before the kill
+            break
+        family = descendants(proc.pid)
+        proc.send_signal(signal.SIGKILL)
+        proc.communicate(timeout=30)
+        lines = len(read_episodes(out / EPISODES_NAME)[0]) if (out / EPISODES_NAME).exists() else 0
+        kills.append((round(delay, 2), len(family), lines))
+        # Its pool workers (and the pool's resource tracker) notice and exit.
+        with contextlib.suppress(psutil.Error):
+            psutil.wait_procs(family, timeout=ORPHAN_GRACE_S)
+        left = alive(family)
+        for p in left:  # do not leave them to the rest of the suite
+            p.kill()
+        assert not left, (f"alive {ORPHAN_GRACE_S} s after kill -9 of their parent: "
+                          f"{[p.pid for p in left]} (rng seed {seed}, kills {kills})")
+    # Killed before it had written anything, it is started afresh.
+    proc = start_fuzz(out, *(("--resume",) if (out / CAMPAIGN_NAME).exists() else ()))
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 0, (stderr, seed, kills)
+    records = assert_whole_lines(out / EPISODES_NAME)
+    assert sorted(r["episode"] for r in records) == list(range(EPISODES)), (seed, kills)
+    assert comparable(records) == comparable(reference), (seed, kills)
+    assert f"{EPISODES} episodes: {EPISODES} ok" in stdout
+    assert not (out / LOCK_NAME).exists()
+
+
+def test_a_second_ctrl_c_stops_the_campaign_within_seconds(tmp_path: Path) -> None:
+    out = tmp_path / "fuzz"
+    # Larger worlds than the others, so that episodes are still running at the second Ctrl-C.
+    proc = start_fuzz(out, "--world-size", "30", "30", "--tour-length", "80", "80",
+                      episodes=8)
+    wait_for(lambda: (out / CAMPAIGN_NAME).exists() or proc.poll() is not None, 60,
+             "the campaign to start")
+    wait_for(lambda: len(descendants(proc.pid)) >= 3 or proc.poll() is not None, 60,
+             "the pool workers to start")
+    time.sleep(0.5)
+    family = descendants(proc.pid)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGINT)
+    t0 = time.monotonic()
+    try:
+        _, stderr = proc.communicate(timeout=SECOND_INTERRUPT_GRACE_S)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        for p in alive(family):
+            p.kill()
+        raise AssertionError("still running 10 s after the second Ctrl-C") from None
+    stopped_s = time.monotonic() - t0
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr, stderr
+    assert "continue with the same options and --resume" in stderr
+    with contextlib.suppress(psutil.Error):
+        psutil.wait_procs(family, timeout=ORPHAN_GRACE_S)
+    assert not alive(family), "workers alive after the campaign ended"
+    records = assert_whole_lines(out / EPISODES_NAME)
+    assert len({r["episode"] for r in records}) == len(records)
+    assert stopped_s < SECOND_INTERRUPT_GRACE_S
+
+
+def test_a_first_ctrl_c_lets_the_running_episodes_finish(tmp_path: Path) -> None:
+    out = tmp_path / "fuzz"
+    proc = start_fuzz(out, episodes=12)
+    path = out / EPISODES_NAME
+    wait_for(lambda: (path.exists() and path.stat().st_size > 0) or proc.poll() is not None,
+             60, "a first episode")
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "finishing the running episodes" in stderr and "Traceback" not in stderr
+    records = assert_whole_lines(out / EPISODES_NAME)
+    assert 1 <= len(records) < 12
+    assert f"interrupted: {len(records)} of 12 episodes" in stderr
