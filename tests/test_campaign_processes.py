@@ -45,14 +45,47 @@ ORPHAN_GRACE_S = 5.0
 SECOND_INTERRUPT_GRACE_S = 10.0
 
 
+# Set in the environment of every campaign started here, and so of all its processes:
+# how the test finds them all, even those started after it last looked.
+MARKER = "ALBOT2D_CAMPAIGN_TEST"
+
+
 def start_fuzz(out: Path, *extra: str, episodes: int = EPISODES, seed: int = 21,
                ) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [sys.executable, "-m", "albot2d", "fuzz", "--episodes", str(episodes), "--seed",
-         str(seed), "--workers", "2", *TINY_ARGS, "--no-figures", "--out", str(out), *extra],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-    )  # fmt: skip
+    """``albot2d fuzz`` in the background, its output to files (not pipes: orphaned workers
+    would hold a pipe open, and reading it would wait for them)."""
+    logs = out.parent / "logs"
+    logs.mkdir(exist_ok=True)
+    n = len(list(logs.iterdir())) // 2
+    with open(logs / f"{n}.out", "w") as stdout, open(logs / f"{n}.err", "w") as stderr:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "albot2d", "fuzz", "--episodes", str(episodes), "--seed",
+             str(seed), "--workers", "2", *TINY_ARGS, "--no-figures", "--out", str(out),
+             *extra],
+            stdout=stdout, stderr=stderr, text=True,
+            env={**os.environ, "PYTHONPATH": str(ROOT), MARKER: str(out)},
+        )  # fmt: skip
+    proc.logs = (logs / f"{n}.out", logs / f"{n}.err")  # type: ignore[attr-defined]
+    return proc
+
+
+def output(proc: subprocess.Popen[str], timeout_s: float) -> tuple[str, str]:
+    """Wait for ``proc``; its stdout and stderr."""
+    proc.wait(timeout=timeout_s)
+    out, err = proc.logs  # type: ignore[attr-defined]
+    return out.read_text(), err.read_text()
+
+
+def family_of(out: Path) -> list:  # type: ignore[type-arg]
+    """Every running process of the campaigns started on ``out`` (by their environment)."""
+    found = []
+    for p in psutil.process_iter():
+        try:
+            if p.pid != os.getpid() and p.environ().get(MARKER) == str(out):
+                found.append(p)
+        except psutil.Error:  # gone, or not ours to read
+            pass
+    return found
 
 
 def wait_for(predicate, timeout_s: float, what: str) -> None:  # type: ignore[no-untyped-def]
@@ -122,22 +155,22 @@ def test_kill_9_at_random_moments_then_resume_gives_the_uninterrupted_campaign(
         time.sleep(delay)
         if proc.poll() is not None:  # finished before the kill
             break
-        family = descendants(proc.pid)
         proc.send_signal(signal.SIGKILL)
-        proc.communicate(timeout=30)
+        proc.wait(timeout=30)
+        family = family_of(out)  # all that is left of it
         lines = len(read_episodes(out / EPISODES_NAME)[0]) if (out / EPISODES_NAME).exists() else 0
         kills.append((round(delay, 2), len(family), lines))
         # Its pool workers (and the pool's resource tracker) notice and exit.
         with contextlib.suppress(psutil.Error):
             psutil.wait_procs(family, timeout=ORPHAN_GRACE_S)
-        left = alive(family)
+        left = alive(family_of(out))
         for p in left:  # do not leave them to the rest of the suite
             p.kill()
         assert not left, (f"alive {ORPHAN_GRACE_S} s after kill -9 of their parent: "
                           f"{[p.pid for p in left]} (rng seed {seed}, kills {kills})")
     # Killed before it had written anything, it is started afresh.
     proc = start_fuzz(out, *(("--resume",) if (out / CAMPAIGN_NAME).exists() else ()))
-    stdout, stderr = proc.communicate(timeout=120)
+    stdout, stderr = output(proc, 120)
     assert proc.returncode == 0, (stderr, seed, kills)
     records = assert_whole_lines(out / EPISODES_NAME)
     assert sorted(r["episode"] for r in records) == list(range(EPISODES)), (seed, kills)
@@ -162,7 +195,7 @@ def test_a_second_ctrl_c_stops_the_campaign_within_seconds(tmp_path: Path) -> No
     proc.send_signal(signal.SIGINT)
     t0 = time.monotonic()
     try:
-        _, stderr = proc.communicate(timeout=SECOND_INTERRUPT_GRACE_S)
+        _, stderr = output(proc, SECOND_INTERRUPT_GRACE_S)
     except subprocess.TimeoutExpired:
         proc.kill()
         for p in alive(family):
@@ -174,7 +207,10 @@ def test_a_second_ctrl_c_stops_the_campaign_within_seconds(tmp_path: Path) -> No
     assert "continue with the same options and --resume" in stderr
     with contextlib.suppress(psutil.Error):
         psutil.wait_procs(family, timeout=ORPHAN_GRACE_S)
-    assert not alive(family), "workers alive after the campaign ended"
+    left = alive(family_of(out))
+    for p in left:
+        p.kill()
+    assert not left, "workers alive after the campaign ended"
     records = assert_whole_lines(out / EPISODES_NAME)
     assert len({r["episode"] for r in records}) == len(records)
     assert stopped_s < SECOND_INTERRUPT_GRACE_S
@@ -187,7 +223,7 @@ def test_a_first_ctrl_c_lets_the_running_episodes_finish(tmp_path: Path) -> None
     wait_for(lambda: (path.exists() and path.stat().st_size > 0) or proc.poll() is not None,
              60, "a first episode")
     proc.send_signal(signal.SIGINT)
-    _, stderr = proc.communicate(timeout=60)
+    _, stderr = output(proc, 60)
     assert proc.returncode == 130, stderr
     assert "finishing the running episodes" in stderr and "Traceback" not in stderr
     records = assert_whole_lines(out / EPISODES_NAME)
