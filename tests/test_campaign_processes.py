@@ -35,10 +35,25 @@ psutil = pytest.importorskip("psutil")
 
 ROOT = Path(__file__).resolve().parents[1]
 EPISODES = 6
-TINY = {"kinds": ("corridors",), "world_size_min_m": 12.0, "world_size_max_m": 14.0,
-        "tour_length_min_m": 8.0, "tour_length_max_m": 12.0}
-TINY_ARGS = ["--kinds", "corridors", "--world-size", "12", "14", "--tour-length", "8", "12",
-             "--profile", "dataset3"]
+TINY = {
+    "kinds": ("corridors",),
+    "world_size_min_m": 12.0,
+    "world_size_max_m": 14.0,
+    "tour_length_min_m": 8.0,
+    "tour_length_max_m": 12.0,
+}
+TINY_ARGS = [
+    "--kinds",
+    "corridors",
+    "--world-size",
+    "12",
+    "14",
+    "--tour-length",
+    "8",
+    "12",
+    "--profile",
+    "dataset3",
+]
 # How long the workers of a killed campaign may live on (they poll every 0.25 s).
 ORPHAN_GRACE_S = 5.0
 # How long a campaign may take to stop after a second Ctrl-C.
@@ -50,8 +65,12 @@ SECOND_INTERRUPT_GRACE_S = 10.0
 MARKER = "ALBOT2D_CAMPAIGN_TEST"
 
 
-def start_fuzz(out: Path, *extra: str, episodes: int = EPISODES, seed: int = 21,
-               ) -> subprocess.Popen[str]:
+def start_fuzz(
+    out: Path,
+    *extra: str,
+    episodes: int = EPISODES,
+    seed: int = 21,
+) -> subprocess.Popen[str]:
     """``albot2d fuzz`` in the background, its output to files (not pipes: orphaned workers
     would hold a pipe open, and reading it would wait for them)."""
     logs = out.parent / "logs"
@@ -122,8 +141,10 @@ def assert_whole_lines(path: Path) -> list[dict]:
 
 
 def comparable(records: list[dict]) -> list[dict]:
-    return [{k: v for k, v in r.items() if k != "timings"}
-            for r in sorted(records, key=lambda r: r["episode"])]
+    return [
+        {k: v for k, v in r.items() if k != "timings"}
+        for r in sorted(records, key=lambda r: r["episode"])
+    ]
 
 
 @pytest.fixture(scope="module")
@@ -135,7 +156,8 @@ def reference(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
 
 
 def test_kill_9_at_random_moments_then_resume_gives_the_uninterrupted_campaign(
-    reference: list[dict], tmp_path: Path,
+    reference: list[dict],
+    tmp_path: Path,
 ) -> None:
     seed = int.from_bytes(os.urandom(4), "little")
     rng = random.Random(seed)
@@ -144,13 +166,15 @@ def test_kill_9_at_random_moments_then_resume_gives_the_uninterrupted_campaign(
     for attempt in range(2):
         resume = ("--resume",) if (out / CAMPAIGN_NAME).exists() else ()
         proc = start_fuzz(out, *resume)
-        wait_for(lambda p=proc: (out / LOCK_NAME).exists() or p.poll() is not None, 60,
-                 "the campaign to start")
+        wait_for(
+            lambda p=proc: (out / LOCK_NAME).exists() or p.poll() is not None,
+            60,
+            "the campaign to start",
+        )
         if attempt == 0:
             # While it runs, no second campaign may write the folder.
             with pytest.raises(InputError, match=f"in use by another campaign \\(pid {proc.pid}"):
-                run_campaign(CampaignParams(episodes=EPISODES, seed=21, **TINY), out,
-                             resume=True)
+                run_campaign(CampaignParams(episodes=EPISODES, seed=21, **TINY), out, resume=True)
         delay = rng.uniform(0.0, 2.5)
         time.sleep(delay)
         if proc.poll() is not None:  # finished before the kill
@@ -166,8 +190,10 @@ def test_kill_9_at_random_moments_then_resume_gives_the_uninterrupted_campaign(
         left = alive(family_of(out))
         for p in left:  # do not leave them to the rest of the suite
             p.kill()
-        assert not left, (f"alive {ORPHAN_GRACE_S} s after kill -9 of their parent: "
-                          f"{[p.pid for p in left]} (rng seed {seed}, kills {kills})")
+        assert not left, (
+            f"alive {ORPHAN_GRACE_S} s after kill -9 of their parent: "
+            f"{[p.pid for p in left]} (rng seed {seed}, kills {kills})"
+        )
     # Killed before it had written anything, it is started afresh.
     proc = start_fuzz(out, *(("--resume",) if (out / CAMPAIGN_NAME).exists() else ()))
     stdout, stderr = output(proc, 120)
@@ -182,12 +208,17 @@ def test_kill_9_at_random_moments_then_resume_gives_the_uninterrupted_campaign(
 def test_a_second_ctrl_c_stops_the_campaign_within_seconds(tmp_path: Path) -> None:
     out = tmp_path / "fuzz"
     # Larger worlds than the others, so that episodes are still running at the second Ctrl-C.
-    proc = start_fuzz(out, "--world-size", "30", "30", "--tour-length", "80", "80",
-                      episodes=8)
-    wait_for(lambda: (out / CAMPAIGN_NAME).exists() or proc.poll() is not None, 60,
-             "the campaign to start")
-    wait_for(lambda: len(descendants(proc.pid)) >= 3 or proc.poll() is not None, 60,
-             "the pool workers to start")
+    proc = start_fuzz(out, "--world-size", "30", "30", "--tour-length", "80", "80", episodes=8)
+    wait_for(
+        lambda: (out / CAMPAIGN_NAME).exists() or proc.poll() is not None,
+        60,
+        "the campaign to start",
+    )
+    wait_for(
+        lambda: len(descendants(proc.pid)) >= 3 or proc.poll() is not None,
+        60,
+        "the pool workers to start",
+    )
     time.sleep(0.5)
     family = descendants(proc.pid)
     proc.send_signal(signal.SIGINT)
@@ -220,8 +251,11 @@ def test_a_first_ctrl_c_lets_the_running_episodes_finish(tmp_path: Path) -> None
     out = tmp_path / "fuzz"
     proc = start_fuzz(out, episodes=12)
     path = out / EPISODES_NAME
-    wait_for(lambda: (path.exists() and path.stat().st_size > 0) or proc.poll() is not None,
-             60, "a first episode")
+    wait_for(
+        lambda: (path.exists() and path.stat().st_size > 0) or proc.poll() is not None,
+        60,
+        "a first episode",
+    )
     proc.send_signal(signal.SIGINT)
     _, stderr = output(proc, 60)
     assert proc.returncode == 130, stderr

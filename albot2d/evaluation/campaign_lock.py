@@ -54,8 +54,10 @@ class CampaignLock:
 
     def _busy(self, pid: int | None) -> InputError:
         holder = f"pid {pid}" if pid is not None else "another process"
-        return InputError(f"{self.path.parent} is in use by another campaign ({holder} holds "
-                          f"{self.path}); wait for it to end or use another --out")
+        return InputError(
+            f"{self.path.parent} is in use by another campaign ({holder} holds "
+            f"{self.path}); wait for it to end or use another --out"
+        )
 
     def acquire(self) -> CampaignLock:
         if fcntl is None:  # pragma: no cover - not POSIX
@@ -108,6 +110,10 @@ class CampaignLock:
     def __enter__(self) -> CampaignLock:
         return self.acquire()
 
-    def __exit__(self, kind: type[BaseException] | None, value: BaseException | None,
-                 tb: TracebackType | None) -> None:
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        value: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
         self.release()
