@@ -13,8 +13,13 @@ address a local dask cluster is started). Written to ``--out DIR``: ``episodes.j
 line per episode, on disk as soon as it finishes), ``reproducers/episode-K.json`` for
 each failing episode (``albot2d run --reproduce FILE --out D`` replays it),
 ``summary.json``, ``histograms.png`` and ``campaign.json``. ``--resume`` continues an
-interrupted campaign. Exit status: 0 when every episode passed, 1 when any failed, 2 on
-bad input.
+interrupted campaign (only one written with the same options; the folder is locked
+while a campaign runs). Ctrl-C once: the running episodes finish and are kept; twice: it
+stops at once. Exit status: 0 when every episode passed, 1 when any failed, 2 on bad
+input, 130 when interrupted.
+
+``albot2d run --reproduce REPRODUCER`` (``reproduce_failure`` here) re-runs a failing
+episode with its invariant checks and exits 1 when it still fails.
 """
 
 from __future__ import annotations

@@ -11,7 +11,10 @@ workers or the order they finish in.
 with the same ``RunSpec``) with the invariant checks attached (``albot2d.evaluation.
 invariants``) and returns an :class:`EpisodeOutcome`: the JSON record for the campaign's
 ``episodes.jsonl`` and, for a failing episode, the reproducer document (a report.json that
-``albot2d run --reproduce`` replays, plus the world JSON and the failure).
+``albot2d run --reproduce`` replays, plus the world JSON and the failure). ``run_checked``
+also returns the run itself; ``crash_outcome`` builds the outcome of an episode that
+crashed, also outside ``run_episode`` (a worker process that died), with a reproducer
+that replays like any other; ``reproduce_episode`` re-runs a reproducer with its checks.
 """
 
 from __future__ import annotations
