@@ -209,10 +209,16 @@ def test_resume_redoes_only_the_missing_and_the_cut_off_episodes(reference, tmp_
     with pytest.raises(InputError, match=r"other parameters \(seed 11 there, 12 here\)"):
         run_campaign(CampaignParams(**{**params.to_dict(), "seed": 12, "kinds": params.kinds}),
                      tmp_path, resume=True)
+    stale = tmp_path / ".summary.json.k1ll3d.tmp"  # an atomic write cut short by kill -9
+    stale.write_text("{")
     ran: list[int] = []
+    notes: list[str] = []
     summary = run_campaign(params, tmp_path, resume=True,
-                           on_episode=lambda r: ran.append(r["episode"]))
+                           on_episode=lambda r: ran.append(r["episode"]), on_note=notes.append)
     assert sorted(ran) == [2, 3]
+    assert not stale.exists()
+    assert notes == [f"{path}: a damaged last line (39 bytes, an interrupted write) is "
+                     "dropped and its episode redone"]
     assert summary["episodes"] == 4 and summary["ran"] == 2
     assert comparable(jsonl(tmp_path)) == comparable(expected)
 

@@ -237,8 +237,12 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     recorded = doc["reproducer"]["episode"]
     if not isinstance(recorded, dict) or recorded.get("status") not in ("violation", "crash"):
         raise InputError(f"{where}: not a fuzzing reproducer (no failing episode in it)")
+    try:
+        spec = EpisodeSpec.from_record(recorded)
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
     # A mapper that cannot be imported here is bad input, not a reproduced crash.
-    run_cmd._check_spec(EpisodeSpec.from_record(recorded).run_spec())
+    run_cmd._check_spec(spec.run_spec())
     out, created = run_cmd.prepare_out_dir(args.out)
     result = None
     try:

@@ -322,6 +322,15 @@ def _check_folder(out: Path, params: CampaignParams, resume: bool) -> tuple[dict
     return {r["episode"]: r for _, r in records if r["episode"] < params.episodes}, keep
 
 
+def _remove_stale_temporaries(out: Path) -> None:
+    """Temporary files of atomic writes a killed campaign left behind (``.NAME.*.tmp``)."""
+    for folder in (out, out / REPRODUCERS_DIR):
+        for name in (CAMPAIGN_NAME, SUMMARY_NAME, "episode-*.json"):
+            for path in folder.glob(f".{name}.*.tmp"):
+                with contextlib.suppress(OSError):
+                    path.unlink()
+
+
 def _write_json(path: Path, value: Any) -> None:
     atomic_write_text(path, json.dumps(value, indent=2, allow_nan=False) + "\n")
 
@@ -401,6 +410,7 @@ def run_campaign(
             if size > keep:
                 on_note(f"{episodes_path}: a damaged last line ({size - keep} bytes, an "
                         "interrupted write) is dropped and its episode redone")
+        _remove_stale_temporaries(out)
         _write_json(out / CAMPAIGN_NAME, {"format": _FORMAT, "format_version": _FORMAT_VERSION,
                                           "params": params.to_dict()})
         todo = _longest_first([k for k in range(params.episodes) if k not in done], params)

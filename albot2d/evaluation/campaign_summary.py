@@ -14,7 +14,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["COMPARED_METRICS", "TIE_ATOL", "TIE_RTOL", "format_summary", "summarise"]
+__all__ = [
+    "COMPARED_METRICS",
+    "TIE_ATOL",
+    "TIE_RTOL",
+    "format_summary",
+    "mapper_vs_odometry",
+    "summarise",
+]
 
 # Metrics compared between the mapper and raw odometry: (mapper's, odometry's).
 COMPARED_METRICS = {
@@ -51,7 +58,9 @@ def _values(records: Sequence[Mapping[str, Any]], name: str) -> list[float]:
             and not isinstance(r["metrics"][name], bool)]
 
 
-def _comparison(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+def mapper_vs_odometry(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """For each of ``COMPARED_METRICS``: both means and the episodes where the mapper is
+    better than raw odometry, worse, or tied (equal to float rounding)."""
     out = {}
     for label, (mine, odo) in COMPARED_METRICS.items():
         pairs = [(r["metrics"][mine], r["metrics"][odo]) for r in records
@@ -114,7 +123,7 @@ def summarise(
         "wall_time_s": wall_time_s,
         "episodes_per_min": 60.0 * ran / wall_time_s if ran and wall_time_s > 0 else None,
         "metrics": {name: _distribution(_values(records, name)) for name in names},
-        "mapper_vs_odometry": _comparison(records),
+        "mapper_vs_odometry": mapper_vs_odometry(records),
         "failing_episodes": failing[:_LISTED_FAILURES],
     }
 
