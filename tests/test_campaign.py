@@ -391,6 +391,14 @@ def test_a_crashing_mapper_is_recorded_and_the_campaign_goes_on(
     assert "reproduce: the recorded failure reproduces" in printed.out
     assert "plugin bug at frame 3" in printed.err  # the traceback
     assert not (tmp_path / "again").exists()
+    # A reproducer as albot2d wrote them for dead workers before: no report, no world, only
+    # the campaign and the index; the episode is drawn again.
+    old = {"reproducer": {"episode": {k: record[k] for k in ("episode", "seed", "status",
+                                                             "error")},
+                          "campaign": params.to_dict()}}
+    path.write_text(json.dumps(old))
+    assert main(["run", "--reproduce", str(path), "--out", str(tmp_path / "again")]) == 1
+    assert "reproduce: the recorded failure reproduces" in capsys.readouterr().out
 
 
 def test_a_dead_worker_fails_only_its_own_episode(plugins: Path, tmp_path: Path,

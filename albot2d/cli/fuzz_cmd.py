@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import sys
 from pathlib import Path
@@ -35,7 +36,7 @@ from albot2d.atomic import atomic_write_bytes
 from albot2d.cli.options import positive_int, positive_number, seed_value
 from albot2d.errors import InputError
 
-__all__ = ["register", "reproduce_failure", "run"]
+__all__ = ["register", "reproduce_failure", "reproducer_document", "run"]
 
 DEFAULTS = {"profile": "dataset3", "noise": "typical", "laser_noise": "sick_lms200",
             "mapper": "albot1", "tour_kind": "loop", "backend": "local"}
@@ -193,12 +194,12 @@ def run(args: argparse.Namespace) -> int:
 
 # -- albot2d run --reproduce of a fuzzing reproducer -------------------------------------
 def _failure_lines(record: dict[str, Any]) -> list[str]:
-    if record["status"] == "crash":
-        error = record["error"] or {}
+    if record.get("status") == "crash":
+        error = record.get("error") or {}
         return [f"crash: {error.get('type')}: {error.get('message')}"]
     return [f"{name} violated: {messages[0]}" + (f" (+{len(messages) - 1} more)"
                                                  if len(messages) > 1 else "")
-            for name, messages in record["violations"].items()]
+            for name, messages in (record.get("violations") or {}).items()] or ["?"]
 
 
 def _replay_isolated(doc: dict[str, Any], where: str) -> tuple[int | None, dict[str, Any] | None]:
@@ -225,22 +226,36 @@ def _replay_child(doc: dict[str, Any], where: str, send: Any) -> None:
     send.send(reproduce_episode(doc, where=where)[0].record)
 
 
+def reproducer_document(path: str) -> dict[str, Any] | None:
+    """The fuzzing reproducer at ``path``; ``None`` when it is anything else (a report,
+    or not readable: ``read_report`` then says what is wrong)."""
+    try:
+        with open(path, encoding="utf-8") as handle:
+            doc = json.load(handle)
+    except (OSError, ValueError, RecursionError):
+        return None
+    return doc if isinstance(doc, dict) and isinstance(doc.get("reproducer"), dict) else None
+
+
 def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     """``albot2d run --reproduce REPRODUCER``: run the failing episode again with every
     invariant check, write its report and figures to ``--out`` (unless it crashes), say
     whether the run and the failure came out the same; exit 1 when it still fails."""
     from albot2d.cli import run_cmd
-    from albot2d.evaluation.episode import EpisodeSpec, reproduce_episode
+    from albot2d.evaluation.episode import reproduce_episode, reproducer_spec
     from albot2d.evaluation.report import without_timings
 
     where = args.reproduce
-    recorded = doc["reproducer"]["episode"]
+    recorded = doc["reproducer"].get("episode")
     if not isinstance(recorded, dict) or recorded.get("status") not in ("violation", "crash"):
         raise InputError(f"{where}: not a fuzzing reproducer (no failing episode in it)")
     try:
-        spec = EpisodeSpec.from_record(recorded)
-    except InputError as exc:
-        raise InputError(f"{where}: {exc}") from None
+        spec = reproducer_spec(doc, where=where)
+    except InputError:
+        raise
+    except Exception as exc:  # the episode cannot even be drawn: that is the failure
+        print(f"reproduce: crash: {type(exc).__name__}: {exc} (drawing the episode)")
+        return 1
     # A mapper that cannot be imported here is bad input, not a reproduced crash.
     run_cmd._check_spec(spec.run_spec())
     out, created = run_cmd.prepare_out_dir(args.out)
@@ -282,8 +297,8 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     for line in _failure_lines(record):
         print(f"reproduce: {line}")
     same = (record["status"] == recorded["status"]
-            and sorted(record["violations"]) == sorted(recorded["violations"])
-            and (record["error"] or {}).get("type") == (recorded["error"] or {}).get("type"))
+            and sorted(record["violations"]) == sorted(recorded.get("violations") or {})
+            and (record["error"] or {}).get("type") == (recorded.get("error") or {}).get("type"))
     print("reproduce: the recorded failure reproduces" if same else
           f"reproduce: fails differently from the record ({_failure_lines(recorded)[0]})")
     return 1

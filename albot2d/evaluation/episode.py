@@ -59,6 +59,7 @@ __all__ = [
     "read_reproducer",
     "replay_reproducer",
     "reproduce_episode",
+    "reproducer_spec",
     "run_checked",
     "run_episode",
 ]
@@ -343,13 +344,32 @@ def reproduce_episode(
     ``run_experiment`` (progress display)."""
     from albot2d.evaluation.experiment import evaluation_params_from_report
 
-    try:
-        record = doc["reproducer"]["episode"]
-    except (KeyError, TypeError):
-        raise InputError(f"{where}: not a fuzzing reproducer (no reproducer.episode)") from None
-    spec = EpisodeSpec.from_record(record)
+    spec = reproducer_spec(doc, where=where)
     params = evaluation_params_from_report(doc) if "params" in doc else None
     return run_checked(spec, params, **hooks)
+
+
+def reproducer_spec(doc: Mapping[str, Any], *, where: str = "reproducer") -> EpisodeSpec:
+    """The episode a reproducer document describes: from its record or, when the record
+    has no world (an episode that could not even be drawn, or a dead worker's reproducer
+    from an older albot2d), drawn again from the campaign's parameters and its index."""
+    try:
+        section = doc["reproducer"]
+        record = section["episode"]
+        index = record["episode"]
+    except (KeyError, TypeError):
+        raise InputError(f"{where}: not a fuzzing reproducer (no reproducer.episode)") from None
+    if "world" in record:
+        try:
+            return EpisodeSpec.from_record(record)
+        except InputError as exc:
+            raise InputError(f"{where}: {exc}") from None
+    campaign = section.get("campaign")
+    if not isinstance(campaign, Mapping) or isinstance(index, bool) or not isinstance(index, int):
+        raise InputError(f"{where}: not a fuzzing reproducer (no world and no campaign)")
+    from albot2d.evaluation.campaign import CampaignParams
+
+    return EpisodeSpec.draw(CampaignParams.from_dict(campaign, where=where), index)
 
 
 def crash_outcome(
