@@ -15,6 +15,7 @@ import pytest
 
 from albot2d.cli import main
 from albot2d.errors import InputError
+from albot2d.evaluation import campaign_lock
 from albot2d.evaluation.backends import DaskBackend, LocalBackend
 from albot2d.evaluation.campaign import (
     CAMPAIGN_NAME,
@@ -314,11 +315,28 @@ def test_a_locked_folder_is_refused_and_a_stale_lock_taken_over(tmp_path: Path) 
             run_campaign(params, tmp_path, resume=True)
     assert not (tmp_path / LOCK_NAME).exists()
     # A lock left by a campaign that was killed: its pid runs no more, no one holds it.
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                          capture_output=True, text=True, check=True).stdout.strip()
-    (tmp_path / LOCK_NAME).write_text(f"{dead}\n")
+    (tmp_path / LOCK_NAME).write_text(f"{dead_pid()}\n")
     with CampaignLock(tmp_path):
         assert (tmp_path / LOCK_NAME).read_text() == f"{os.getpid()}\n"
+
+
+def dead_pid() -> int:
+    """The pid of a process that has ended."""
+    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    return int(done.stdout)
+
+
+def test_without_fcntl_the_lock_is_a_pid_file(tmp_path: Path,
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where there is no fcntl (Windows): O_EXCL creation, a dead pid's file is stale."""
+    monkeypatch.setattr(campaign_lock, "fcntl", None)
+    (tmp_path / LOCK_NAME).write_text(f"{dead_pid()}\n")
+    with CampaignLock(tmp_path):
+        assert (tmp_path / LOCK_NAME).read_text() == f"{os.getpid()}\n"
+        with pytest.raises(InputError, match=f"in use by another campaign .pid {os.getpid()}"):
+            CampaignLock(tmp_path).acquire()
+    assert not (tmp_path / LOCK_NAME).exists()
 
 
 # -- the summary ------------------------------------------------------------------------------

@@ -60,7 +60,7 @@ class CampaignLock:
         )
 
     def acquire(self) -> CampaignLock:
-        if fcntl is None:  # pragma: no cover - not POSIX
+        if fcntl is None:
             return self._acquire_exclusive()
         while True:
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
@@ -83,7 +83,7 @@ class CampaignLock:
         self._fd = fd
         return self
 
-    def _acquire_exclusive(self) -> CampaignLock:  # pragma: no cover - not POSIX
+    def _acquire_exclusive(self) -> CampaignLock:
         for _ in range(2):
             try:
                 fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644)
