@@ -1,7 +1,8 @@
 """The fuzzing campaign's figure: histograms of homing and pose errors over all episodes.
 
 matplotlib (the ``viz`` extra) is imported inside the function; the figure is drawn on the
-Agg canvas directly, headless.
+Agg canvas directly, headless. Panels comparing the mapper with raw odometry say in how
+many episodes it was better, worse or tied (``campaign_summary.mapper_vs_odometry``).
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+
+from albot2d.evaluation.campaign_summary import mapper_vs_odometry
 
 __all__ = ["campaign_histograms"]
 
@@ -46,6 +49,7 @@ def campaign_histograms(records: Sequence[Mapping[str, Any]], *, dpi: int = DEFA
     FigureCanvasAgg(fig)
     axes = fig.subplots(2, 3).ravel()
     mapper = next((r["mapper"] for r in records if r.get("mapper")), "mapper")
+    comparison = mapper_vs_odometry(records)
     for ax, (title, mine, odometry, unit) in zip(axes, PANELS, strict=True):
         series = [(mapper, _values(records, mine), MAPPER_COLOR)]
         if odometry is not None:
@@ -62,7 +66,10 @@ def campaign_histograms(records: Sequence[Mapping[str, Any]], *, dpi: int = DEFA
             ax.hist(values, bins=bins, color=color, alpha=0.6,
                     label=f"{label} (median {np.median(values):.3g})")
         ax.set_ylabel("episodes")
-        ax.legend(fontsize=8)
+        cmp = comparison.get(mine) if odometry is not None else None
+        title = (f"{mapper}: better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']},"
+                 f"\ntied in {cmp['ties']} of {cmp['episodes']} episodes" if cmp else None)
+        ax.legend(fontsize=8, title=title, title_fontsize=8)
     fig.suptitle(f"fuzzing campaign: {len(records)} episodes, {mapper}")
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)

@@ -13,15 +13,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from albot2d.cli import main
 from albot2d.errors import InputError
+from albot2d.evaluation import campaign_lock
 from albot2d.evaluation.backends import DaskBackend, LocalBackend
 from albot2d.evaluation.campaign import (
+    CAMPAIGN_NAME,
     EPISODES_NAME,
     CampaignParams,
     read_episodes,
     reproducer_path,
     run_campaign,
 )
+from albot2d.evaluation.campaign_lock import LOCK_NAME, CampaignLock
+from albot2d.evaluation.campaign_summary import COMPARED_METRICS, format_summary, summarise
 from albot2d.evaluation.episode import EpisodeSpec, episode_seed, replay_reproducer, run_episode
 from worldgen.generate import generate
 from worldgen.params import PARAMS_BY_KIND
@@ -202,13 +207,19 @@ def test_resume_redoes_only_the_missing_and_the_cut_off_episodes(reference, tmp_
     assert sorted(read_episodes(path)[0]) == [0, 1]
     with pytest.raises(InputError, match="already holds a campaign"):
         run_campaign(params, tmp_path)
-    with pytest.raises(InputError, match="seed differ"):
+    with pytest.raises(InputError, match=r"other parameters \(seed 11 there, 12 here\)"):
         run_campaign(CampaignParams(**{**params.to_dict(), "seed": 12, "kinds": params.kinds}),
                      tmp_path, resume=True)
+    stale = tmp_path / ".summary.json.k1ll3d.tmp"  # an atomic write cut short by kill -9
+    stale.write_text("{")
     ran: list[int] = []
+    notes: list[str] = []
     summary = run_campaign(params, tmp_path, resume=True,
-                           on_episode=lambda r: ran.append(r["episode"]))
+                           on_episode=lambda r: ran.append(r["episode"]), on_note=notes.append)
     assert sorted(ran) == [2, 3]
+    assert not stale.exists()
+    assert notes == [f"{path}: a damaged last line (39 bytes, an interrupted write) is "
+                     "dropped and its episode redone"]
     assert summary["episodes"] == 4 and summary["ran"] == 2
     assert comparable(jsonl(tmp_path)) == comparable(expected)
 
@@ -220,8 +231,132 @@ def test_a_damaged_line_inside_the_file_is_an_error(tmp_path: Path) -> None:
         read_episodes(path)
 
 
+def test_a_damaged_tail_is_left_out_to_be_redone(tmp_path: Path) -> None:
+    path = tmp_path / EPISODES_NAME
+    whole = b'{"episode": 0, "status": "ok"}\n{"episode": 1, "status": "crash"}\n'
+    for tail in (b'{"episode": 2, "sta', b"\x00" * 300, b"\x00" * 50 + b"\n" + b"\x00" * 9):
+        path.write_bytes(whole + tail)
+        assert read_episodes(path) == ({0: {"episode": 0, "status": "ok"},
+                                        1: {"episode": 1, "status": "crash"}}, len(whole))
+
+
+def write_campaign(folder: Path, params: CampaignParams, episodes: bytes = b"") -> None:
+    doc = {"format": "albot2d-campaign", "format_version": 1, "params": params.to_dict()}
+    (folder / CAMPAIGN_NAME).write_text(json.dumps(doc))
+    (folder / EPISODES_NAME).write_bytes(episodes)
+
+
+def folder_state(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def test_resume_refuses_a_folder_without_a_campaign(tmp_path: Path) -> None:
+    (tmp_path / "notes.txt").write_text("mine")
+    with pytest.raises(InputError, match=r"--resume: .* holds no campaign"):
+        run_campaign(CampaignParams(episodes=1, **SMALL), tmp_path, resume=True)
+    assert folder_state(tmp_path) == {"notes.txt": b"mine"}
+
+
+@pytest.mark.parametrize(("content", "message"), [
+    (b"not json", "not a campaign file written by albot2d"),
+    (b"[1, 2]", "format is not 'albot2d-campaign'"),
+    (b'{"format": "albot2d-report", "format_version": 1}', "format is not 'albot2d-campaign'"),
+    (b'{"format": "albot2d-campaign", "format_version": 7, "params": {}}', "format_version 7"),
+    (b'{"format": "albot2d-campaign", "format_version": 1}', "no params"),
+    (b'{"format": "albot2d-campaign", "format_version": 1, "params": {"episodes": 1, "hue": 2}}',
+     "unknown campaign parameter"),
+    (b'{"format": "albot2d-campaign", "format_version": 1, "params": {"episodes": 1, '
+     b'"kinds": ["caves"]}}', "campaign.json: unknown world kind 'caves'"),
+])
+def test_resume_refuses_a_damaged_campaign_file(tmp_path: Path, content: bytes,
+                                                message: str) -> None:
+    (tmp_path / CAMPAIGN_NAME).write_bytes(content)
+    before = folder_state(tmp_path)
+    with pytest.raises(InputError, match=message):
+        run_campaign(CampaignParams(episodes=1, **SMALL), tmp_path, resume=True)
+    assert folder_state(tmp_path) == before
+
+
+def record_line(index: int, seed: int = 0) -> bytes:
+    return json.dumps({"episode": index, "status": "ok",
+                       "seed": {"entropy": seed, "spawn_key": [index]}}).encode() + b"\n"
+
+
+@pytest.mark.parametrize(("episodes", "message"), [
+    (record_line(0) + b"junk\n" + record_line(1), f"{EPISODES_NAME}:2: not an episode record"),
+    (record_line(0) + b'{"episode": 1}\n', f"{EPISODES_NAME}:2: not an episode record"),
+    (record_line(0) + b'{"episode": -1, "status": "ok"}\n', ":2: not an episode record"),
+    (record_line(0) + record_line(1) + record_line(0), ":3: episode 0 again .first on line 1"),
+    (record_line(0) + record_line(1, seed=5), ":2: episode 1 was not drawn from this campaign"),
+])
+def test_resume_refuses_episodes_that_are_not_this_campaigns(tmp_path: Path, episodes: bytes,
+                                                             message: str) -> None:
+    params = CampaignParams(episodes=3, **SMALL)
+    write_campaign(tmp_path, params, episodes)
+    before = folder_state(tmp_path)
+    with pytest.raises(InputError, match=message):
+        run_campaign(params, tmp_path, resume=True)
+    assert folder_state(tmp_path) == before
+
+
+def test_a_new_campaign_refuses_a_folder_that_holds_one(tmp_path: Path) -> None:
+    params = CampaignParams(episodes=1, **SMALL)
+    write_campaign(tmp_path, params)
+    with pytest.raises(InputError, match=f"already holds a campaign .{CAMPAIGN_NAME}"):
+        run_campaign(params, tmp_path)
+
+
+def test_a_locked_folder_is_refused_and_a_stale_lock_taken_over(tmp_path: Path) -> None:
+    params = CampaignParams(episodes=1, **SMALL)
+    write_campaign(tmp_path, params)
+    with CampaignLock(tmp_path):
+        assert (tmp_path / LOCK_NAME).read_text() == f"{os.getpid()}\n"
+        with pytest.raises(InputError, match=f"in use by another campaign .pid {os.getpid()}"):
+            run_campaign(params, tmp_path, resume=True)
+    assert not (tmp_path / LOCK_NAME).exists()
+    # A lock left by a campaign that was killed: its pid runs no more, no one holds it.
+    (tmp_path / LOCK_NAME).write_text(f"{dead_pid()}\n")
+    with CampaignLock(tmp_path):
+        assert (tmp_path / LOCK_NAME).read_text() == f"{os.getpid()}\n"
+
+
+def dead_pid() -> int:
+    """The pid of a process that has ended."""
+    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    return int(done.stdout)
+
+
+def test_without_fcntl_the_lock_is_a_pid_file(tmp_path: Path,
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where there is no fcntl (Windows): O_EXCL creation, a dead pid's file is stale."""
+    monkeypatch.setattr(campaign_lock, "fcntl", None)
+    (tmp_path / LOCK_NAME).write_text(f"{dead_pid()}\n")
+    with CampaignLock(tmp_path):
+        assert (tmp_path / LOCK_NAME).read_text() == f"{os.getpid()}\n"
+        with pytest.raises(InputError, match=f"in use by another campaign .pid {os.getpid()}"):
+            CampaignLock(tmp_path).acquire()
+    assert not (tmp_path / LOCK_NAME).exists()
+
+
+# -- the summary ------------------------------------------------------------------------------
+def test_ties_are_neither_wins_nor_losses() -> None:
+    mine, odo = COMPARED_METRICS["heading_error_mean_deg"]
+    pairs = [(1.0, 1.0), (5.575216133517828, 5.5752161335178005), (0.0, 1e-15), (0.5, 1.0),
+             (2.0, 1.0), (1.0, 1.0 + 1e-6)]
+    records = [{"episode": k, "status": "ok", "metrics": {mine: a, odo: b}}
+               for k, (a, b) in enumerate(pairs)]
+    summary = summarise(records, {}, ran=6, wall_time_s=1.0, workers=1)
+    cmp = summary["mapper_vs_odometry"]["heading_error_mean_deg"]
+    assert (cmp["mapper_better"], cmp["mapper_worse"], cmp["ties"]) == (2, 1, 3)
+    assert cmp["mapper_better_share"] == pytest.approx(2 / 6)
+    assert cmp["tie_share"] == pytest.approx(3 / 6)
+    assert "(of 6 episodes mapper better in 2, worse in 1, tied in 3)" in format_summary(summary)
+
+
 # -- failures: reproducers, crashes, dead workers, plugins -------------------------------------
-def test_a_violation_is_saved_as_a_reproducer_that_replays(plugins: Path, tmp_path: Path) -> None:
+def test_a_violation_is_saved_as_a_reproducer_that_replays(plugins: Path, tmp_path: Path,
+                                                           capsys: pytest.CaptureFixture) -> None:
     params = CampaignParams(episodes=2, seed=3, mapper="fuzz_plugins:BrokenRoute", **SMALL)
     summary = run_campaign(params, tmp_path / "c")
     assert summary["failures_by_invariant"] == {"route_connected": 2}
@@ -240,23 +375,52 @@ def test_a_violation_is_saved_as_a_reproducer_that_replays(plugins: Path, tmp_pa
         env={**os.environ, "PYTHONPATH": os.pathsep.join([str(plugins), str(ROOT)])},
         timeout=120, check=False,
     )  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert "reproduce: identical to" in done.stdout
+    assert done.returncode == 1, done.stderr  # the failure reproduces
+    assert "reproduce: run identical to" in done.stdout
+    assert "reproduce: route_connected violated: local map 1 (frame 1) has no pose" in done.stdout
+    assert "reproduce: the recorded failure reproduces" in done.stdout
+    assert (tmp_path / "again" / "report.json").is_file()
+    # The same episode with a mapper that keeps its route connected: fixed, exit 0.
+    doc["reproducer"]["episode"]["mapper"] = "naive"
+    fixed = tmp_path / "fixed.json"
+    fixed.write_text(json.dumps(doc))
+    assert main(["run", "--reproduce", str(fixed), "--no-figures", "--out",
+                 str(tmp_path / "fixed")]) == 0
+    assert "the recorded failure does not reproduce: route_connected violated" in (
+        capsys.readouterr().out)
 
 
-def test_a_crashing_mapper_is_recorded_and_the_campaign_goes_on(plugins: Path,
-                                                                tmp_path: Path) -> None:
+def test_a_crashing_mapper_is_recorded_and_the_campaign_goes_on(
+    plugins: Path, tmp_path: Path, capsys: pytest.CaptureFixture,
+) -> None:
     params = CampaignParams(episodes=3, seed=3, mapper="fuzz_plugins:Crashing", **SMALL)
     summary = run_campaign(params, tmp_path)
     assert summary["crashes"] == 3 and summary["crashes_by_type"] == {"RuntimeError": 3}
     record = jsonl(tmp_path)[0]
     assert "plugin bug at frame 3" in record["error"]["traceback"]
     assert "Traceback" in record["error"]["traceback"]
-    doc = json.loads(reproducer_path(tmp_path, record["episode"]).read_text())
+    path = reproducer_path(tmp_path, record["episode"])
+    doc = json.loads(path.read_text())
     assert doc["params"]["spec"]["mappers"] == ["fuzz_plugins:Crashing"]
+    capsys.readouterr()
+    assert main(["run", "--reproduce", str(path), "--out", str(tmp_path / "again")]) == 1
+    printed = capsys.readouterr()
+    assert "reproduce: crash: RuntimeError: plugin bug at frame 3" in printed.out
+    assert "reproduce: the recorded failure reproduces" in printed.out
+    assert "plugin bug at frame 3" in printed.err  # the traceback
+    assert not (tmp_path / "again").exists()
+    # A reproducer as albot2d wrote them for dead workers before: no report, no world, only
+    # the campaign and the index; the episode is drawn again.
+    old = {"reproducer": {"episode": {k: record[k] for k in ("episode", "seed", "status",
+                                                             "error")},
+                          "campaign": params.to_dict()}}
+    path.write_text(json.dumps(old))
+    assert main(["run", "--reproduce", str(path), "--out", str(tmp_path / "again")]) == 1
+    assert "reproduce: the recorded failure reproduces" in capsys.readouterr().out
 
 
-def test_a_dead_worker_fails_only_its_own_episode(plugins: Path, tmp_path: Path) -> None:
+def test_a_dead_worker_fails_only_its_own_episode(plugins: Path, tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture) -> None:
     params = CampaignParams(episodes=4, seed=2, mapper="fuzz_plugins:Dying", **SMALL)
     backend = LocalBackend(2)
     try:
@@ -273,6 +437,16 @@ def test_a_dead_worker_fails_only_its_own_episode(plugins: Path, tmp_path: Path)
         assert r["status"] == ("crash" if dies else "ok"), (k, r["status"])
         if dies:
             assert r["error"]["type"] == "WorkerDiedError"
+            assert r["world"]["kind"] == spec.kind and r["run_seed"] == spec.run_seed
+    # Its reproducer replays: in a child process, which dies the same way.
+    died = min(k for k, r in records.items() if r["status"] == "crash")
+    path = reproducer_path(tmp_path, died)
+    assert json.loads(path.read_text())["format"] == "albot2d-report"
+    capsys.readouterr()
+    assert main(["run", "--reproduce", str(path), "--out", str(tmp_path / "again")]) == 1
+    assert "reproduce: the episode killed its process again (exit code 3)" in (
+        capsys.readouterr().out)
+    assert not (tmp_path / "again").exists()
 
 
 def test_a_users_own_mapper_is_fuzzed_the_same_way(plugins: Path, tmp_path: Path) -> None:
@@ -284,6 +458,9 @@ def test_a_users_own_mapper_is_fuzzed_the_same_way(plugins: Path, tmp_path: Path
     assert record["checked"] == ["laser_hits_on_obstacles", "robot_clear_of_obstacles"]
     assert record["metrics"]["heading_error_max_deg"] == pytest.approx(
         record["metrics"]["odometry_heading_error_max_deg"], abs=1e-6)
+    # It is odometry by other arithmetic: every comparison is a tie, never a win.
+    for label, cmp in summary["mapper_vs_odometry"].items():
+        assert (cmp["ties"], cmp["mapper_better"], cmp["mapper_worse"]) == (3, 0, 0), label
 
 
 @pytest.mark.parametrize(("change", "message"), [

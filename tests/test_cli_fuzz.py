@@ -77,6 +77,7 @@ def test_failures_exit_1_with_reproducers(tmp_path: Path) -> None:
     (["--world-size", "30", "20"], "--world-size: MIN 30 is larger than MAX 20"),
     (["--backend", "slurm"], "unknown backend 'slurm'"),
     (["--address", "tcp://127.0.0.1:1"], "--address is for --backend dask"),
+    (["--resume"], "--resume: "),
 ])
 def test_bad_input_is_one_line_and_exit_2(args: list[str], message: str, tmp_path: Path,
                                           capsys: pytest.CaptureFixture) -> None:

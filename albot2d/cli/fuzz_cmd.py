@@ -13,14 +13,20 @@ address a local dask cluster is started). Written to ``--out DIR``: ``episodes.j
 line per episode, on disk as soon as it finishes), ``reproducers/episode-K.json`` for
 each failing episode (``albot2d run --reproduce FILE --out D`` replays it),
 ``summary.json``, ``histograms.png`` and ``campaign.json``. ``--resume`` continues an
-interrupted campaign. Exit status: 0 when every episode passed, 1 when any failed, 2 on
-bad input.
+interrupted campaign (only one written with the same options; the folder is locked
+while a campaign runs). Ctrl-C once: the running episodes finish and are kept; twice: it
+stops at once. Exit status: 0 when every episode passed, 1 when any failed, 2 on bad
+input, 130 when interrupted.
+
+``albot2d run --reproduce REPRODUCER`` (``reproduce_failure`` here) re-runs a failing
+episode with its invariant checks and exits 1 when it still fails.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import sys
 from pathlib import Path
@@ -30,7 +36,7 @@ from albot2d.atomic import atomic_write_bytes
 from albot2d.cli.options import positive_int, positive_number, seed_value
 from albot2d.errors import InputError
 
-__all__ = ["register", "run"]
+__all__ = ["register", "reproduce_failure", "reproducer_document", "run"]
 
 DEFAULTS = {"profile": "dataset3", "noise": "typical", "laser_noise": "sick_lms200",
             "mapper": "albot1", "tour_kind": "loop", "backend": "local"}
@@ -146,10 +152,14 @@ def _write_histograms(out: Path, no_figures: bool) -> str | None:
     return HISTOGRAMS_NAME
 
 
+def _note(line: str) -> None:
+    print(f"albot2d fuzz: {line}", file=sys.stderr, flush=True)
+
+
 def run(args: argparse.Namespace) -> int:
     from albot2d.cli.run_cmd import prepare_out_dir
     from albot2d.evaluation.backends import make_backend
-    from albot2d.evaluation.campaign import run_campaign
+    from albot2d.evaluation.campaign import CampaignInterrupted, run_campaign
     from albot2d.evaluation.campaign_summary import format_summary
 
     params = _params(args)
@@ -158,15 +168,20 @@ def run(args: argparse.Namespace) -> int:
     out, created = prepare_out_dir(args.out)
     try:
         backend = make_backend(backend_name, workers=workers, address=args.address)
+        try:
+            summary = run_campaign(params, out, backend=backend, resume=args.resume,
+                                   progress=True, on_note=_note)
+        finally:
+            backend.close()
+    except CampaignInterrupted as exc:
+        _note(f"interrupted: {exc.done} of {exc.total} episodes are in "
+              f"{out / 'episodes.jsonl'}; continue with the same options and --resume")
+        return 130
     except BaseException:
         if created:
             with contextlib.suppress(OSError):
-                out.rmdir()
+                out.rmdir()  # only when nothing was written
         raise
-    try:
-        summary = run_campaign(params, out, backend=backend, resume=args.resume, progress=True)
-    finally:
-        backend.close()
     figure = _write_histograms(out, args.no_figures)
     print(format_summary(summary))
     failing = summary["violations"] + summary["crashes"]
@@ -175,3 +190,115 @@ def run(args: argparse.Namespace) -> int:
         files.append(f"{failing} reproducer(s) in reproducers/")
     print(f"-> {out}: {', '.join(files)}")
     return 1 if failing else 0
+
+
+# -- albot2d run --reproduce of a fuzzing reproducer -------------------------------------
+def _failure_lines(record: dict[str, Any]) -> list[str]:
+    if record.get("status") == "crash":
+        error = record.get("error") or {}
+        return [f"crash: {error.get('type')}: {error.get('message')}"]
+    return [f"{name} violated: {messages[0]}" + (f" (+{len(messages) - 1} more)"
+                                                 if len(messages) > 1 else "")
+            for name, messages in (record.get("violations") or {}).items()] or ["?"]
+
+
+def _replay_isolated(doc: dict[str, Any], where: str) -> tuple[int | None, dict[str, Any] | None]:
+    """Run the episode in a child process (its worker died: it may kill this one too);
+    returns the child's exit code and, when it lived, the new record."""
+    import multiprocessing
+
+    context = multiprocessing.get_context("spawn")
+    receive, send = context.Pipe(duplex=False)
+    child = context.Process(target=_replay_child, args=(doc, where, send), daemon=True)
+    child.start()
+    send.close()
+    try:
+        record = receive.recv()
+    except EOFError:
+        record = None
+    child.join()
+    return child.exitcode, record
+
+
+def _replay_child(doc: dict[str, Any], where: str, send: Any) -> None:
+    from albot2d.evaluation.episode import reproduce_episode
+
+    send.send(reproduce_episode(doc, where=where)[0].record)
+
+
+def reproducer_document(path: str) -> dict[str, Any] | None:
+    """The fuzzing reproducer at ``path``; ``None`` when it is anything else (a report,
+    or not readable: ``read_report`` then says what is wrong)."""
+    try:
+        with open(path, encoding="utf-8") as handle:
+            doc = json.load(handle)
+    except (OSError, ValueError, RecursionError):
+        return None
+    return doc if isinstance(doc, dict) and isinstance(doc.get("reproducer"), dict) else None
+
+
+def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
+    """``albot2d run --reproduce REPRODUCER``: run the failing episode again with every
+    invariant check, write its report and figures to ``--out`` (unless it crashes), say
+    whether the run and the failure came out the same; exit 1 when it still fails."""
+    from albot2d.cli import run_cmd
+    from albot2d.evaluation.episode import reproduce_episode, reproducer_spec
+    from albot2d.evaluation.report import without_timings
+
+    where = args.reproduce
+    recorded = doc["reproducer"].get("episode")
+    if not isinstance(recorded, dict) or recorded.get("status") not in ("violation", "crash"):
+        raise InputError(f"{where}: not a fuzzing reproducer (no failing episode in it)")
+    try:
+        spec = reproducer_spec(doc, where=where)
+    except InputError:
+        raise
+    except Exception as exc:  # the episode cannot even be drawn: that is the failure
+        print(f"reproduce: crash: {type(exc).__name__}: {exc} (drawing the episode)")
+        return 1
+    # A mapper that cannot be imported here is bad input, not a reproduced crash.
+    run_cmd._check_spec(spec.run_spec())
+    out, created = run_cmd.prepare_out_dir(args.out)
+    result = None
+    try:
+        if (recorded.get("error") or {}).get("type") == "WorkerDiedError":
+            code, record = _replay_isolated(doc, where)
+            if record is None:
+                print(f"reproduce: the episode killed its process again (exit code {code}); "
+                      f"recorded: {_failure_lines(recorded)[0]}")
+                run_cmd._remove_if_empty(out, created)
+                return 1
+        outcome, result = reproduce_episode(doc, where=where)
+        if result is not None:
+            run_cmd.finish(out, created, "run", lambda: result, args.no_figures)
+        else:
+            run_cmd._remove_if_empty(out, created)
+    except BaseException:
+        run_cmd._remove_if_empty(out, created)
+        raise
+    record = outcome.record
+    if result is not None:
+        run_cmd.print_tables(result, out)
+        ignore = ("figures", "albot2d_version", "reproducer")
+        diff = run_cmd._differences(
+            {k: v for k, v in without_timings(doc).items() if k not in ignore},
+            {k: v for k, v in without_timings(result.report).items() if k not in ignore},
+        )
+        if recorded["status"] != "crash":
+            same = "identical to" if not diff else f"differs at {', '.join(diff[:5])} from"
+            print(f"reproduce: run {same} {where} (apart from wall-clock timings)")
+    else:
+        print((record["error"] or {}).get("traceback", ""), file=sys.stderr, end="")
+    checked = len(record["checked"])
+    if record["status"] == "ok":
+        print(f"reproduce: every invariant holds ({checked} checked); the recorded failure "
+              f"does not reproduce: {_failure_lines(recorded)[0]}")
+        return 0
+    for line in _failure_lines(record):
+        print(f"reproduce: {line}")
+    same = (record["status"] == recorded["status"]
+            and sorted(record["violations"]) == sorted(recorded.get("violations") or {})
+            and (record["error"] or {}).get("type") == (recorded.get("error") or {}).get("type"))
+    print("reproduce: the recorded failure reproduces" if same else
+          f"reproduce: fails differently from the record ({_failure_lines(recorded)[0]})")
+    return 1

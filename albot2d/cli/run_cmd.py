@@ -275,6 +275,11 @@ def run(args: argparse.Namespace) -> int:
         if given:
             flags = ", ".join("--" + n.replace("_", "-") for n in given)
             raise InputError(f"--reproduce takes the run's settings from the report; drop {flags}")
+        from albot2d.cli.fuzz_cmd import reproduce_failure, reproducer_document
+
+        doc = reproducer_document(args.reproduce)
+        if doc is not None:  # a fuzzing reproducer: its invariant checks run too
+            return reproduce_failure(args, doc)
         recorded = read_report(args.reproduce)
         spec = RunSpec.from_report(recorded, where=args.reproduce)
         params = evaluation_params_from_report(recorded)

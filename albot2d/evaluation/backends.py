@@ -8,7 +8,9 @@ arguments travel; workers build worlds and pymunk spaces themselves.
 
 - ``LocalBackend(workers)``: ``concurrent.futures.ProcessPoolExecutor`` with the ``spawn``
   start method (no state inherited from the parent; the same on every platform).
-  ``workers=1`` runs in this process, with no pool at all.
+  ``workers=1`` runs in this process, with no pool at all. Workers ignore Ctrl-C (the
+  campaign decides what it means) and exit by themselves within a second of the campaign
+  process dying; ``abort()`` terminates them at once.
 - ``DaskBackend(address, workers)``: ``dask.distributed.Client`` connected to the scheduler
   at ``address`` (``tcp://HOST:PORT``), or to a new ``LocalCluster`` on 127.0.0.1 with
   ``workers`` single-threaded worker processes when no address is given. Needs the
@@ -20,8 +22,11 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import os
 import signal
 import socket
+import threading
+import time
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -44,6 +49,10 @@ BACKENDS = ("local", "dask")
 _IN_FLIGHT_PER_WORKER = 2
 # How long to wait for a dask scheduler to answer before giving up.
 _CONNECT_TIMEOUT_S = 10.0
+# How often a local worker checks that the campaign process is still alive, and the exit
+# code it ends with when it is not.
+_PARENT_POLL_S = 0.25
+_ORPHAN_EXIT_CODE = 75
 
 
 class Backend(Protocol):
@@ -63,10 +72,23 @@ class WorkerDiedError(RuntimeError):
     """The worker process running a task died (a segfault, the OOM killer, os._exit)."""
 
 
-def _ignore_interrupts() -> None:
+def _exit_with_parent(parent_pid: int) -> None:
+    """Poll the parent's pid; exit at once when the parent is gone (a worker is then
+    adopted by init or a subreaper, so ``os.getppid()`` changes)."""
+    while True:
+        if os.getppid() != parent_pid:
+            os._exit(_ORPHAN_EXIT_CODE)
+        time.sleep(_PARENT_POLL_S)
+
+
+def _init_worker(parent_pid: int) -> None:
     """Workers leave Ctrl-C to the campaign, which stops handing out episodes, lets the
-    running ones finish and keeps everything written so far."""
+    running ones finish and keeps everything written so far; and they never outlive the
+    campaign: a watchdog thread ends the worker when its parent dies (``kill -9``), which
+    no signal or pipe of the pool would tell it."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_exit_with_parent, args=(parent_pid,), name="albot2d-watchdog",
+                     daemon=True).start()
 
 
 class LocalBackend:
@@ -87,7 +109,7 @@ class LocalBackend:
         if self._pool is None:
             self._pool = ProcessPoolExecutor(
                 max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
-                initializer=_ignore_interrupts,
+                initializer=_init_worker, initargs=(os.getpid(),),
             )
         return self._pool
 
@@ -139,8 +161,27 @@ class LocalBackend:
                     pending.clear()
                     self._restart()
         finally:
-            for future in pending:
-                future.cancel()
+            # Tasks still in flight when the caller stops early are not cancelled here:
+            # close() cancels the queued ones, abort() ends them all. (A future cancelled
+            # here would break the pool's own clean-up if abort() followed: CPython's
+            # manager thread then fails to mark it broken, with a traceback.)
+            pending.clear()
+
+    def abort(self) -> None:
+        """Stop now: terminate the worker processes, drop every task (a second Ctrl-C)."""
+        if self._pool is None:
+            return
+        terminate = getattr(self._pool, "terminate_workers", None)
+        if terminate is not None:  # pragma: no cover - Python >= 3.14
+            terminate()
+        else:
+            # No public way to stop running tasks before Python 3.14's terminate_workers:
+            # the pool's own table of its processes.
+            for process in list((getattr(self._pool, "_processes", None) or {}).values()):
+                with contextlib.suppress(Exception):
+                    process.terminate()
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        self._pool = None
 
     def close(self) -> None:
         if self._pool is not None:

@@ -4,23 +4,36 @@
 ``albot2d.evaluation.episode`` for how each is drawn from the campaign seed) on a backend
 (``albot2d.evaluation.backends``) and writes into ``out_dir``:
 
-- ``campaign.json``: the parameters (written first; ``resume`` checks they match);
+- ``campaign.lock`` while it runs (``albot2d.evaluation.campaign_lock``): a second
+  campaign on the same folder is refused, a lock left by a killed one is taken over;
+- ``campaign.json``: the parameters (written first; ``resume`` refuses a folder without
+  one written by albot2d, or with other parameters; a new campaign refuses a folder
+  that holds one);
 - ``episodes.jsonl``: one JSON line per finished episode, in the order they finish, each
   flushed to disk before the next, so an interrupted campaign loses nothing; with
-  ``resume`` the episodes already there are skipped and a truncated last line is redone;
+  ``resume`` the episodes already there are skipped and a damaged tail (a last line cut
+  off by a killed writer) is dropped and redone; any other damage (a broken line, an
+  episode twice, an episode of another seed) is refused, naming the line;
 - ``reproducers/episode-<k>.json`` for every failing episode (an invariant violated or a
   crash), written before its line: ``albot2d run --reproduce FILE`` replays it;
 - ``summary.json`` (``albot2d.evaluation.campaign_summary.summarise``); ``albot2d fuzz``
   adds ``histograms.png`` (``albot2d.plots_fuzz``).
+
+Ctrl-C: the first stops handing out episodes and lets the running ones finish and be
+written down, the second stops at once (the backend's workers are terminated); either way
+:class:`CampaignInterrupted` is raised and ``episodes.jsonl`` holds only whole lines.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import signal
 import sys
+import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -29,15 +42,18 @@ import numpy as np
 
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
+from albot2d.evaluation.campaign_lock import CampaignLock
 from albot2d.evaluation.campaign_summary import summarise
-from albot2d.evaluation.episode import EpisodeOutcome, EpisodeSpec, run_episode
+from albot2d.evaluation.episode import EpisodeOutcome, EpisodeSpec, crash_outcome, run_episode
 
 __all__ = [
     "CAMPAIGN_NAME",
     "EPISODES_NAME",
     "HISTOGRAMS_NAME",
     "SUMMARY_NAME",
+    "CampaignInterrupted",
     "CampaignParams",
+    "read_campaign",
     "read_episodes",
     "reproducer_path",
     "run_campaign",
@@ -49,6 +65,8 @@ SUMMARY_NAME = "summary.json"
 HISTOGRAMS_NAME = "histograms.png"
 REPRODUCERS_DIR = "reproducers"
 _FORMAT = "albot2d-campaign"
+_FORMAT_VERSION = 1
+STATUSES = ("ok", "violation", "crash")
 
 
 @dataclass(frozen=True)
@@ -128,7 +146,7 @@ class CampaignParams:
             data["kinds"] = tuple(data["kinds"])
         try:
             return cls(**data)
-        except TypeError as exc:
+        except (TypeError, InputError) as exc:
             raise InputError(f"{where}: {exc}") from None
 
     def identity(self) -> dict[str, Any]:
@@ -142,40 +160,62 @@ def reproducer_path(out_dir: str | os.PathLike[str], index: int) -> Path:
     return Path(out_dir) / REPRODUCERS_DIR / f"episode-{index}.json"
 
 
-def read_episodes(path: str | os.PathLike[str]) -> tuple[dict[int, dict[str, Any]], int]:
-    """The episode records in an ``episodes.jsonl`` and the byte length of its complete part.
+class CampaignInterrupted(KeyboardInterrupt):
+    """The campaign was stopped by Ctrl-C (SIGINT); every finished episode is on disk."""
 
-    A last line that was cut off (no newline, or not JSON) is left out, to be redone; a
-    broken line anywhere else is an error naming the line.
+    def __init__(self, done: int, total: int) -> None:
+        super().__init__(f"interrupted after {done} of {total} episodes")
+        self.done = done
+        self.total = total
+
+
+def _scan_episodes(path: Path) -> tuple[list[tuple[int, dict[str, Any]]], int, int]:
+    """(line number, record) of every whole line, the byte length of the whole part and the
+    number of bytes after it (a damaged tail: a line cut off by a killed writer, or the
+    zero bytes a crash can leave at the end of a file). Anything else that is not an
+    episode record, or an episode twice, is an error naming the line."""
+    data = path.read_bytes()
+    # Whole lines end with a newline; a writer that was killed leaves at most a cut-off
+    # last line. Lines of zero bytes at the end are left by a crash of the machine.
+    keep = data.rfind(b"\n") + 1
+    while keep > 0:
+        previous = data.rfind(b"\n", 0, keep - 1) + 1
+        if data[previous:keep].strip(b"\x00\n"):
+            break
+        keep = previous
+    records: list[tuple[int, dict[str, Any]]] = []
+    lines_of: dict[int, int] = {}
+    for number, line in enumerate(data[:keep].split(b"\n")[:-1], start=1):
+        if not line.strip():
+            continue
+        try:
+            record = json.loads(line)
+        except ValueError:
+            record = None
+        index = record.get("episode") if isinstance(record, dict) else None
+        if (not isinstance(index, int) or isinstance(index, bool) or index < 0
+                or record.get("status") not in STATUSES):  # type: ignore[union-attr]
+            raise InputError(f"{path}:{number}: not an episode record; the file is damaged "
+                             "(move it away to start afresh)")
+        if index in lines_of:
+            raise InputError(f"{path}:{number}: episode {index} again (first on line "
+                             f"{lines_of[index]}); the file is damaged (two writers?)")
+        lines_of[index] = number
+        records.append((number, record))  # type: ignore[arg-type]
+    return records, keep, len(data) - keep
+
+
+def read_episodes(path: str | os.PathLike[str]) -> tuple[dict[int, dict[str, Any]], int]:
+    """The episode records in an ``episodes.jsonl`` and the byte length of its whole part.
+
+    A damaged tail (a last line cut off by a killed writer) is left out, to be redone; a
+    broken line anywhere else, or an episode twice, is an error naming the line.
     """
     p = Path(path)
     if not p.exists():
         return {}, 0
-    data = p.read_bytes()
-    records: dict[int, dict[str, Any]] = {}
-    offset = 0
-    lines = data.split(b"\n")
-    for number, line in enumerate(lines, start=1):
-        last = number == len(lines)
-        end = offset + len(line) + (0 if last else 1)
-        if not line.strip():
-            offset = end
-            continue
-        try:
-            record = json.loads(line)
-            index = record["episode"]
-            ok = (isinstance(record, dict) and isinstance(index, int) and not last
-                  and "status" in record)
-        except (ValueError, KeyError, TypeError):
-            ok = False
-        if not ok:
-            if last or all(not rest.strip() for rest in lines[number:]):
-                return records, offset
-            raise InputError(f"{p}:{number}: not an episode record; the file is damaged "
-                             "(move it away to start afresh)")
-        records.setdefault(index, record)
-        offset = end
-    return records, offset
+    records, keep, _ = _scan_episodes(p)
+    return {r["episode"]: r for _, r in records}, keep
 
 
 class _EpisodeLog:
@@ -200,12 +240,13 @@ def _crash_outcome(params: Mapping[str, Any], index: int, exc: BaseException) ->
     """A crash outside ``run_episode`` (drawing the episode, a dead worker)."""
     import traceback
 
-    record = {"episode": index, "seed": {"entropy": params.get("seed"), "spawn_key": [index]},
-              "status": "crash", "checked": [], "violations": {}, "metrics": {},
-              "error": {"type": type(exc).__name__, "message": str(exc),
-                        "traceback": "".join(traceback.format_exception(exc))},
-              "digest": None, "timings": {}}
-    return EpisodeOutcome(record, {"reproducer": {"episode": record, "campaign": dict(params)}})
+    error = {"type": type(exc).__name__, "message": str(exc),
+             "traceback": "".join(traceback.format_exception(exc))}
+    try:
+        spec = EpisodeSpec.draw(CampaignParams.from_dict(params), index)
+    except Exception:  # the episode cannot even be drawn: the campaign says which it is
+        spec = None
+    return crash_outcome(spec, error, campaign=params, index=index)
 
 
 # Rough relative cost per m² of world of each kind (measured with dataset3): only used to
@@ -231,33 +272,110 @@ def _episode_task(params: dict[str, Any], index: int) -> EpisodeOutcome:
         return _crash_outcome(params, index, exc)
 
 
-def _check_resume(out: Path, params: CampaignParams, resume: bool) -> dict[int, Any]:
-    """The records already there (resume) or none; refuses to mix two campaigns."""
+def read_campaign(out_dir: str | os.PathLike[str]) -> CampaignParams:
+    """The parameters in ``out_dir/campaign.json``, checked to be a campaign albot2d wrote."""
+    path = Path(out_dir) / CAMPAIGN_NAME
+    try:
+        meta = json.loads(path.read_bytes())
+    except FileNotFoundError:
+        raise InputError(f"{path.parent} holds no campaign (no {CAMPAIGN_NAME})") from None
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{path}: not a campaign file written by albot2d ({exc})") from None
+    if not isinstance(meta, dict) or meta.get("format") != _FORMAT:
+        raise InputError(f"{path}: not a campaign file written by albot2d "
+                         f"(format is not {_FORMAT!r})")
+    if meta.get("format_version") != _FORMAT_VERSION:
+        raise InputError(f"{path}: campaign format_version {meta.get('format_version')!r}, "
+                         f"this albot2d reads {_FORMAT_VERSION}")
+    if not isinstance(meta.get("params"), dict):
+        raise InputError(f"{path}: not a campaign file written by albot2d (no params)")
+    return CampaignParams.from_dict(meta["params"], where=str(path))
+
+
+def _check_folder(out: Path, params: CampaignParams, resume: bool) -> tuple[dict[int, Any], int]:
+    """The records already there and the bytes of episodes.jsonl to keep (resume), or
+    none; refuses a folder that is not this campaign's (resume) or holds one (no resume)."""
     meta_path, episodes_path = out / CAMPAIGN_NAME, out / EPISODES_NAME
-    has_episodes = episodes_path.exists() and episodes_path.stat().st_size > 0
     if not resume:
-        if has_episodes:
-            raise InputError(f"{episodes_path} already holds a campaign; give --resume to "
-                             "continue it, or another --out")
-        return {}
-    if meta_path.exists():
-        try:
-            meta = json.loads(meta_path.read_text(encoding="utf-8"))
-            old = CampaignParams.from_dict(meta["params"], where=str(meta_path))
-        except (ValueError, KeyError, TypeError) as exc:
-            raise InputError(f"{meta_path}: not a campaign file ({exc})") from None
-        if old.identity() != params.identity():
-            diff = [k for k, v in params.identity().items() if old.identity()[k] != v]
-            raise InputError(f"--resume: {meta_path} was written with other parameters "
-                             f"({', '.join(diff)} differ); use the same options")
-    elif has_episodes:
-        raise InputError(f"--resume: {episodes_path} has no {CAMPAIGN_NAME} beside it")
-    records, _ = read_episodes(episodes_path)
-    return {k: r for k, r in records.items() if k < params.episodes}
+        for path in (meta_path, episodes_path):
+            if path.exists() and path.stat().st_size > 0:
+                raise InputError(f"{out} already holds a campaign ({path.name}); give --resume "
+                                 "to continue it, or another --out")
+        return {}, 0
+    try:
+        old = read_campaign(out)
+    except InputError as exc:
+        raise InputError(f"--resume: {exc}") from None
+    if old.identity() != params.identity():
+        diff = [f"{k} {old.identity()[k]!r} there, {v!r} here"
+                for k, v in params.identity().items() if old.identity()[k] != v]
+        raise InputError(f"--resume: {meta_path} was written with other parameters "
+                         f"({'; '.join(diff)}); use the same options")
+    if not episodes_path.exists():
+        return {}, 0
+    records, keep, _ = _scan_episodes(episodes_path)
+    for number, record in records:
+        k = record["episode"]
+        if record.get("seed") != {"entropy": params.seed, "spawn_key": [k]}:
+            raise InputError(f"{episodes_path}:{number}: episode {k} was not drawn from this "
+                             f"campaign's seed {params.seed}; the file is not this campaign's")
+    return {r["episode"]: r for _, r in records if r["episode"] < params.episodes}, keep
+
+
+def _remove_stale_temporaries(out: Path) -> None:
+    """Temporary files of atomic writes a killed campaign left behind (``.NAME.*.tmp``)."""
+    for folder in (out, out / REPRODUCERS_DIR):
+        for name in (CAMPAIGN_NAME, SUMMARY_NAME, "episode-*.json"):
+            for path in folder.glob(f".{name}.*.tmp"):
+                with contextlib.suppress(OSError):
+                    path.unlink()
 
 
 def _write_json(path: Path, value: Any) -> None:
     atomic_write_text(path, json.dumps(value, indent=2, allow_nan=False) + "\n")
+
+
+class _Interrupts:
+    """Ctrl-C during a campaign: the first stops handing out episodes (the running ones
+    finish and are written down), the second stops at once; neither interrupts the
+    writing of an episode, so episodes.jsonl only ever holds whole lines."""
+
+    def __init__(self, on_note: Callable[[str], None] | None) -> None:
+        self.count = 0
+        self._writing = False
+        self._deferred = False
+        self._note = on_note
+        self._previous: Any = None
+
+    def __enter__(self) -> _Interrupts:
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+
+    def _handler(self, signum: int, frame: Any) -> None:
+        self.count += 1
+        if self.count == 1:
+            if self._note is not None:
+                self._note("interrupted: finishing the running episodes (Ctrl-C again to "
+                           "stop at once)")
+        elif self._writing:
+            self._deferred = True
+        else:
+            raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def writing(self) -> Iterator[None]:
+        self._writing = True
+        try:
+            yield
+        finally:
+            self._writing = False
+        if self._deferred:
+            raise KeyboardInterrupt
 
 
 def run_campaign(
@@ -268,56 +386,98 @@ def run_campaign(
     resume: bool = False,
     progress: bool = False,
     on_episode: Callable[[dict[str, Any]], None] | None = None,
+    on_note: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Run the campaign into ``out_dir`` (created if missing) on ``backend`` (default: this
     process, one episode after another); returns the summary (also in summary.json).
-    ``on_episode(record)`` is called as each episode is written down."""
+    ``on_episode(record)`` is called as each episode is written down, ``on_note(line)``
+    with what the user should know (a damaged line redone, an interruption).
+
+    ``resume`` continues the campaign in ``out_dir`` (which must hold one with the same
+    parameters); without it ``out_dir`` must not hold one. The folder is locked while the
+    campaign runs. Ctrl-C (in the main thread) raises :class:`CampaignInterrupted`
+    once the running episodes are written down, a second Ctrl-C at once.
+    """
     from albot2d.evaluation.backends import LocalBackend
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    done = _check_resume(out, params, resume)
-    _write_json(out / CAMPAIGN_NAME, {"format": _FORMAT, "format_version": 1,
-                                      "params": params.to_dict()})
-    episodes_path = out / EPISODES_NAME
-    _, keep = read_episodes(episodes_path)
-    todo = _longest_first([k for k in range(params.episodes) if k not in done], params)
-    own_backend = backend is None
-    backend = backend or LocalBackend(1)
+    with CampaignLock(out):
+        done, keep = _check_folder(out, params, resume)
+        episodes_path = out / EPISODES_NAME
+        if on_note is not None and resume:
+            size = episodes_path.stat().st_size if episodes_path.exists() else 0
+            if size > keep:
+                on_note(f"{episodes_path}: a damaged last line ({size - keep} bytes, an "
+                        "interrupted write) is dropped and its episode redone")
+        _remove_stale_temporaries(out)
+        _write_json(out / CAMPAIGN_NAME, {"format": _FORMAT, "format_version": _FORMAT_VERSION,
+                                          "params": params.to_dict()})
+        todo = _longest_first([k for k in range(params.episodes) if k not in done], params)
+        own_backend = backend is None
+        backend = backend or LocalBackend(1)
+        try:
+            wall = _run_episodes(params, out, backend, todo, done, keep, progress, on_episode,
+                                 on_note)
+        finally:
+            if own_backend:
+                backend.close()
+        records = [done[k] for k in sorted(done)]
+        summary = summarise(records, params.to_dict(), ran=len(todo), wall_time_s=wall,
+                            workers=backend.workers)
+        _write_json(out / SUMMARY_NAME, summary)
+    return summary
+
+
+def _run_episodes(
+    params: CampaignParams, out: Path, backend: Any, todo: list[int], done: dict[int, Any],
+    keep: int, progress: bool, on_episode: Callable[[dict[str, Any]], None] | None,
+    on_note: Callable[[str], None] | None,
+) -> float:
+    """Run ``todo`` on ``backend``, writing each episode down; returns the wall time."""
     bar = _progress(params.episodes, len(done), progress)
     failures = sum(r["status"] != "ok" for r in done.values())
-    log = _EpisodeLog(episodes_path, keep)
+    log = _EpisodeLog(out / EPISODES_NAME, keep)
     t0 = time.perf_counter()
-    try:
-        for index, result in backend.map_unordered(_episode_task, todo, params.to_dict()):
-            if isinstance(result, BaseException) and not isinstance(result, Exception):
-                raise result  # an interrupt on a worker: stop, it is no finding
-            outcome = (result if isinstance(result, EpisodeOutcome)
-                       else _crash_outcome(params.to_dict(), index, result))
-            if outcome.reproducer is not None:
-                path = reproducer_path(out, index)
-                path.parent.mkdir(exist_ok=True)
-                _write_json(path, outcome.reproducer)
-            log.write(outcome.record)
-            done[index] = outcome.record
-            failures += outcome.failed
-            if on_episode is not None:
-                on_episode(outcome.record)
+    with _Interrupts(on_note) as interrupts:
+        # After a first Ctrl-C the backend is handed no more episodes.
+        queue = (k for k in todo if not interrupts.count)
+        try:
+            for index, result in backend.map_unordered(_episode_task, queue, params.to_dict()):
+                if isinstance(result, BaseException) and not isinstance(result, Exception):
+                    raise result  # an interrupt on a worker: stop, it is no finding
+                outcome = (result if isinstance(result, EpisodeOutcome)
+                           else _crash_outcome(params.to_dict(), index, result))
+                with interrupts.writing():
+                    if outcome.reproducer is not None:
+                        path = reproducer_path(out, index)
+                        path.parent.mkdir(exist_ok=True)
+                        _write_json(path, outcome.reproducer)
+                    log.write(outcome.record)
+                    done[index] = outcome.record
+                failures += outcome.failed
+                if on_episode is not None:
+                    on_episode(outcome.record)
+                if bar is not None:
+                    bar.set_postfix_str(f"{failures} failing", refresh=False)
+                    bar.update(1)
+        except KeyboardInterrupt:
+            _abort(backend)
+            raise CampaignInterrupted(len(done), params.episodes) from None
+        finally:
+            log.close()
             if bar is not None:
-                bar.set_postfix_str(f"{failures} failing", refresh=False)
-                bar.update(1)
-    finally:
-        log.close()
-        if bar is not None:
-            bar.close()
-        if own_backend:
-            backend.close()
-    wall = time.perf_counter() - t0
-    records = [done[k] for k in sorted(done)]
-    summary = summarise(records, params.to_dict(), ran=len(todo), wall_time_s=wall,
-                        workers=backend.workers)
-    _write_json(out / SUMMARY_NAME, summary)
-    return summary
+                bar.close()
+        if interrupts.count:
+            raise CampaignInterrupted(len(done), params.episodes)
+    return time.perf_counter() - t0
+
+
+def _abort(backend: Any) -> None:
+    """Stop the backend's running tasks now (a second Ctrl-C)."""
+    abort = getattr(backend, "abort", None)
+    if abort is not None:
+        abort()
 
 
 def _progress(total: int, initial: int, enabled: bool) -> Any:

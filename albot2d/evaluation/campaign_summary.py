@@ -1,7 +1,9 @@
 """A campaign's summary: throughput, failures by invariant, metric distributions, the table.
 
 ``summarise(records, ...)`` turns the episode records of ``episodes.jsonl`` into
-``summary.json``'s dict; ``format_summary`` prints it in a few lines.
+``summary.json``'s dict; ``format_summary`` prints it in a few lines. The mapper is
+compared with raw odometry episode by episode: better, worse, or tied (equal to float
+rounding, ``TIE_RTOL``/``TIE_ATOL``), never a tie counted as a win.
 """
 
 from __future__ import annotations
@@ -12,7 +14,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["COMPARED_METRICS", "format_summary", "summarise"]
+__all__ = [
+    "COMPARED_METRICS",
+    "TIE_ATOL",
+    "TIE_RTOL",
+    "format_summary",
+    "mapper_vs_odometry",
+    "summarise",
+]
 
 # Metrics compared between the mapper and raw odometry: (mapper's, odometry's).
 COMPARED_METRICS = {
@@ -22,6 +31,11 @@ COMPARED_METRICS = {
     "rpe_trans_m": ("rpe_trans_m", "odometry_rpe_trans_m"),
     "end_rot_deg": ("end_rot_deg", "odometry_end_rot_deg"),
 }
+# A mapper and odometry are tied on an episode when their values agree to float rounding
+# (a mapper that integrates odometry itself gets its values by other arithmetic): within
+# 1e-9 relative, or 1e-9 absolute (deg or m) near zero.
+TIE_RTOL = 1e-9
+TIE_ATOL = 1e-9
 _PERCENTILES = (10, 50, 90, 99)
 # Failing episodes listed in the summary (the rest are in episodes.jsonl).
 _LISTED_FAILURES = 50
@@ -44,7 +58,9 @@ def _values(records: Sequence[Mapping[str, Any]], name: str) -> list[float]:
             and not isinstance(r["metrics"][name], bool)]
 
 
-def _comparison(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+def mapper_vs_odometry(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """For each of ``COMPARED_METRICS``: both means and the episodes where the mapper is
+    better than raw odometry, worse, or tied (equal to float rounding)."""
     out = {}
     for label, (mine, odo) in COMPARED_METRICS.items():
         pairs = [(r["metrics"][mine], r["metrics"][odo]) for r in records
@@ -53,9 +69,16 @@ def _comparison(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         if not pairs:
             continue
         a = np.asarray(pairs, dtype=np.float64)
+        tied = np.isclose(a[:, 0], a[:, 1], rtol=TIE_RTOL, atol=TIE_ATOL)
+        better = ~tied & (a[:, 0] < a[:, 1])
+        worse = ~tied & (a[:, 0] > a[:, 1])
         out[label] = {"episodes": len(a), "mapper_mean": float(a[:, 0].mean()),
                       "odometry_mean": float(a[:, 1].mean()),
-                      "mapper_better_share": float(np.mean(a[:, 0] < a[:, 1]))}
+                      "mapper_better": int(better.sum()), "mapper_worse": int(worse.sum()),
+                      "ties": int(tied.sum()),
+                      "mapper_better_share": float(better.mean()),
+                      "mapper_worse_share": float(worse.mean()),
+                      "tie_share": float(tied.mean())}
     return out
 
 
@@ -100,7 +123,7 @@ def summarise(
         "wall_time_s": wall_time_s,
         "episodes_per_min": 60.0 * ran / wall_time_s if ran and wall_time_s > 0 else None,
         "metrics": {name: _distribution(_values(records, name)) for name in names},
-        "mapper_vs_odometry": _comparison(records),
+        "mapper_vs_odometry": mapper_vs_odometry(records),
         "failing_episodes": failing[:_LISTED_FAILURES],
     }
 
@@ -135,6 +158,7 @@ def format_summary(summary: Mapping[str, Any]) -> str:
     cmp = summary["mapper_vs_odometry"].get("heading_error_mean_deg")
     if cmp:
         lines.append(f"  mean heading error: mapper {cmp['mapper_mean']:.2f}° vs odometry "
-                     f"{cmp['odometry_mean']:.2f}° (mapper better in "
-                     f"{100 * cmp['mapper_better_share']:.0f}% of episodes)")
+                     f"{cmp['odometry_mean']:.2f}° (of {cmp['episodes']} episodes mapper "
+                     f"better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']}, "
+                     f"tied in {cmp['ties']})")
     return "\n".join(lines)

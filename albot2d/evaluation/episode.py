@@ -11,7 +11,10 @@ workers or the order they finish in.
 with the same ``RunSpec``) with the invariant checks attached (``albot2d.evaluation.
 invariants``) and returns an :class:`EpisodeOutcome`: the JSON record for the campaign's
 ``episodes.jsonl`` and, for a failing episode, the reproducer document (a report.json that
-``albot2d run --reproduce`` replays, plus the world JSON and the failure).
+``albot2d run --reproduce`` replays, plus the world JSON and the failure). ``run_checked``
+also returns the run itself; ``crash_outcome`` builds the outcome of an episode that
+crashed, also outside ``run_episode`` (a worker process that died), with a reproducer
+that replays like any other; ``reproduce_episode`` re-runs a reproducer with its checks.
 """
 
 from __future__ import annotations
@@ -48,10 +51,16 @@ from albot2d.sim.odometry import noise_preset
 from albot2d.sim.robot import RobotParams
 
 __all__ = [
+    "REPRODUCE_HOW",
     "EpisodeOutcome",
     "EpisodeSpec",
+    "crash_outcome",
     "episode_seed",
+    "read_reproducer",
     "replay_reproducer",
+    "reproduce_episode",
+    "reproducer_spec",
+    "run_checked",
     "run_episode",
 ]
 
@@ -61,6 +70,8 @@ _RUN_SEED_BOUND = 2**63
 _DECIMETRE = 0.1
 # At most this many messages are kept per violated invariant (the first ones).
 _MESSAGES_KEPT = 5
+# What a reproducer says about itself.
+REPRODUCE_HOW = "albot2d run --reproduce THIS_FILE --out DIR"
 
 
 def episode_seed(campaign_seed: int, index: int) -> np.random.SeedSequence:
@@ -182,6 +193,17 @@ class _Checks:
         if self.frames is not None:
             self.frames(frame)
 
+    def chain(self, other: Any) -> Any:
+        """``on_frame``, then ``other`` (a progress display) when given."""
+        if other is None:
+            return self.on_frame
+
+        def both(frame: Any, travelled_m: float) -> None:
+            self.on_frame(frame, travelled_m)
+            other(frame, travelled_m)
+
+        return both
+
     def on_mappers(self, mappers: Mapping[str, Mapper]) -> None:
         for mapper in mappers.values():
             if isinstance(mapper, Albot1):
@@ -295,63 +317,144 @@ def _world_document(spec: EpisodeSpec, world: Any) -> Any:
     return json.loads(world_to_json(world))
 
 
-def replay_reproducer(path: str | os.PathLike[str]) -> EpisodeOutcome:
-    """Run a saved reproducer's episode again, with every check (``albot2d run --reproduce``
-    replays the run itself; this also says whether the invariants still fail)."""
+def read_reproducer(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """A reproducer document (``reproducers/episode-K.json``), checked to hold an episode."""
     try:
         with open(path, encoding="utf-8") as handle:
             doc = json.load(handle)
         record = doc["reproducer"]["episode"]
     except (ValueError, KeyError, TypeError) as exc:
         raise InputError(f"{path}: not a fuzzing reproducer ({exc})") from None
-    return run_episode(EpisodeSpec.from_record(record))
+    if not isinstance(record, dict):
+        raise InputError(f"{path}: not a fuzzing reproducer (no episode record)")
+    return doc  # type: ignore[no-any-return]
+
+
+def replay_reproducer(path: str | os.PathLike[str]) -> EpisodeOutcome:
+    """Run a saved reproducer's episode again, with every check (``albot2d run --reproduce``
+    replays the run itself; this also says whether the invariants still fail)."""
+    return reproduce_episode(read_reproducer(path), where=str(path))[0]
+
+
+def reproduce_episode(
+    doc: Mapping[str, Any], *, where: str = "reproducer", **hooks: Any
+) -> tuple[EpisodeOutcome, ExperimentResult | None]:
+    """Re-run a reproducer document's episode with its scoring parameters and every check;
+    returns the new outcome and the run (``None`` when it crashed). ``hooks`` go to
+    ``run_experiment`` (progress display)."""
+    from albot2d.evaluation.experiment import evaluation_params_from_report
+
+    spec = reproducer_spec(doc, where=where)
+    params = evaluation_params_from_report(doc) if "params" in doc else None
+    return run_checked(spec, params, **hooks)
+
+
+def reproducer_spec(doc: Mapping[str, Any], *, where: str = "reproducer") -> EpisodeSpec:
+    """The episode a reproducer document describes: from its record or, when the record
+    has no world (an episode that could not even be drawn, or a dead worker's reproducer
+    from an older albot2d), drawn again from the campaign's parameters and its index."""
+    try:
+        section = doc["reproducer"]
+        record = section["episode"]
+        index = record["episode"]
+    except (KeyError, TypeError):
+        raise InputError(f"{where}: not a fuzzing reproducer (no reproducer.episode)") from None
+    if "world" in record:
+        try:
+            return EpisodeSpec.from_record(record)
+        except InputError as exc:
+            raise InputError(f"{where}: {exc}") from None
+    campaign = section.get("campaign")
+    if not isinstance(campaign, Mapping) or isinstance(index, bool) or not isinstance(index, int):
+        raise InputError(f"{where}: not a fuzzing reproducer (no world and no campaign)")
+    from albot2d.evaluation.campaign import CampaignParams
+
+    return EpisodeSpec.draw(CampaignParams.from_dict(campaign, where=where), index)
+
+
+def crash_outcome(
+    spec: EpisodeSpec | None,
+    error: Mapping[str, Any],
+    *,
+    campaign: Mapping[str, Any] | None = None,
+    index: int | None = None,
+    params: EvaluationParams | None = None,
+    elapsed_s: float | None = None,
+    world: Any = None,
+) -> EpisodeOutcome:
+    """The outcome of an episode that crashed: in the run, in drawing it, or by killing its
+    worker process. With ``spec`` the reproducer is a report ``albot2d run --reproduce``
+    replays; without (the episode could not even be drawn) it names the campaign."""
+    if spec is None:
+        record: dict[str, Any] = {
+            "episode": index,
+            "seed": {"entropy": (campaign or {}).get("seed"), "spawn_key": [index]},
+        }
+    else:
+        record = spec.describe()
+    record |= {"status": "crash", "checked": [], "violations": {}, "error": dict(error),
+               "metrics": {}, "digest": None,
+               "timings": {"total_s": elapsed_s, "ms_per_view": None}}
+    record = plain(record)
+    episode = {k: v for k, v in record.items() if k not in ("metrics", "timings")}
+    if spec is None:
+        return EpisodeOutcome(record, plain({"reproducer": {"episode": episode,
+                                                            "campaign": dict(campaign or {})}}))
+    params = params or EvaluationParams()
+    reproducer = make_report("run", seed=spec.run_seed,
+                             params={"spec": spec.run_spec().to_dict(),
+                                     **evaluation_params_dict(params)})
+    reproducer["reproducer"] = {"episode": episode, "world_json": _world_document(spec, world),
+                                "how": REPRODUCE_HOW}
+    return EpisodeOutcome(record, plain(reproducer))
 
 
 def run_episode(spec: EpisodeSpec, params: EvaluationParams | None = None) -> EpisodeOutcome:
     """Run one episode with every applicable invariant checked; never raises for a failure
     of the run itself (a crash is recorded with its traceback)."""
+    return run_checked(spec, params)[0]
+
+
+def run_checked(
+    spec: EpisodeSpec, params: EvaluationParams | None = None, **hooks: Any
+) -> tuple[EpisodeOutcome, ExperimentResult | None]:
+    """``run_episode``, also returning the run itself (``None`` when it crashed)."""
     params = params or EvaluationParams()
     record = spec.describe()
     checks = _Checks(spec)
     t0 = time.perf_counter()
     result: ExperimentResult | None = None
-    error = None
     try:
         result = run_experiment(spec.run_spec(), params, on_start=checks.on_start,
-                                on_frame=checks.on_frame, on_mappers=checks.on_mappers)
+                                on_frame=checks.chain(hooks.pop("on_frame", None)),
+                                on_mappers=checks.on_mappers, **hooks)
         metrics = _report_metrics(result.report, next(iter(result.report["mappers"])))
         metrics |= checks.finish(result)
     except Exception as exc:  # any failure is a finding, not the end of the campaign
         error = {"type": type(exc).__name__, "message": str(exc),
                  "traceback": traceback.format_exc()}
-        metrics = {}
+        return crash_outcome(spec, error, params=params, world=checks.world,
+                             elapsed_s=time.perf_counter() - t0), None
     elapsed = time.perf_counter() - t0
-    status = "crash" if error else ("violation" if checks.violations else "ok")
-    if result is not None:
-        record["world"]["sha256"] = result.report["world"]["sha256"]
-        record["tour"]["length_m"] = result.report["params"]["tour"]["length_m"]
+    status = "violation" if checks.violations else "ok"
+    record["world"]["sha256"] = result.report["world"]["sha256"]
+    record["tour"]["length_m"] = result.report["params"]["tour"]["length_m"]
     record |= {
         "status": status,
         "checked": sorted(checks.checked),
         "violations": checks.violations,
-        "error": error,
+        "error": None,
         "metrics": metrics,
-        "digest": _digest(result) if result is not None and error is None else None,
-        "timings": {"total_s": elapsed,
-                    "ms_per_view": 1e3 * elapsed / metrics["frames"] if metrics else None},
+        "digest": _digest(result),
+        "timings": {"total_s": elapsed, "ms_per_view": 1e3 * elapsed / metrics["frames"]},
     }
     record = plain(record)
     if status == "ok":
-        return EpisodeOutcome(record)
-    report = (result.report if result is not None
-              else make_report("run", seed=spec.run_seed,
-                               params={"spec": spec.run_spec().to_dict(),
-                                       **evaluation_params_dict(params)}))
-    reproducer = dict(report)
+        return EpisodeOutcome(record), result
+    reproducer = dict(result.report)
     reproducer["reproducer"] = {
         "episode": {k: v for k, v in record.items() if k not in ("metrics", "timings")},
         "world_json": _world_document(spec, checks.world),
-        "how": "albot2d run --reproduce THIS_FILE --out DIR",
+        "how": REPRODUCE_HOW,
     }
-    return EpisodeOutcome(record, plain(reproducer))
-
+    return EpisodeOutcome(record, plain(reproducer)), result
