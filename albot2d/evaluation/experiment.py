@@ -27,6 +27,7 @@ from albot2d.evaluation.map_quality import MapQualityParams
 from albot2d.evaluation.report import make_report
 from albot2d.evaluation.scoring import EvaluationParams, odometry_section, score_mappers
 from albot2d.evaluation.trace import HomingParams, Trace, drive_mappers
+from albot2d.evaluation.updates import updates_section
 from albot2d.frames import Frame
 from albot2d.logs.relations import Relations, RelationsOptions, relations_from_truth
 from albot2d.mapping.protocol import Mapper
@@ -232,6 +233,9 @@ def run_experiment(
         on_stage("scoring")
     relations = relations_from_truth(trace.timestamps, trace.true_poses, options=params.relations)
     scores = score_mappers(trace, relations, world.obstacle_segments, params)
+    for name, mapper in trace.mappers.items():
+        # Fig. 14: instructions and moves per global-map update, by region kind.
+        scores[name]["updates_by_region"] = updates_section(world, trace, mapper)
     world_info = {
         "kind": world.kind, "seed": world.seed, "params": dict(spec.world_params),
         "source": spec.world_file, "width_m": world.width_m, "height_m": world.height_m,

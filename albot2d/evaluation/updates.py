@@ -30,6 +30,7 @@ __all__ = [
     "summarise_counts",
     "update_counts",
     "updates_by_region",
+    "updates_section",
 ]
 
 # A frame whose true position moved less than this since the previous one was a turn.
@@ -131,3 +132,18 @@ def updates_by_region(
     """Instructions (and moves) per update, by region kind; see the module docstring and
     ``update_counts`` for the arguments, ``summarise_counts`` for the result."""
     return summarise_counts(*update_counts(true_xy, updated, regions))
+
+
+def updates_section(world: Any, trace: Any, mapper: Any) -> dict[str, dict[str, Any]] | None:
+    """report.json's ``updates_by_region`` for a view-based mapper with per-frame step
+    records (Albot1) in a simulated run; None otherwise. Only update rows are labelled."""
+    steps = getattr(mapper, "steps", None)
+    if world is None or trace.true_poses is None or not isinstance(steps, list):
+        return None
+    flags = albot1_update_flags(steps, trace.frame_indices)
+    xy = trace.true_poses[:, :2]
+    labels = np.full(len(flags), "", dtype=object)
+    rows = np.flatnonzero(flags)
+    if len(rows):
+        labels[rows] = region_labels(world, xy[rows])
+    return updates_by_region(xy, flags, labels)
