@@ -1,4 +1,9 @@
-"""Checks that parameter dataclasses run in ``__post_init__``; each error names field and value."""
+"""Checks that parameter dataclasses and readers run; each error names field and value.
+
+Also the physical limits every input shares: :data:`COORDINATE_LIMIT_M` bounds every
+coordinate and size in metres (world files, log poses, relations), so that no later
+computation (grids, spatial indexes, squared distances) overflows or loses all precision.
+"""
 
 from __future__ import annotations
 
@@ -6,9 +11,15 @@ import dataclasses
 import math
 from typing import Any
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 from albot2d.errors import InputError
 
 __all__ = [
+    "COORDINATE_LIMIT_M",
+    "check_at_most",
+    "check_coordinates",
     "check_finite",
     "check_in_range",
     "check_non_negative",
@@ -54,6 +65,30 @@ def check_in_range(obj: object, name: str, low: float, high: float) -> None:
     value = check_finite(obj, name)
     if not low <= value <= high:
         raise InputError(f"{_owner(obj)}.{name} must be in [{low}, {high}], got {value!r}")
+
+
+def check_at_most(obj: object, name: str, maximum: float, why: str = "") -> None:
+    """``obj.name`` must be a finite number <= ``maximum`` (a named cap; ``why`` explains it)."""
+    value = check_finite(obj, name)
+    if value > maximum:
+        reason = f" ({why})" if why else ""
+        raise InputError(f"{_owner(obj)}.{name} must be <= {maximum:g}{reason}, got {value!r}")
+
+
+#: Largest magnitude of any coordinate or size in metres an input may hold (±1000 km).
+COORDINATE_LIMIT_M = 1e6
+
+
+def check_coordinates(values: ArrayLike, what: str, limit: float = COORDINATE_LIMIT_M) -> None:
+    """Every number in ``values`` must be finite and within ±``limit``; names the first bad row."""
+    arr = np.asarray(values, dtype=np.float64)
+    bad = ~(np.abs(arr) <= limit)  # NaN compares False, so it is caught too
+    if bad.any():
+        index = tuple(int(i) for i in np.argwhere(bad)[0])
+        row = index[:1] if arr.ndim > 1 else index
+        shown = arr[row].tolist() if arr.ndim > 1 else arr[index].item()
+        where = "".join(f"[{i}]" for i in row)
+        raise InputError(f"{what}{where} is {shown!r}, outside the limit of ±{limit:g} m")
 
 
 def params_from_mapping(cls: type, values: dict[str, Any], *, where: str = "") -> Any:
