@@ -29,6 +29,7 @@ import numpy as np
 import shapely
 
 from albot2d.errors import InputError
+from worldgen.params import MAX_DYNAMIC_OBSTACLES, MAX_ROBOT_RADIUS_M
 from worldgen.world import World
 
 __all__ = [
@@ -49,9 +50,7 @@ __all__ = [
 MAX_WALLS = 500_000
 MAX_CLUTTER_ITEMS = 100_000
 MAX_ROADMAP_NODES = 200_000
-MAX_DYNAMIC_OBSTACLES = 200
 MAX_PATH_POINTS = 10_000
-MAX_ROBOT_RADIUS_M = 5.0
 MIN_OBSTACLE_AREA_M2 = 1e-4  # a 1 cm square
 MAX_OBSTACLE_SPEED_M_S = 10.0  # a sprinter
 MAX_OBSTACLE_MASS_KG = 10_000.0
