@@ -8,6 +8,11 @@ values ``null``; map quality is ``null``. The ``truth`` mapper cannot run on a l
 Without an explicit relations file one is looked for beside the log: ``NAME.relations``
 next to ``NAME.clf[.gz]`` (this is where ``albot2d simulate`` puts it, as ``log.relations``)
 or in a sibling ``relations/`` folder (the layout of the shared MIT CSAIL data).
+
+The log's frames are put in time order first (``albot2d.logs.anomalies``: sorted by
+timestamp, repeated timestamps dropped) and its anomalies (non-finite and negative ranges,
+out-of-order and duplicate timestamps) are counted in the report's ``log.anomalies``;
+with ``strict`` any anomaly refuses the log instead.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from albot2d.evaluation.report import make_report
 from albot2d.evaluation.scoring import EvaluationParams, odometry_section, score_mappers
 from albot2d.evaluation.trace import drive_mappers
 from albot2d.frames import Frame
+from albot2d.logs.anomalies import ordered_frames
 from albot2d.logs.frames import read_frames
 from albot2d.logs.relations import Relations, read_relations
 from albot2d.mapping.registry import resolve_mappers
@@ -75,11 +81,13 @@ def replay_log(
     max_frames: int | None = None,
     on_frame: Callable[[Frame, float], None] | None = None,
     on_stage: Callable[[str], None] | None = None,
+    strict: bool = False,
 ) -> ExperimentResult:
     """Map ``log`` with every mapper and score against ``relations_path`` (found if None).
 
     ``on_frame(frame, travelled_m)`` is called after each frame and ``on_stage("scoring")``
-    after the last one (progress display).
+    after the last one (progress display). ``strict`` turns any log anomaly into an
+    ``InputError`` (see the module docstring).
     """
     params = params or EvaluationParams()
     t0 = time.perf_counter()
@@ -96,7 +104,9 @@ def replay_log(
         relations = read_relations(rel_path)
     if max_frames is not None and (isinstance(max_frames, bool) or max_frames <= 0):
         raise InputError(f"max_frames must be a positive integer, got {max_frames!r}")
-    frames = read_frames(log_path)
+    frames, anomalies = ordered_frames(read_frames(log_path))
+    if strict and anomalies.total:
+        raise InputError(f"{log_path}: log anomalies (strict): {anomalies.summary()}")
     instances = {name: factory() for name, factory in factories.items()}
     trace = drive_mappers(
         frames, instances, homing=params.homing, last_k_views=params.map_quality.last_k_views,
@@ -131,6 +141,7 @@ def replay_log(
             **{k: v for k, v in evaluation_params_dict(params).items() if k != "relations"},
         },
         run=log_info,
+        log={"path": os.fspath(log_path), "anomalies": anomalies.as_dict()},
         odometry=odometry,
         mappers=scores,
         figures=[],
