@@ -54,11 +54,14 @@ def check_non_negative(obj: object, *names: str) -> None:
             raise InputError(f"{_owner(obj)}.{name} must be >= 0, got {getattr(obj, name)!r}")
 
 
-def check_positive_int(obj: object, *names: str) -> None:
+def check_positive_int(obj: object, *names: str, maximum: int | None = None) -> None:
+    """Each named field must be an integer > 0 (and <= ``maximum``, a named cap, if given)."""
     for name in names:
         value = getattr(obj, name)
         if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
             raise InputError(f"{_owner(obj)}.{name} must be a positive integer, got {value!r}")
+        if maximum is not None and value > maximum:
+            raise InputError(f"{_owner(obj)}.{name} must be <= {maximum}, got {value!r}")
 
 
 def check_in_range(obj: object, name: str, low: float, high: float) -> None:
