@@ -8,7 +8,9 @@ computation (grids, spatial indexes, squared distances) overflows or loses all p
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -18,6 +20,7 @@ from albot2d.errors import InputError
 
 __all__ = [
     "COORDINATE_LIMIT_M",
+    "MAX_JSON_DEPTH",
     "check_at_most",
     "check_coordinates",
     "check_finite",
@@ -26,6 +29,7 @@ __all__ = [
     "check_positive",
     "check_positive_int",
     "params_from_mapping",
+    "parse_json",
 ]
 
 
@@ -92,6 +96,53 @@ def check_coordinates(values: ArrayLike, what: str, limit: float = COORDINATE_LI
         shown = arr[row].tolist() if arr.ndim > 1 else arr[index].item()
         where = "".join(f"[{i}]" for i in row)
         raise InputError(f"{what}{where} is {shown!r}, outside the limit of ±{limit:g} m")
+
+
+#: Arrays and objects in a JSON input may nest at most this deep (albot2d's files need ~8).
+MAX_JSON_DEPTH = 64
+
+
+def parse_json(
+    text: str,
+    source: str,
+    *,
+    max_depth: int = MAX_JSON_DEPTH,
+    object_pairs_hook: Callable[[list[tuple[str, Any]]], Any] | None = None,
+) -> Any:
+    """Parse JSON ``text``; every failure is one ``InputError`` naming ``source``.
+
+    Covers what ``json`` raises beyond ``JSONDecodeError``: ``RecursionError`` for deep
+    nesting and ``ValueError`` for integers with more digits than Python converts; then
+    refuses documents nested deeper than ``max_depth``.
+    """
+    try:
+        doc = json.loads(text, object_pairs_hook=object_pairs_hook)
+    except json.JSONDecodeError as exc:
+        raise InputError(
+            f"{source}: not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}"
+        ) from None
+    except RecursionError:
+        raise InputError(f"{source}: JSON nested deeper than {max_depth} levels") from None
+    except ValueError as exc:  # e.g. "Exceeds the limit (4300 digits) for integer string"
+        raise InputError(f"{source}: not valid JSON: {str(exc)[:120]}") from None
+    if _json_depth(doc, max_depth) > max_depth:
+        raise InputError(f"{source}: JSON nested deeper than {max_depth} levels")
+    return doc
+
+
+def _json_depth(doc: Any, limit: int) -> int:
+    """How deep lists and objects nest in ``doc`` (stops past ``limit``); iterative."""
+    deepest = 0
+    stack: list[tuple[Any, int]] = [(doc, 1)]
+    while stack:
+        value, depth = stack.pop()
+        if isinstance(value, dict | list):
+            deepest = max(deepest, depth)
+            if depth > limit:
+                return depth
+            items = value.values() if isinstance(value, dict) else value
+            stack.extend((item, depth + 1) for item in items if isinstance(item, dict | list))
+    return deepest
 
 
 def params_from_mapping(cls: type, values: dict[str, Any], *, where: str = "") -> Any:

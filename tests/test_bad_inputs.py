@@ -581,6 +581,49 @@ def test_replay_command_line_values(tmp_path: Path, capsys: Any) -> None:
         _nothing_written(out)
 
 
+# ------------------------------------------------------------------ plans and reports
+
+OTHER_CASES = [
+    (
+        "houseexpo-1e300",
+        "he.json",
+        '{"id": "h", "verts": [[0, 0], [1e300, 0], [0, 5]]}',
+        ("verts[1]", "1e+300"),
+    ),
+    (
+        "houseexpo-huge-int",
+        "he.json",
+        '{"id": "h", "verts": [[0, 0], [' + "9" * 400 + ", 0]]}",
+        ("verts[1]", "999999"),
+    ),
+    (
+        "houseexpo-800m",
+        "he.json",
+        '{"id": "h", "verts": [[0, 0], [800, 0], [0, 5]]}',
+        ("verts span 800 m", "500"),
+    ),
+    ("houseexpo-deep", "he.json", bi.nested(100_000), ("nested deeper than 64",)),
+    ("report-deep", "report.json", bi.nested(100_000), ("nested deeper than 64",)),
+    ("report-not-json", "report.json", "{", ("not valid JSON",)),
+]
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "expected"), [c[1:] for c in OTHER_CASES], ids=[c[0] for c in OTHER_CASES]
+)
+def test_bad_plan_or_report(name, content, expected, tmp_path, capsys) -> None:
+    path = tmp_path / name
+    path.write_text(content)
+    if name == "he.json":
+        out = tmp_path / "w.json"
+        argv = ["world", "--from-houseexpo", str(path), "--out", str(out)]
+    else:
+        out = tmp_path / "out"
+        argv = ["run", "--reproduce", str(path), "--out", str(out)]
+    _refused(capsys, argv, str(path), *expected)
+    _nothing_written(out)
+
+
 # ------------------------------------------------------------------ the installed CLI
 
 SUBPROCESS_CASES = [

@@ -27,6 +27,7 @@ import shapely
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
+from albot2d.validation import MAX_JSON_DEPTH, parse_json
 from worldgen.world import DynamicObstacle, World
 from worldgen.world_reader import (
     ARRAY_DTYPES,
@@ -49,8 +50,6 @@ __all__ = [
 
 #: A world file may be at most this large (the largest generated worlds are a few MB).
 MAX_WORLD_FILE_BYTES = 256 * 1024 * 1024
-#: Arrays and objects may nest at most this deep (a world file needs about 8 levels).
-MAX_JSON_DEPTH = 64
 
 # ---------------------------------------------------------------- writing
 
@@ -228,33 +227,7 @@ def world_from_json(text: str, *, source: str = "<string>", validate: bool = Tru
             f"{source}: {len(text)} characters, more than the limit of {MAX_WORLD_FILE_BYTES}"
         )
     try:
-        doc = json.loads(text, object_pairs_hook=_no_duplicate_keys)
-    except json.JSONDecodeError as exc:
-        raise InputError(
-            f"{source}: not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}"
-        ) from exc
+        doc = parse_json(text, source, object_pairs_hook=_no_duplicate_keys)
     except _DuplicateKeyError as exc:
         raise InputError(f"{source}: duplicate key {exc.args[0]!r} in a JSON object") from exc
-    except RecursionError:
-        raise InputError(f"{source}: JSON nested deeper than {MAX_JSON_DEPTH} levels") from None
-    except ValueError as exc:  # e.g. an integer with more digits than Python converts
-        raise InputError(f"{source}: not valid JSON: {str(exc)[:120]}") from None
-    depth = _json_depth(doc, MAX_JSON_DEPTH)
-    if depth > MAX_JSON_DEPTH:
-        raise InputError(f"{source}: JSON nested deeper than {MAX_JSON_DEPTH} levels")
     return WorldReader(source, validate=validate).world(doc)
-
-
-def _json_depth(doc: Any, limit: int) -> int:
-    """How deep lists and objects nest in ``doc`` (stops counting past ``limit``); no recursion."""
-    deepest = 0
-    stack: list[tuple[Any, int]] = [(doc, 1)]
-    while stack:
-        value, depth = stack.pop()
-        if isinstance(value, dict | list):
-            deepest = max(deepest, depth)
-            if depth > limit:
-                return depth
-            items = value.values() if isinstance(value, dict) else value
-            stack.extend((item, depth + 1) for item in items if isinstance(item, dict | list))
-    return deepest
