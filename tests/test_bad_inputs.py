@@ -301,6 +301,16 @@ _ROBOTLASER = (
     + " 0 0 0 0 0 0 0 0 0 0 0 0 100.0 albot2d 100.0"
 )
 
+
+def _coarse_laser(lines: list[str]) -> None:
+    """19 beams 20° apart: readable, but too coarse for the mappers' surface extraction."""
+    lines[:] = [
+        "PARAM laser_front_laser_fov 360.0",
+        "PARAM laser_front_laser_resolution 20.0",
+        *(bi.flaser_line(k, ranges=["2.0"] * 19) for k in range(10)),
+    ]
+
+
 # (id, mutation of the valid log's lines, texts the error line must hold; ``:N`` = line)
 LOG_CASES: list[tuple[str, Callable[[list[str]], None], tuple[str, ...]]] = [
     ("pose-x-1e308", _line(3, x="1e308"), (":7:", "x '1e308'", "limit")),
@@ -370,6 +380,7 @@ LOG_CASES: list[tuple[str, Callable[[list[str]], None], tuple[str, ...]]] = [
     ("odom-1e308", _append("ODOM 1e308 0 0 0 0 0 100.0 albot2d 100.0"), (":44:", "ODOM", "x")),
     ("odom-short", _append("ODOM 1 2 3"), (":44:", "ODOM has 4 fields")),
     ("neff-text", _append("NEFF many"), (":44:", "NEFF", "'many'")),
+    ("coarse-laser", _coarse_laser, ("beams are 20 deg apart", "less than 10 deg")),
     ("no-laser-lines", lambda lines: lines.__setitem__(slice(3, None), []), ("no laser scans",)),
 ]
 

@@ -22,6 +22,8 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+import numpy as np
+
 from albot2d.errors import InputError
 from albot2d.evaluation.experiment import ExperimentResult, evaluation_params_dict
 from albot2d.evaluation.report import make_report
@@ -72,6 +74,21 @@ def check_replay_mappers(specs: Sequence[str]) -> None:
             )
 
 
+def _check_beam_spacing(log_path: Path, frame: Frame) -> None:
+    """Refuse, naming the log, a laser too coarse for the mappers' surface extraction."""
+    from albot2d.perception.extraction import ExtractionParams
+
+    angles = frame.scan.angles
+    spacing = float(np.degrees(np.abs(np.diff(angles)).max())) if len(angles) > 1 else 0.0
+    limit = ExtractionParams().breakpoint_lambda_deg
+    if spacing >= limit:
+        raise InputError(
+            f"{log_path}: the laser's beams are {spacing:.3g} deg apart (its PARAM "
+            f"laser_front_laser_fov/resolution or ROBOTLASER1 angles); the mappers need "
+            f"them less than {limit:g} deg apart"
+        )
+
+
 def replay_log(
     log: str | os.PathLike[str],
     *,
@@ -107,6 +124,8 @@ def replay_log(
     frames, anomalies = ordered_frames(read_frames(log_path))
     if strict and anomalies.total:
         raise InputError(f"{log_path}: log anomalies (strict): {anomalies.summary()}")
+    if frames:
+        _check_beam_spacing(log_path, frames[0])
     instances = {name: factory() for name, factory in factories.items()}
     trace = drive_mappers(
         frames, instances, homing=params.homing, last_k_views=params.map_quality.last_k_views,
