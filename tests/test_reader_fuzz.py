@@ -26,6 +26,7 @@ from albot2d.logs.relations import read_relations
 from albot2d.sim.raycast_grid import SegmentGrid
 from albot2d.validation import COORDINATE_LIMIT_M
 from tests import bad_inputs as bi
+from tests.log_strategies import frame_sequences
 from worldgen.io import load
 from worldgen.space import build_space
 
@@ -175,3 +176,20 @@ def test_relations_mutations_raise_only_input_error(tmp_path_factory, data) -> N
         return
     table = np.column_stack([relations.t1, relations.t2, relations.motion])
     assert np.isfinite(table).all() and (np.abs(relations.motion) <= COORDINATE_LIMIT_M).all()
+
+
+@given(frame_sequences(max_frames=6), st.randoms(use_true_random=False), st.integers(0, 3))
+def test_time_order_rule_restores_a_shuffled_log(frames, random, repeats) -> None:
+    """Shuffled frames with repeated ones come back as the original log, repeats dropped."""
+    shuffled = frames + [frames[random.randrange(len(frames))] for _ in range(repeats)]
+    random.shuffle(shuffled)
+    ordered, anomalies = ordered_frames(shuffled)
+    assert anomalies.duplicate_timestamps == repeats
+    assert anomalies.frames_read == len(frames) + repeats == anomalies.frames_kept + repeats
+    assert [f.index for f in ordered] == list(range(len(frames)))
+    for got, want in zip(ordered, frames, strict=True):
+        assert got.timestamp == want.timestamp and got.scan is want.scan
+        assert got.odom_pose == want.odom_pose
+        assert np.allclose(got.odom_increment.as_array(), want.odom_increment.as_array())
+    invalid = np.concatenate([f.scan.ranges for f in shuffled])
+    assert anomalies.non_finite_ranges == int((~np.isfinite(invalid)).sum())
