@@ -124,7 +124,7 @@ def replay_log(
     frames, anomalies = ordered_frames(read_frames(log_path))
     if strict and anomalies.total:
         raise InputError(f"{log_path}: log anomalies (strict): {anomalies.summary()}")
-    if frames:
+    if frames and any(":" not in spec for spec in mappers):  # built-ins extract surfaces
         _check_beam_spacing(log_path, frames[0])
     instances = {name: factory() for name, factory in factories.items()}
     trace = drive_mappers(
