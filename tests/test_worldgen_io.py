@@ -206,7 +206,7 @@ def worlds(draw: st.DrawFn) -> World:
 @given(worlds())
 def test_json_round_trip_is_exact(world: World) -> None:
     text = world_to_json(world)
-    again = world_from_json(text)
+    again = world_from_json(text, validate=False)
     assert_same_world(world, again)
     assert world_to_json(again) == text
 

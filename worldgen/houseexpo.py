@@ -9,8 +9,6 @@ the file, the field and the value.
 
 from __future__ import annotations
 
-import json
-import math
 import os
 from pathlib import Path
 from typing import Any
@@ -20,7 +18,9 @@ import shapely
 
 from albot2d.errors import InputError
 from albot2d.seeding import make_rng
+from albot2d.validation import COORDINATE_LIMIT_M, parse_json
 from worldgen.assemble import make_world
+from worldgen.params import MAX_WORLD_SIZE_M
 from worldgen.roadmap import RoadmapParams
 from worldgen.world import World
 
@@ -34,12 +34,17 @@ def _fail(source: str, message: str) -> InputError:
 
 
 def _is_number(x: Any) -> bool:
-    return type(x) in (int, float) and math.isfinite(x)
+    """A finite number within the coordinate limit (ints of any size are compared exactly)."""
+    return type(x) in (int, float) and abs(x) <= COORDINATE_LIMIT_M
 
 
 def _numbers(value: Any, source: str, field: str, count: int) -> list[float]:
     if not isinstance(value, list) or len(value) != count or not all(map(_is_number, value)):
-        raise _fail(source, f"{field} must be {count} finite numbers, got {value!r}")
+        raise _fail(
+            source,
+            f"{field} must be {count} finite numbers, got {value!r:.80} "
+            f"(each within ±{COORDINATE_LIMIT_M:g})",
+        )
     return [float(v) for v in value]
 
 
@@ -50,6 +55,11 @@ def _check_verts(value: Any, source: str) -> np.ndarray:
     arr = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if len(np.unique(arr, axis=0)) < 3:
         raise _fail(source, f"verts needs at least 3 distinct points, got {len(arr)}")
+    extent = float(np.ptp(arr, axis=0).max())
+    if extent > MAX_WORLD_SIZE_M:
+        raise _fail(
+            source, f"verts span {extent:g} m, more than the world size cap of {MAX_WORLD_SIZE_M} m"
+        )
     return arr
 
 
@@ -78,13 +88,10 @@ def read_houseexpo(path: str | os.PathLike[str]) -> dict[str, Any]:
     p = Path(path)
     source = str(p)
     try:
-        doc = json.loads(p.read_bytes().decode("utf-8"))
+        text = p.read_bytes().decode("utf-8")
     except UnicodeDecodeError as exc:
         raise _fail(source, f"not UTF-8 text (byte {exc.start})") from exc
-    except json.JSONDecodeError as exc:
-        raise _fail(
-            source, f"not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}"
-        ) from exc
+    doc = parse_json(text, source)
     if not isinstance(doc, dict):
         raise _fail(source, "expected a HouseExpo JSON object with a verts field")
     missing = [key for key in ("verts", "id") if key not in doc]

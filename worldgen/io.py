@@ -8,6 +8,8 @@ timestamps): identical worlds give identical bytes in any process. Loading check
 field (``worldgen.world_reader``) and raises ``InputError`` naming the file, the field and
 the value. Numpy arrays, shapely geometries and poses inside ``params``/``features`` are
 stored as tagged objects (``{"__type__": "ndarray", ...}``); tuples come back as lists.
+A file larger than ``MAX_WORLD_FILE_BYTES`` or nested deeper than ``MAX_JSON_DEPTH`` is
+refused before its fields are read.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import shapely
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
+from albot2d.validation import MAX_JSON_DEPTH, parse_json
 from worldgen.world import DynamicObstacle, World
 from worldgen.world_reader import (
     ARRAY_DTYPES,
@@ -37,11 +40,16 @@ from worldgen.world_reader import (
 __all__ = [
     "FORMAT_NAME",
     "FORMAT_VERSION",
+    "MAX_JSON_DEPTH",
+    "MAX_WORLD_FILE_BYTES",
     "load",
     "save",
     "world_from_json",
     "world_to_json",
 ]
+
+#: A world file may be at most this large (the largest generated worlds are a few MB).
+MAX_WORLD_FILE_BYTES = 256 * 1024 * 1024
 
 # ---------------------------------------------------------------- writing
 
@@ -182,6 +190,11 @@ def _encode_value(value: Any, field: str) -> Any:
 def load(path: str | os.PathLike[str]) -> World:
     """Read a world file written by ``save``; bad files raise ``InputError`` naming the problem."""
     p = Path(path)
+    size = p.stat().st_size
+    if size > MAX_WORLD_FILE_BYTES:
+        raise InputError(
+            f"{p}: {size} bytes, more than the limit of {MAX_WORLD_FILE_BYTES} for a world file"
+        )
     data = p.read_bytes()
     try:
         text = data.decode("utf-8")
@@ -203,14 +216,18 @@ def _no_duplicate_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def world_from_json(text: str, *, source: str = "<string>") -> World:
-    """Parse and check world JSON text; ``source`` names the file in error messages."""
-    try:
-        doc = json.loads(text, object_pairs_hook=_no_duplicate_keys)
-    except json.JSONDecodeError as exc:
+def world_from_json(text: str, *, source: str = "<string>", validate: bool = True) -> World:
+    """Parse and check world JSON text; ``source`` names the file in error messages.
+
+    ``validate=False`` skips the coordinate limits and the drivability checks (see
+    ``worldgen.world_reader``); every command reads worlds with ``validate=True``.
+    """
+    if len(text) > MAX_WORLD_FILE_BYTES:
         raise InputError(
-            f"{source}: not valid JSON: {exc.msg} at line {exc.lineno} column {exc.colno}"
-        ) from exc
+            f"{source}: {len(text)} characters, more than the limit of {MAX_WORLD_FILE_BYTES}"
+        )
+    try:
+        doc = parse_json(text, source, object_pairs_hook=_no_duplicate_keys)
     except _DuplicateKeyError as exc:
         raise InputError(f"{source}: duplicate key {exc.args[0]!r} in a JSON object") from exc
-    return WorldReader(source).world(doc)
+    return WorldReader(source, validate=validate).world(doc)

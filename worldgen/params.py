@@ -1,17 +1,32 @@
 """Frozen, validated parameter dataclasses for each procedural world kind.
 
 Every field is named with its unit; ``__post_init__`` rejects NaN, negative, inverted
-ranges and sizes too small for the kind, naming the field and the value.
+ranges and sizes too small for the kind, naming the field and the value. Fields that
+multiply the work of generating or simulating a world are capped by named maxima
+(:data:`MAX_WORLD_SIZE_M`, :data:`MAX_DYNAMIC_OBSTACLES`, ...): generation time grows
+faster than the area (a 200 m world takes about 1.5 s, a 1000 m one minutes).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from albot2d.errors import InputError
-from albot2d.validation import check_finite, check_in_range, check_non_negative, check_positive
+from albot2d.validation import (
+    check_at_most,
+    check_finite,
+    check_in_range,
+    check_non_negative,
+    check_positive,
+)
 
 __all__ = [
+    "MAX_CLUTTER_PER_10M2",
+    "MAX_DYNAMIC_OBSTACLES",
+    "MAX_PART_COUNT",
+    "MAX_ROBOT_RADIUS_M",
+    "MAX_WORLD_SIZE_M",
     "PARAMS_BY_KIND",
     "CommonParams",
     "CorridorsParams",
@@ -21,6 +36,17 @@ __all__ = [
     "RoomsParams",
     "passage_width_m",
 ]
+
+#: Largest world width or height (metres) a generator accepts.
+MAX_WORLD_SIZE_M = 500.0
+#: Most moving obstacles a world may hold (generated or read from a file).
+MAX_DYNAMIC_OBSTACLES = 200
+#: Densest clutter a generator places (items per 10 m² of floor).
+MAX_CLUTTER_PER_10M2 = 5.0
+#: Most hall parts, partition walls or open areas a generator lays out.
+MAX_PART_COUNT = 50
+#: Largest robot radius (metres) a world may be made for.
+MAX_ROBOT_RADIUS_M = 5.0
 
 # A doorway or gap must let the robot's disc through with its node clearance on both sides.
 _GAP_SLACK_M = 0.02
@@ -37,6 +63,15 @@ def _check_count(obj: object, name: str) -> None:
     value = getattr(obj, name)
     if isinstance(value, bool) or not isinstance(value, int) or value < 0:
         raise InputError(f"{type(obj).__name__}.{name} must be an integer >= 0, got {value!r}")
+
+
+def _check_count_at_most(obj: object, name: str, maximum: int) -> None:
+    _check_count(obj, name)
+    if getattr(obj, name) > maximum:
+        raise InputError(
+            f"{type(obj).__name__}.{name} must be <= {maximum} (a cap on the work), "
+            f"got {getattr(obj, name)!r}"
+        )
 
 
 def _check_order(obj: object, low: str, high: str) -> None:
@@ -73,7 +108,13 @@ class CommonParams:
         check_positive(self, "width_m", "height_m", "robot_radius_m", "wall_thickness_m")
         check_non_negative(self, "clearance_margin_m", "clutter_per_10m2")
         check_in_range(self, "wall_thickness_m", 0.05, 1.0)
-        _check_count(self, "dynamic_obstacles")
+        _check_count_at_most(self, "dynamic_obstacles", MAX_DYNAMIC_OBSTACLES)
+        check_at_most(self, "robot_radius_m", MAX_ROBOT_RADIUS_M)
+        check_at_most(self, "clearance_margin_m", MAX_ROBOT_RADIUS_M)
+        check_at_most(self, "clutter_per_10m2", MAX_CLUTTER_PER_10M2, "a cap on the work")
+        for spec in dataclasses.fields(self):  # no length may exceed the largest world
+            if spec.name.endswith("_m"):
+                check_at_most(self, spec.name, MAX_WORLD_SIZE_M, "a cap on the work")
         kind = type(self).__name__.removesuffix("Params").lower()
         for name in ("width_m", "height_m"):
             _check_at_least(self, name, self.min_size_m, f"for {kind} worlds")
@@ -185,10 +226,10 @@ class OpenParams(CommonParams):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check_count(self, "hall_parts")
+        _check_count_at_most(self, "hall_parts", MAX_PART_COUNT)
         if self.hall_parts < 1:
             raise InputError(f"OpenParams.hall_parts must be >= 1, got {self.hall_parts!r}")
-        _check_count(self, "partition_walls")
+        _check_count_at_most(self, "partition_walls", MAX_PART_COUNT)
         check_in_range(self, "chamfer_fraction", 0.0, 1.0)
         check_non_negative(self, "pillar_spacing_m")
         check_in_range(self, "pillar_size_m", 0.1, 2.0)
@@ -230,7 +271,7 @@ class OfficeParams(_DoorParams):
         _check_at_least(self, "room_width_min_m", small, "(a door must fit in a room wall)")
         _check_at_least(self, "room_depth_min_m", small, "(a door must fit in a room wall)")
         _check_at_least(self, "block_length_max_m", 2.0 * self.room_width_max_m, "(two rooms)")
-        _check_count(self, "open_areas")
+        _check_count_at_most(self, "open_areas", MAX_PART_COUNT)
         check_in_range(self, "extra_door_fraction", 0.0, 1.0)
         ring = 2.0 * (self.room_depth_max_m + self.corridor_width_max_m) + 2.0 * small
         for name in ("width_m", "height_m"):

@@ -2,7 +2,11 @@
 
 Every error is an ``InputError`` naming the source file, the field path (``walls[17]``,
 ``free_space.holes[2]``) and the offending value. The format itself is described in
-``worldgen.io``.
+``worldgen.io``. Every number must be finite. With ``validate`` (the default, and what every
+command uses) every coordinate and size must also lie within ±``COORDINATE_LIMIT_M`` (1e6 m)
+and the world as a whole must be drivable (``worldgen.world_checks``: walls, start disc,
+roadmap, moving obstacles, with named limits); ``validate=False`` reads any finite world
+exactly as written, for format-level round trips.
 """
 
 from __future__ import annotations
@@ -15,7 +19,9 @@ import shapely
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
+from albot2d.validation import COORDINATE_LIMIT_M
 from worldgen.world import DynamicObstacle, Roadmap, World
+from worldgen.world_checks import world_problem
 
 __all__ = ["ARRAY_DTYPES", "FORMAT_NAME", "FORMAT_VERSION", "TYPE_TAG", "WorldReader"]
 
@@ -42,6 +48,7 @@ _WORLD_KEYS = frozenset(
 )
 _OBSTACLE_KEYS = frozenset({"kind", "shape", "pose", "path", "speed_m_s", "mass_kg"})
 _OBSTACLE_KINDS = ("box", "person")
+_INT_FLOAT_LIMIT = 1e300  # larger integers may not convert to a float64
 ARRAY_DTYPES = frozenset(
     [
         "bool",
@@ -66,11 +73,21 @@ def _type_name(value: Any) -> str:
     )
 
 
+def _short(value: Any, limit: int = 60) -> str:
+    """``repr(value)`` cut to ``limit`` characters (a 5000-digit integer stays one short line)."""
+    if type(value) is int and abs(value) > 10**40:
+        return f"an integer of {len(str(abs(value)))} digits"
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 class WorldReader:
     """Checks a parsed JSON document field by field; every error names ``source`` and the field."""
 
-    def __init__(self, source: str) -> None:
+    def __init__(self, source: str, *, validate: bool = True) -> None:
         self.source = source
+        self.validate = validate
+        self.limit = COORDINATE_LIMIT_M if validate else math.inf
 
     def fail(self, message: str) -> InputError:
         return InputError(f"{self.source}: {message}")
@@ -86,20 +103,26 @@ class WorldReader:
             raise self.fail(f"{field} has unknown key(s) {', '.join(unknown)}")
         return value
 
-    def number(self, value: Any, field: str) -> float:
+    def number(self, value: Any, field: str, limit: float | None = None) -> float:
+        """A finite number within ±``limit`` (default: the coordinate limit, if validating)."""
+        limit = self.limit if limit is None else limit
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.fail(f"{field} must be a number, got {value!r}")
+            raise self.fail(f"{field} must be a number, got {_short(value)}")
         try:
             number = float(value)
         except OverflowError:
             number = math.inf
         if not math.isfinite(number):
-            raise self.fail(f"{field} must be finite, got {value!r}")
+            raise self.fail(f"{field} must be finite, got {_short(value)}")
+        if abs(number) > limit:
+            raise self.fail(f"{field} is {_short(value)}, outside the limit of ±{limit:g}")
         return number
 
     def numbers(self, value: Any, field: str, count: int, what: str) -> list[float]:
         if not isinstance(value, list):
-            raise self.fail(f"{field} must be a list of {count} numbers {what}, got {value!r}")
+            raise self.fail(
+                f"{field} must be a list of {count} numbers {what}, got {_short(value)}"
+            )
         if len(value) != count:
             raise self.fail(f"{field} has {len(value)} numbers, expected {count} {what}")
         return [self.number(v, f"{field}[{i}]") for i, v in enumerate(value)]
@@ -114,12 +137,23 @@ class WorldReader:
                 raise self.fail(f"{field}[{i}] has {got}, expected {cols} {what}")
             for x in row:
                 if type(x) is not float and type(x) is not int:
-                    raise self.fail(f"{field}[{i}] must hold numbers, got {x!r}")
+                    raise self.fail(f"{field}[{i}] must hold numbers, got {_short(x)}")
+                if type(x) is int and abs(x) > min(self.limit, _INT_FLOAT_LIMIT):
+                    limit = min(self.limit, _INT_FLOAT_LIMIT)
+                    raise self.fail(
+                        f"{field}[{i}] holds {_short(x)}, outside the limit of ±{limit:g}"
+                    )
         arr = np.array(value, dtype=np.float64).reshape(-1, cols)
         bad = ~np.isfinite(arr)
         if bad.any():
             i = int(np.argwhere(bad)[0][0])
-            raise self.fail(f"{field}[{i}] has a non-finite number: {value[i]!r}")
+            raise self.fail(f"{field}[{i}] has a non-finite number: {_short(value[i])}")
+        big = np.abs(arr) > self.limit
+        if big.any():
+            i = int(np.argwhere(big)[0][0])
+            raise self.fail(
+                f"{field}[{i}] is {_short(value[i])}, outside the limit of ±{self.limit:g}"
+            )
         return arr
 
     def ring(self, value: Any, field: str) -> np.ndarray:
@@ -134,7 +168,7 @@ class WorldReader:
         doc = self.obj(value, field, frozenset({"exterior", "holes"}))
         exterior = self.ring(doc["exterior"], f"{field}.exterior")
         if not isinstance(doc["holes"], list):
-            raise self.fail(f"{field}.holes must be a list of rings, got {doc['holes']!r}")
+            raise self.fail(f"{field}.holes must be a list of rings, got {_short(doc['holes'])}")
         holes = [self.ring(h, f"{field}.holes[{i}]") for i, h in enumerate(doc["holes"])]
         poly = shapely.Polygon(exterior, holes)
         if not poly.is_valid:
@@ -148,20 +182,22 @@ class WorldReader:
         if "format" not in doc:
             raise self.fail(f'not an albot2d world file (no "format": "{FORMAT_NAME}")')
         if doc["format"] != FORMAT_NAME:
-            raise self.fail(f"format is {doc['format']!r}, expected {FORMAT_NAME!r}")
+            raise self.fail(f"format is {_short(doc['format'])}, expected {FORMAT_NAME!r}")
         version = doc.get("version")
         if type(version) is not int or version != FORMAT_VERSION:
-            raise self.fail(f"version is {version!r}; this albot2d reads version {FORMAT_VERSION}")
+            raise self.fail(
+                f"version is {_short(version)}; this albot2d reads version {FORMAT_VERSION}"
+            )
         doc = self.obj(doc, "the world", _WORLD_KEYS)
         kind = doc["kind"]
         if not isinstance(kind, str) or not kind:
-            raise self.fail(f"kind must be a non-empty string, got {kind!r}")
+            raise self.fail(f"kind must be a non-empty string, got {_short(kind)}")
         seed = doc["seed"]
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
-            raise self.fail(f"seed must be a non-negative integer or null, got {seed!r}")
+            raise self.fail(f"seed must be a non-negative integer or null, got {_short(seed)}")
         radius = self.number(doc["robot_radius_m"], "robot_radius_m")
         if radius <= 0.0:
-            raise self.fail(f"robot_radius_m must be > 0, got {radius!r}")
+            raise self.fail(f"robot_radius_m must be > 0, got {_short(radius)}")
         bounds = self.numbers(doc["bounds"], "bounds", 4, "[xmin, ymin, xmax, ymax]")
         if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
             raise self.fail(f"bounds {bounds} need xmin < xmax and ymin < ymax")
@@ -172,11 +208,11 @@ class WorldReader:
         clutter = [self.polygon(p, f"clutter[{i}]") for i, p in enumerate(doc["clutter"])]
         free_space = self.polygon(doc["free_space"], "free_space")
         if not free_space.covers(shapely.Point(start.x, start.y)):
-            raise self.fail(f"start ({start.x!r}, {start.y!r}) is outside free_space")
+            raise self.fail(f"start ({_short(start.x)}, {_short(start.y)}) is outside free_space")
         obstacles = doc["dynamic_obstacles"]
         if not isinstance(obstacles, list):
             raise self.fail(f"dynamic_obstacles must be a list, got {_type_name(obstacles)}")
-        return World(
+        world = World(
             walls=walls,
             clutter=tuple(clutter),
             free_space=free_space,
@@ -192,6 +228,10 @@ class WorldReader:
             features=self.mapping(doc["features"], "features"),
             robot_radius_m=radius,
         )
+        problem = world_problem(world) if self.validate else None
+        if problem is not None:
+            raise self.fail(problem)
+        return world
 
     def roadmap(self, value: Any) -> Roadmap:
         doc = self.obj(value, "roadmap", frozenset({"nodes", "edges"}))
@@ -202,10 +242,10 @@ class WorldReader:
         for k, edge in enumerate(edges):
             field = f"roadmap.edges[{k}]"
             if not isinstance(edge, list) or len(edge) != 2:
-                raise self.fail(f"{field} must be [i, j], got {edge!r}")
+                raise self.fail(f"{field} must be [i, j], got {_short(edge)}")
             for index in edge:
                 if type(index) is not int:
-                    raise self.fail(f"{field} must hold integer node indices, got {edge!r}")
+                    raise self.fail(f"{field} must hold integer node indices, got {_short(edge)}")
                 if not 0 <= index < len(nodes):
                     raise self.fail(
                         f"{field} node index {index} out of range (roadmap has {len(nodes)} nodes)"
@@ -217,13 +257,15 @@ class WorldReader:
     def obstacle(self, value: Any, field: str) -> DynamicObstacle:
         doc = self.obj(value, field, _OBSTACLE_KEYS)
         if doc["kind"] not in _OBSTACLE_KINDS:
-            raise self.fail(f"{field}.kind must be one of {_OBSTACLE_KINDS}, got {doc['kind']!r}")
-        speed = self.number(doc["speed_m_s"], f"{field}.speed_m_s")
-        mass = self.number(doc["mass_kg"], f"{field}.mass_kg")
+            raise self.fail(
+                f"{field}.kind must be one of {_OBSTACLE_KINDS}, got {_short(doc['kind'])}"
+            )
+        speed = self.number(doc["speed_m_s"], f"{field}.speed_m_s", math.inf)
+        mass = self.number(doc["mass_kg"], f"{field}.mass_kg", math.inf)
         if speed < 0.0:
-            raise self.fail(f"{field}.speed_m_s must be >= 0, got {speed!r}")
+            raise self.fail(f"{field}.speed_m_s must be >= 0, got {_short(speed)}")
         if mass <= 0.0:
-            raise self.fail(f"{field}.mass_kg must be > 0, got {mass!r}")
+            raise self.fail(f"{field}.mass_kg must be > 0, got {_short(mass)}")
         return DynamicObstacle(
             kind=doc["kind"],
             shape=self.ring(doc["shape"], f"{field}.shape"),
@@ -240,7 +282,7 @@ class WorldReader:
 
     def value(self, value: Any, field: str) -> Any:
         if isinstance(value, float):
-            return self.number(value, field)
+            return self.number(value, field, math.inf)
         if isinstance(value, list):
             return [self.value(v, f"{field}[{i}]") for i, v in enumerate(value)]
         if isinstance(value, dict):
@@ -280,18 +322,20 @@ class WorldReader:
         name, shape, data = doc["dtype"], doc["shape"], doc["data"]
         dtype = np.dtype(name) if isinstance(name, str) and name in ARRAY_DTYPES else None
         if dtype is None:
-            raise self.fail(f"{field}.dtype must be one of {sorted(ARRAY_DTYPES)}, got {name!r}")
+            raise self.fail(
+                f"{field}.dtype must be one of {sorted(ARRAY_DTYPES)}, got {_short(name)}"
+            )
         if not isinstance(shape, list) or not all(type(n) is int and n >= 0 for n in shape):
-            raise self.fail(f"{field}.shape must be a list of sizes, got {shape!r}")
+            raise self.fail(f"{field}.shape must be a list of sizes, got {_short(shape)}")
         if not isinstance(data, list) or len(data) != math.prod(shape):
             got = f"{len(data)} items" if isinstance(data, list) else _type_name(data)
             raise self.fail(f"{field}.data has {got}, shape {shape} needs {math.prod(shape)}")
         allowed = (bool,) if dtype.kind == "b" else (int,) if dtype.kind in "iu" else (int, float)
         for i, x in enumerate(data):
             if type(x) not in allowed:
-                raise self.fail(f"{field}.data[{i}] is {x!r}, not a {dtype.name} value")
+                raise self.fail(f"{field}.data[{i}] is {_short(x)}, not a {dtype.name} value")
             if type(x) is float:
-                self.number(x, f"{field}.data[{i}]")
+                self.number(x, f"{field}.data[{i}]", math.inf)
         try:
             return np.array(data, dtype=dtype).reshape(shape)
         except OverflowError as exc:

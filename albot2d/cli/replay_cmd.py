@@ -42,6 +42,8 @@ def register(subparsers: Any) -> None:
     add_scoring_options(p)
     p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    p.add_argument("--strict", action="store_true",
+                   help="refuse a log with anomalies (bad ranges, timestamps out of order)")
     p.set_defaults(handler=run)
 
 
@@ -76,12 +78,19 @@ def run(args: argparse.Namespace) -> int:
         result = finish(
             out, created, "replay",
             lambda: replay_log(log, relations_path=relations, mappers=mappers, params=params,
-                               max_frames=max_frames, on_frame=frame, on_stage=bar.set_description),
+                               max_frames=max_frames, on_frame=frame, on_stage=bar.set_description,
+                               strict=args.strict),
             args.no_figures, bar.set_description,
         )  # fmt: skip
     finally:
         bar.close()
     print_tables(result, out)
+    anomalies = result.report["log"]["anomalies"]
+    if any(anomalies[k] for k in anomalies if not k.startswith("frames_")):
+        from albot2d.logs.anomalies import LogAnomalies
+
+        print(f"albot2d replay: warning: {log}: {LogAnomalies(**anomalies).summary()} "
+              "(--strict refuses such a log)", file=sys.stderr)
     used = result.report["run"].get("relations_used")
     if relations is None:
         print(f"albot2d replay: note: no relations file for {log} (give --relations), "

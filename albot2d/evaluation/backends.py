@@ -189,13 +189,24 @@ class LocalBackend:
             self._pool = None
 
 
+def _check_address(address: str) -> tuple[str, int]:
+    """``(host, port)`` of a ``tcp://HOST:PORT`` scheduler address; InputError naming it if not."""
+    try:
+        parts = urlsplit(address if "://" in address else f"tcp://{address}")
+        port = parts.port  # urllib raises ValueError for a port that is not 0-65535
+    except ValueError:
+        port = None
+        parts = None
+    if parts is None or parts.scheme not in ("tcp", "tls") or not parts.hostname or not port:
+        raise InputError(f"--address {address!r}: expected tcp://HOST:PORT (port 1-65535)")
+    return parts.hostname, port
+
+
 def _check_reachable(address: str) -> None:
     """Fail fast, with one line, when nothing listens at ``tcp://HOST:PORT``."""
-    parts = urlsplit(address if "://" in address else f"tcp://{address}")
-    if parts.scheme not in ("tcp", "tls") or not parts.hostname or parts.port is None:
-        raise InputError(f"--address {address!r}: expected tcp://HOST:PORT")
+    host, port = _check_address(address)
     try:
-        with socket.create_connection((parts.hostname, parts.port), timeout=_CONNECT_TIMEOUT_S):
+        with socket.create_connection((host, port), timeout=_CONNECT_TIMEOUT_S):
             pass
     except OSError as exc:
         raise InputError(f"--address {address}: no dask scheduler reachable there "

@@ -23,7 +23,11 @@ from numpy.typing import ArrayLike, NDArray
 from albot2d.geometry import Pose, as_segments, segment_lengths, transform_segments
 from albot2d.validation import check_positive, check_positive_int
 
-__all__ = ["MapQuality", "MapQualityParams", "map_quality", "sample_segments"]
+__all__ = ["MAX_LAST_K_VIEWS", "MapQuality", "MapQualityParams", "map_quality", "sample_segments"]
+
+
+#: Most recent views map completeness may be asked over (more than any run has).
+MAX_LAST_K_VIEWS = 1_000_000
 
 
 @dataclass(frozen=True, slots=True)
@@ -34,7 +38,7 @@ class MapQualityParams:
 
     def __post_init__(self) -> None:
         check_positive(self, "sample_spacing_m", "coverage_tolerance_m")
-        check_positive_int(self, "last_k_views")
+        check_positive_int(self, "last_k_views", maximum=MAX_LAST_K_VIEWS)
 
 
 @dataclass(frozen=True, slots=True)

@@ -8,6 +8,11 @@ values ``null``; map quality is ``null``. The ``truth`` mapper cannot run on a l
 Without an explicit relations file one is looked for beside the log: ``NAME.relations``
 next to ``NAME.clf[.gz]`` (this is where ``albot2d simulate`` puts it, as ``log.relations``)
 or in a sibling ``relations/`` folder (the layout of the shared MIT CSAIL data).
+
+The log's frames are put in time order first (``albot2d.logs.anomalies``: sorted by
+timestamp, repeated timestamps dropped) and its anomalies (non-finite and negative ranges,
+out-of-order and duplicate timestamps) are counted in the report's ``log.anomalies``;
+with ``strict`` any anomaly refuses the log instead.
 """
 
 from __future__ import annotations
@@ -17,12 +22,15 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+import numpy as np
+
 from albot2d.errors import InputError
 from albot2d.evaluation.experiment import ExperimentResult, evaluation_params_dict
 from albot2d.evaluation.report import make_report
 from albot2d.evaluation.scoring import EvaluationParams, odometry_section, score_mappers
 from albot2d.evaluation.trace import drive_mappers
 from albot2d.frames import Frame
+from albot2d.logs.anomalies import ordered_frames
 from albot2d.logs.frames import read_frames
 from albot2d.logs.relations import Relations, read_relations
 from albot2d.mapping.registry import resolve_mappers
@@ -66,6 +74,21 @@ def check_replay_mappers(specs: Sequence[str]) -> None:
             )
 
 
+def _check_beam_spacing(log_path: Path, frame: Frame) -> None:
+    """Refuse, naming the log, a laser too coarse for the mappers' surface extraction."""
+    from albot2d.perception.extraction import ExtractionParams
+
+    angles = frame.scan.angles
+    spacing = float(np.degrees(np.abs(np.diff(angles)).max())) if len(angles) > 1 else 0.0
+    limit = ExtractionParams().breakpoint_lambda_deg
+    if spacing >= limit:
+        raise InputError(
+            f"{log_path}: the laser's beams are {spacing:.3g} deg apart (its PARAM "
+            f"laser_front_laser_fov/resolution or ROBOTLASER1 angles); the mappers need "
+            f"them less than {limit:g} deg apart"
+        )
+
+
 def replay_log(
     log: str | os.PathLike[str],
     *,
@@ -75,11 +98,13 @@ def replay_log(
     max_frames: int | None = None,
     on_frame: Callable[[Frame, float], None] | None = None,
     on_stage: Callable[[str], None] | None = None,
+    strict: bool = False,
 ) -> ExperimentResult:
     """Map ``log`` with every mapper and score against ``relations_path`` (found if None).
 
     ``on_frame(frame, travelled_m)`` is called after each frame and ``on_stage("scoring")``
-    after the last one (progress display).
+    after the last one (progress display). ``strict`` turns any log anomaly into an
+    ``InputError`` (see the module docstring).
     """
     params = params or EvaluationParams()
     t0 = time.perf_counter()
@@ -96,7 +121,11 @@ def replay_log(
         relations = read_relations(rel_path)
     if max_frames is not None and (isinstance(max_frames, bool) or max_frames <= 0):
         raise InputError(f"max_frames must be a positive integer, got {max_frames!r}")
-    frames = read_frames(log_path)
+    frames, anomalies = ordered_frames(read_frames(log_path))
+    if strict and anomalies.total:
+        raise InputError(f"{log_path}: log anomalies (strict): {anomalies.summary()}")
+    if frames and any(":" not in spec for spec in mappers):  # built-ins extract surfaces
+        _check_beam_spacing(log_path, frames[0])
     instances = {name: factory() for name, factory in factories.items()}
     trace = drive_mappers(
         frames, instances, homing=params.homing, last_k_views=params.map_quality.last_k_views,
@@ -131,6 +160,7 @@ def replay_log(
             **{k: v for k, v in evaluation_params_dict(params).items() if k != "relations"},
         },
         run=log_info,
+        log={"path": os.fspath(log_path), "anomalies": anomalies.as_dict()},
         odometry=odometry,
         mappers=scores,
         figures=[],

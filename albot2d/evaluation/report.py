@@ -22,6 +22,7 @@ import numpy as np
 from albot2d import __version__
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
+from albot2d.validation import parse_json
 
 __all__ = [
     "NONDETERMINISTIC_KEYS",
@@ -90,11 +91,8 @@ def write_report(path: str | os.PathLike[str], report: Mapping[str, Any]) -> Non
 
 def read_report(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read a report.json written by ``albot2d run``/``replay`` (checks its format)."""
-    with open(path, encoding="utf-8") as handle:
-        try:
-            report = json.load(handle)
-        except json.JSONDecodeError as exc:
-            raise InputError(f"{path}:{exc.lineno}: invalid JSON ({exc.msg})") from None
+    with open(path, encoding="utf-8", errors="replace") as handle:
+        report = parse_json(handle.read(), str(path))
     if not isinstance(report, dict) or report.get("format") != REPORT_FORMAT:
         raise InputError(f"{path}: not an albot2d report (format != {REPORT_FORMAT!r})")
     version = report.get("format_version")

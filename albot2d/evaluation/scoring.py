@@ -28,6 +28,7 @@ from albot2d.mapping.route_map import RouteMap
 from albot2d.validation import check_positive, check_positive_int
 
 __all__ = [
+    "MAX_SNAPSHOTS",
     "EvaluationParams",
     "end_pose_error",
     "homing_section",
@@ -43,6 +44,10 @@ FloatArray = NDArray[np.float64]
 # splits deletion groups at gaps of 20 views; a revisit is what crosses such a gap).
 REVISIT_GAP_MAPS = 20
 _MAP_FIELDS = ("accuracy_m_mean", "accuracy_m_p95", "accuracy_m_max", "completeness")
+
+
+#: Most map-history moments a run draws and reports (each is a full map drawn in a figure).
+MAX_SNAPSHOTS = 100
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,7 +67,7 @@ class EvaluationParams:
 
     def __post_init__(self) -> None:
         check_positive(self, "rpe_split_s")
-        check_positive_int(self, "snapshots")
+        check_positive_int(self, "snapshots", maximum=MAX_SNAPSHOTS)
 
 
 def route_of(mapper: Mapper) -> RouteMap | None:

@@ -6,6 +6,12 @@ record per data line, lazily; ``FLASER``/``RLASER`` (any beam count), ``ROBOTLAS
 skipped and counted in :attr:`CarmenReader.stats`. A malformed line raises
 :class:`~albot2d.errors.InputError` as ``file:line: <message> <what is wrong>``.
 
+Limits (named below, each refused as ``file:line``): pose numbers (headings too) within
+±``COORDINATE_LIMIT_M`` (1e6), timestamps within ±:data:`TIMESTAMP_LIMIT_S`,
+at most :data:`MAX_BEAMS` readings per line, ``ROBOTLASER1`` angles within a turn and its
+max range within the coordinate limit. Ranges may be anything a laser writes (NaN, inf,
+negative); ``albot2d.logs.anomalies`` counts those.
+
 Pose fields keep CARMEN's meaning: ``LaserRecord.pose`` is the first pose of the line (the laser
 pose; in raw logs identical to odometry) and ``odom_pose`` the second (the robot's odometry).
 """
@@ -25,8 +31,12 @@ from numpy.typing import NDArray
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
 from albot2d.logs.textio import open_text
+from albot2d.validation import COORDINATE_LIMIT_M
 
 __all__ = [
+    "ANGLE_LIMIT_RAD",
+    "MAX_BEAMS",
+    "TIMESTAMP_LIMIT_S",
     "CarmenReader",
     "CarmenStats",
     "CommentRecord",
@@ -39,6 +49,13 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+
+#: Most readings (or remissions) one laser line may hold (a 0.01° sweep of 360° is 36,000).
+MAX_BEAMS = 65_536
+#: Largest timestamp magnitude in seconds (year ~5100 in Unix time).
+TIMESTAMP_LIMIT_S = 1e11
+#: Largest heading or laser angle magnitude in radians (just over one turn).
+ANGLE_LIMIT_RAD = 2.0 * math.pi + 1e-6
 
 _POSE_NAMES = ("x", "y", "theta", "odom_x", "odom_y", "odom_theta")
 _STAMP_NAMES = ("ipc_timestamp", "ipc_hostname", "logger_timestamp")
@@ -190,14 +207,24 @@ def _count_error(context: str, tokens: list[str], expected: int, layout: _Layout
     return _LineError(f"{message} {got} fields, expected {expected} ({got - expected} extra)")
 
 
-def _float(tokens: list[str], index: int, name: str, *, finite: bool = True) -> float:
+def _float(
+    tokens: list[str], index: int, name: str, *, finite: bool = True, limit: float = math.inf
+) -> float:
     try:
         value = float(tokens[index])
     except ValueError:
         raise _LineError(f"{name} {tokens[index]!r} (field {index}) is not a number") from None
     if finite and not math.isfinite(value):
         raise _LineError(f"{name} {tokens[index]!r} (field {index}) is not finite")
+    if abs(value) > limit:
+        raise _LineError(
+            f"{name} {tokens[index]!r} (field {index}) is outside the limit of ±{limit:g}"
+        )
     return value
+
+
+def _stamp(tokens: list[str], index: int, name: str) -> float:
+    return _float(tokens, index, name, limit=TIMESTAMP_LIMIT_S)
 
 
 def _int(tokens: list[str], index: int, name: str) -> int:
@@ -207,6 +234,13 @@ def _int(tokens: list[str], index: int, name: str) -> int:
         raise _LineError(f"{name} {tokens[index]!r} (field {index}) is not an integer") from None
     if value < 0:
         raise _LineError(f"{name} must be >= 0, got {value} (field {index})")
+    return value
+
+
+def _count(tokens: list[str], index: int, name: str) -> int:
+    value = _int(tokens, index, name)
+    if value > MAX_BEAMS:
+        raise _LineError(f"{name} {value} (field {index}) is more than the limit of {MAX_BEAMS}")
     return value
 
 
@@ -227,13 +261,13 @@ def _floats(tokens: list[str], start: int, count: int, name: str) -> FloatArray:
 
 
 def _pose(tokens: list[str], start: int, names: tuple[str, ...]) -> Pose:
-    return Pose(*(_float(tokens, start + k, names[k]) for k in range(3)))
+    return Pose(*(_float(tokens, start + k, names[k], limit=COORDINATE_LIMIT_M) for k in range(3)))
 
 
 def _beam_count(tokens: list[str], index: int = 1, name: str = "n") -> int:
     if len(tokens) <= index:
         raise _LineError(f"has no {name} (number of readings)")
-    return _int(tokens, index, name)
+    return _count(tokens, index, name)
 
 
 def _parse_flaser(tokens: list[str], line_number: int) -> LaserRecord:
@@ -250,9 +284,9 @@ def _parse_flaser(tokens: list[str], line_number: int) -> LaserRecord:
         ranges=ranges,
         pose=_pose(tokens, tail, _FLASER_TAIL[:3]),
         odom_pose=_pose(tokens, tail + 3, _FLASER_TAIL[3:6]),
-        ipc_timestamp=_float(tokens, tail + 6, "ipc_timestamp"),
+        ipc_timestamp=_stamp(tokens, tail + 6, "ipc_timestamp"),
         hostname=tokens[tail + 7],
-        logger_timestamp=_float(tokens, tail + 8, "logger_timestamp"),
+        logger_timestamp=_stamp(tokens, tail + 8, "logger_timestamp"),
         line_number=line_number,
     )
 
@@ -265,7 +299,7 @@ def _parse_robotlaser(tokens: list[str], line_number: int) -> LaserRecord:
     if len(tokens) <= rem_index:
         layout: _Layout = [*_ROBOTLASER_HEAD, "num_readings", ("range", n), "num_remissions"]
         raise _count_error(f"with n={n}", tokens, rem_index + 1, layout)
-    n_rem = _int(tokens, rem_index, "num_remissions")
+    n_rem = _count(tokens, rem_index, "num_remissions")
     expected = rem_index + 1 + n_rem + len(_ROBOTLASER_TAIL)
     if len(tokens) != expected:
         layout = [
@@ -275,20 +309,22 @@ def _parse_robotlaser(tokens: list[str], line_number: int) -> LaserRecord:
         raise _count_error(f"with n={n}, n_rem={n_rem}", tokens, expected, layout)
     tail = rem_index + 1 + n_rem
     values = [_float(tokens, tail + k, _ROBOTLASER_TAIL[k]) for k in range(11)]
+    for k in range(6):  # laser and robot poses
+        _float(tokens, tail + k, _ROBOTLASER_TAIL[k], limit=COORDINATE_LIMIT_M)
     return LaserRecord(
         message=message,
         ranges=_floats(tokens, head + 1, n, "range"),
         pose=Pose(*values[0:3]),
         odom_pose=Pose(*values[3:6]),
-        ipc_timestamp=_float(tokens, tail + 11, "ipc_timestamp"),
+        ipc_timestamp=_stamp(tokens, tail + 11, "ipc_timestamp"),
         hostname=tokens[tail + 12],
-        logger_timestamp=_float(tokens, tail + 13, "logger_timestamp"),
+        logger_timestamp=_stamp(tokens, tail + 13, "logger_timestamp"),
         line_number=line_number,
         laser_type=_int(tokens, 1, "laser_type"),
-        start_angle_rad=_float(tokens, 2, "start_angle"),
-        fov_rad=_float(tokens, 3, "fov"),
-        angular_resolution_rad=_float(tokens, 4, "angular_res"),
-        max_range_m=_float(tokens, 5, "max_range"),
+        start_angle_rad=_float(tokens, 2, "start_angle", limit=ANGLE_LIMIT_RAD),
+        fov_rad=_float(tokens, 3, "fov", limit=ANGLE_LIMIT_RAD),
+        angular_resolution_rad=_float(tokens, 4, "angular_res", limit=ANGLE_LIMIT_RAD),
+        max_range_m=_float(tokens, 5, "max_range", limit=COORDINATE_LIMIT_M),
         accuracy_m=_float(tokens, 6, "accuracy"),
         remission_mode=_int(tokens, 7, "remission_mode"),
         remissions=_floats(tokens, rem_index + 1, n_rem, "remission"),
@@ -305,6 +341,9 @@ def _parse_odom(tokens: list[str], line_number: int) -> OdomRecord:
     if len(tokens) != expected:
         raise _count_error("", tokens, expected, list(_ODOM_NAMES))
     values = [_float(tokens, 1 + k, _ODOM_NAMES[k]) for k in range(7)]
+    for k in range(3):
+        _float(tokens, 1 + k, _ODOM_NAMES[k], limit=COORDINATE_LIMIT_M)
+    _stamp(tokens, 7, "ipc_timestamp")
     return OdomRecord(
         pose=Pose(*values[0:3]),
         tv_mps=values[3],
@@ -312,7 +351,7 @@ def _parse_odom(tokens: list[str], line_number: int) -> OdomRecord:
         accel_mps2=values[5],
         ipc_timestamp=values[6],
         hostname=tokens[8],
-        logger_timestamp=_float(tokens, 9, "logger_timestamp"),
+        logger_timestamp=_stamp(tokens, 9, "logger_timestamp"),
         line_number=line_number,
     )
 

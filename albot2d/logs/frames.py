@@ -43,6 +43,7 @@ from albot2d.frames import Frame, Scan
 from albot2d.geometry import Pose
 from albot2d.logs.carmen import CarmenReader, LaserRecord, OdomRecord, ParamRecord, Record
 from albot2d.logs.carmen_writer import LOG_PRECISION, FloatFormat, format_float, write_records
+from albot2d.validation import COORDINATE_LIMIT_M
 
 __all__ = [
     "DEFAULT_EVEN_BEAM_CONVENTION",
@@ -76,6 +77,16 @@ _GEOMETRY_PARAMS = frozenset(
      PARAM_ANGULAR_OFFSET_RAD)
 )  # fmt: skip
 _POSITIVE_PARAMS = frozenset((PARAM_FOV_DEG, PARAM_RESOLUTION_DEG, PARAM_MAX_RANGE_M))
+# The largest value each laser PARAM may have: angles in degrees up to one turn, lengths
+# within the coordinate limit, the mount's angle in radians up to one turn.
+_PARAM_LIMITS = {
+    PARAM_FOV_DEG: 360.0,
+    PARAM_RESOLUTION_DEG: 360.0,
+    PARAM_MAX_RANGE_M: COORDINATE_LIMIT_M,
+    PARAM_OFFSET_M: COORDINATE_LIMIT_M,
+    PARAM_SIDE_OFFSET_M: COORDINATE_LIMIT_M,
+    PARAM_ANGULAR_OFFSET_RAD: 2.0 * math.pi,
+}
 _UNIFORM_TOLERANCE_RAD = 1e-9
 
 
@@ -116,13 +127,13 @@ def records_to_frames(
             f"even_beam_convention must be 'fov_over_n' or 'fov_over_n_minus_1', "
             f"got {even_beam_convention!r}"
         )
-    for name, value in (
-        ("fov_deg", fov_deg),
-        ("no_return_threshold_m", no_return_threshold_m),
-        ("max_range_m", max_range_m),
+    for name, value, limit in (
+        ("fov_deg", fov_deg, 360.0),
+        ("no_return_threshold_m", no_return_threshold_m, COORDINATE_LIMIT_M),
+        ("max_range_m", max_range_m, COORDINATE_LIMIT_M),
     ):
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise InputError(f"{name} must be a finite number > 0, got {value!r}")
+        if value is not None and not (math.isfinite(value) and 0 < value <= limit):
+            raise InputError(f"{name} must be a number in (0, {limit:g}], got {value!r}")
     return _frames(
         records, source, fov_deg, no_return_threshold_m, even_beam_convention, max_range_m
     )
@@ -188,8 +199,10 @@ def _geometry_param(record: ParamRecord, source: str) -> float:
         value = float(record.value)
     except ValueError:
         value = math.nan
-    if not math.isfinite(value) or (record.name in _POSITIVE_PARAMS and value <= 0):
-        kind = "a number > 0" if record.name in _POSITIVE_PARAMS else "a finite number"
+    limit = _PARAM_LIMITS[record.name]
+    positive = record.name in _POSITIVE_PARAMS
+    if not (abs(value) <= limit) or (positive and value <= 0):
+        kind = f"a number in (0, {limit:g}]" if positive else f"a number within ±{limit:g}"
         raise InputError(
             f"{source}:{record.line_number}: PARAM {record.name} value {record.value!r} "
             f"is not {kind}"

@@ -17,9 +17,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from albot2d.errors import InputError
 from albot2d.geometry import between_arrays
+from albot2d.logs.carmen import TIMESTAMP_LIMIT_S
 from albot2d.logs.carmen_writer import format_float
 from albot2d.logs.textio import atomic_text_output, read_number_table
-from albot2d.validation import check_positive, check_positive_int
+from albot2d.validation import COORDINATE_LIMIT_M, check_positive, check_positive_int
 
 __all__ = [
     "Relations",
@@ -34,6 +35,8 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 _FIELDS = ("t1", "t2", "x", "y", "z", "roll", "pitch", "yaw")
+# Timestamps as in the logs; motions within the coordinate limit (angles too).
+_LIMITS = (TIMESTAMP_LIMIT_S, TIMESTAMP_LIMIT_S, *(COORDINATE_LIMIT_M,) * 6)
 
 
 def _frozen(values: ArrayLike, shape_tail: tuple[int, ...]) -> FloatArray:
@@ -70,7 +73,7 @@ class Relations:
 
 def read_relations(path: str | os.PathLike[str]) -> Relations:
     """Read a relations file (plain or gzip); ``#`` comments and blank lines are skipped."""
-    table = read_number_table(path, _FIELDS, "relation")
+    table = read_number_table(path, _FIELDS, "relation", _LIMITS)
     return Relations(t1=table[:, 0], t2=table[:, 1], motion=table[:, [2, 3, 7]])
 
 

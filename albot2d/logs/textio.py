@@ -79,13 +79,18 @@ def atomic_text_output(path: str | os.PathLike[str]) -> Iterator[TextIO]:
 
 
 def read_number_table(
-    path: str | os.PathLike[str], fields: tuple[str, ...], what: str
+    path: str | os.PathLike[str],
+    fields: tuple[str, ...],
+    what: str,
+    limits: tuple[float, ...] | None = None,
 ) -> np.ndarray:
     """Rows of ``len(fields)`` finite numbers from a text table (plain or gzip).
 
     ``#`` starts a comment; blank lines are skipped. A bad line raises ``InputError``
     naming ``file:line``, the ``what`` (e.g. "relation") and the offending field.
+    ``limits`` gives each field's largest magnitude (default: any finite number).
     """
+    bounds = limits if limits is not None else (math.inf,) * len(fields)
     rows: list[list[float]] = []
     with open_text(path) as handle:
         for line_number, line in enumerate(handle, start=1):
@@ -99,7 +104,7 @@ def read_number_table(
                     f"{len(fields)} ({' '.join(fields)})"
                 )
             row = []
-            for name, token in zip(fields, tokens, strict=True):
+            for name, token, limit in zip(fields, tokens, bounds, strict=True):
                 try:
                     value = float(token)
                 except ValueError:
@@ -108,6 +113,11 @@ def read_number_table(
                     raise InputError(
                         f"{path}:{line_number}: {what} field {name} {token!r} "
                         "is not a finite number"
+                    )
+                if abs(value) > limit:
+                    raise InputError(
+                        f"{path}:{line_number}: {what} field {name} {token!r} "
+                        f"is outside the limit of ±{limit:g}"
                     )
                 row.append(value)
             rows.append(row)

@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from albot2d.errors import InputError
 from albot2d.geometry import as_segments
+from albot2d.validation import check_coordinates
 
 __all__ = ["MIN_SEGMENT_LENGTH_M", "SegmentGrid", "clean_segments", "piece_table"]
 
@@ -43,7 +44,9 @@ def _readonly(arr: np.ndarray) -> np.ndarray:
 
 
 def clean_segments(segments: ArrayLike, what: str = "segments") -> FloatArray:
-    """``segments`` as a finite float64 ``(N, 4)`` array without zero-length segments."""
+    """``segments`` as a finite float64 ``(N, 4)`` array without zero-length segments.
+
+    Coordinates beyond ``albot2d.validation.COORDINATE_LIMIT_M`` raise ``InputError``."""
     try:
         segs = as_segments(segments)
     except ValueError as exc:
@@ -51,6 +54,8 @@ def clean_segments(segments: ArrayLike, what: str = "segments") -> FloatArray:
     if not np.isfinite(segs).all():
         bad = int(np.flatnonzero(~np.isfinite(segs).all(axis=1))[0])
         raise InputError(f"{what}[{bad}] is not finite: {segs[bad].tolist()}")
+    # Beyond the coordinate limit the grid's cell indices overflow; refuse, naming the row.
+    check_coordinates(segs, what)
     keep = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1]) >= MIN_SEGMENT_LENGTH_M
     return np.ascontiguousarray(segs[keep])
 

@@ -1,0 +1,117 @@
+"""Valid inputs to break: a small world document, a CARMEN log and its relations, as text.
+
+The bad-input corpus (``tests/test_bad_inputs.py``) and the reader fuzzing
+(``tests/test_reader_fuzz.py``) start from these and change one thing. Each builder returns
+a fresh copy, so a case may mutate what it gets.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import json
+from typing import Any
+
+import numpy as np
+import shapely
+
+__all__ = [
+    "N_BEAMS",
+    "carmen_lines",
+    "carmen_text",
+    "crossing_edge",
+    "flaser_line",
+    "nested",
+    "person",
+    "relations_text",
+    "world_doc",
+    "world_text",
+]
+
+N_BEAMS = 181  # 1° apart over 180°: fine enough for the mappers' breakpoint rule
+_FRAMES = 40
+_STEP_M = 0.1
+_STEP_S = 0.5
+_PARAMS = (
+    "PARAM laser_front_laser_fov 180.0",
+    "PARAM laser_front_laser_resolution 1.0",
+    "PARAM robot_front_laser_max 30.0",
+)
+
+
+@functools.cache
+def _world_json() -> str:
+    from worldgen.generate import generate
+    from worldgen.io import world_to_json
+
+    return world_to_json(generate("rooms", seed=1, width_m=12.0, height_m=12.0))
+
+
+def world_doc() -> dict[str, Any]:
+    """A valid world file's document (a generated 12 m rooms world), a fresh copy."""
+    return copy.deepcopy(json.loads(_world_json()))
+
+
+def world_text(doc: dict[str, Any] | None = None) -> str:
+    """``doc`` (default: the valid world) as world-file JSON text."""
+    return json.dumps(world_doc() if doc is None else doc)
+
+
+def person(doc: dict[str, Any], **changes: Any) -> dict[str, Any]:
+    """A valid walking person on the first roadmap edge of ``doc``, with ``changes``."""
+    nodes, (i, j) = doc["roadmap"]["nodes"], doc["roadmap"]["edges"][0]
+    ob = {
+        "kind": "person",
+        "shape": [[-0.2, -0.2], [0.2, -0.2], [0.2, 0.2], [-0.2, 0.2]],
+        "pose": [nodes[i][0], nodes[i][1], 0.0],
+        "path": [nodes[i], nodes[j]],
+        "speed_m_s": 1.0,
+        "mass_kg": 70.0,
+    }
+    return ob | changes
+
+
+def crossing_edge(doc: dict[str, Any]) -> list[int]:
+    """Two roadmap nodes of ``doc`` whose straight line crosses a wall."""
+    walls = shapely.MultiLineString(np.asarray(doc["walls"]).reshape(-1, 2, 2).tolist())
+    nodes = doc["roadmap"]["nodes"]
+    for i in range(len(nodes)):
+        for j in range(i + 1, len(nodes)):
+            if shapely.LineString([nodes[i], nodes[j]]).intersects(walls):
+                return [i, j]
+    raise AssertionError("no roadmap node pair crosses a wall")
+
+
+def flaser_line(
+    k: int, *, ranges: list[str] | None = None, x: str | None = None, stamp: str | None = None
+) -> str:
+    """Frame ``k`` of the valid log: the robot ``k`` steps along x, 2 m from everything."""
+    beams = ranges if ranges is not None else ["2.0"] * N_BEAMS
+    px = x if x is not None else repr(k * _STEP_M)
+    t = stamp if stamp is not None else repr(k * _STEP_S)
+    pose = f"{px} 0.0 0.0"
+    return f"FLASER {len(beams)} {' '.join(beams)} {pose} {pose} {t} albot2d {t}"
+
+
+def carmen_lines() -> list[str]:
+    """The valid log's lines: laser PARAMs, then one FLASER line per frame."""
+    return [*_PARAMS, *(flaser_line(k) for k in range(_FRAMES))]
+
+
+def carmen_text(lines: list[str] | None = None) -> str:
+    return "\n".join(carmen_lines() if lines is None else lines) + "\n"
+
+
+def relations_text(rows: list[str] | None = None) -> str:
+    """Relations between consecutive frames of the valid log (the true motion, no noise)."""
+    if rows is None:
+        rows = [
+            f"{k * _STEP_S!r} {(k + 1) * _STEP_S!r} {_STEP_M!r} 0 0 0 0 0"
+            for k in range(_FRAMES - 1)
+        ]
+    return "\n".join(rows) + "\n"
+
+
+def nested(depth: int) -> str:
+    """JSON text of ``depth`` nested lists."""
+    return "[" * depth + "]" * depth
