@@ -568,6 +568,21 @@ CLI_CASES = [
         ("--address", "notaport"),
     ),
     (
+        "fuzz-tour-length-huge",
+        ["fuzz", "--episodes", "2", "--tour-length", "1e300", "2e300"],
+        ("tour_length_max_m", "2e+300"),
+    ),
+    (
+        "fuzz-world-size-over-cap",
+        ["fuzz", "--episodes", "2", "--world-size", "10", "1e5"],
+        ("world_size_max_m", "100000.0"),
+    ),
+    (
+        "fuzz-workers-huge",
+        ["fuzz", "--episodes", "2", "--workers", "100000"],
+        ("--workers", "100000"),
+    ),
+    (
         "fuzz-address-port-range",
         ["fuzz", "--episodes", "2", "--backend", "dask", "--address", "tcp://127.0.0.1:99999"],
         ("--address", "99999"),

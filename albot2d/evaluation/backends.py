@@ -35,6 +35,9 @@ from urllib.parse import urlsplit
 
 from albot2d.errors import InputError
 
+# More local processes than this only thrash the machine (each holds ~200 MB).
+MAX_LOCAL_WORKERS = 256
+
 __all__ = [
     "BACKENDS",
     "Backend",
@@ -102,6 +105,10 @@ class LocalBackend:
     def __init__(self, workers: int) -> None:
         if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
             raise InputError(f"--workers must be a positive integer, got {workers!r}")
+        if workers > MAX_LOCAL_WORKERS:
+            raise InputError(
+                f"--workers must be at most {MAX_LOCAL_WORKERS} on one machine, got {workers!r}"
+            )
         self.workers = workers
         self._pool: ProcessPoolExecutor | None = None
 

@@ -45,6 +45,8 @@ from albot2d.errors import InputError
 from albot2d.evaluation.campaign_lock import CampaignLock
 from albot2d.evaluation.campaign_summary import summarise
 from albot2d.evaluation.episode import EpisodeOutcome, EpisodeSpec, crash_outcome, run_episode
+from albot2d.validation import check_at_most
+from worldgen.params import MAX_WORLD_SIZE_M
 
 __all__ = [
     "CAMPAIGN_NAME",
@@ -67,6 +69,10 @@ REPRODUCERS_DIR = "reproducers"
 _FORMAT = "albot2d-campaign"
 _FORMAT_VERSION = 1
 STATUSES = ("ok", "violation", "crash")
+
+
+# The longest tour an episode may drive (a 100 km tour takes hours per episode).
+MAX_TOUR_LENGTH_M = 100_000.0
 
 
 @dataclass(frozen=True)
@@ -129,6 +135,9 @@ class CampaignParams:
                     raise InputError(f"{name} must be a positive number, got {value!r}")
             if a > b:
                 raise InputError(f"{low} ({a}) is larger than {high} ({b})")
+        # Caps on the work one episode may ask for (worlds are generated up to this size).
+        check_at_most(self, "world_size_max_m", MAX_WORLD_SIZE_M, "the world generator's cap")
+        check_at_most(self, "tour_length_max_m", MAX_TOUR_LENGTH_M, "a cap on the work")
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)

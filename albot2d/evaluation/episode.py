@@ -49,6 +49,7 @@ from albot2d.sim.driving import get_profile
 from albot2d.sim.laser import LaserNoise
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.robot import RobotParams
+from albot2d.validation import parse_json
 
 __all__ = [
     "REPRODUCE_HOW",
@@ -321,7 +322,7 @@ def read_reproducer(path: str | os.PathLike[str]) -> dict[str, Any]:
     """A reproducer document (``reproducers/episode-K.json``), checked to hold an episode."""
     try:
         with open(path, encoding="utf-8") as handle:
-            doc = json.load(handle)
+            doc = parse_json(handle.read(), str(path))
         record = doc["reproducer"]["episode"]
     except (ValueError, KeyError, TypeError) as exc:
         raise InputError(f"{path}: not a fuzzing reproducer ({exc})") from None
