@@ -16,10 +16,10 @@ from albot2d.atomic import atomic_path
 from albot2d.cli.options import parse_param, positive_number, seed_value, world_params
 from albot2d.errors import InputError
 from albot2d.seeding import spawn_rngs
+from worldgen.tours import TOUR_KINDS
 
-__all__ = ["TOUR_KINDS", "parse_param", "register", "run", "summary"]
+__all__ = ["parse_param", "register", "run", "summary"]
 
-TOUR_KINDS = ("loop", "out_and_back", "backtracking")
 DEFAULT_TOUR_LENGTH_M = 100.0
 HOUSEEXPO_PARAMS = ("robot_radius_m", "clearance_margin_m")
 
