@@ -133,6 +133,7 @@ def replay_log(
         run=log_info,
         odometry=odometry,
         mappers=scores,
+        timing_ms=trace.step_times.summary_ms(),  # per-view stage times (steps.csv)
         figures=[],
         wall_time_s=time.perf_counter() - t0,
     )
