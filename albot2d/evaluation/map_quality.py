@@ -13,11 +13,11 @@ frame, so map segments are mapped by the true start pose first.
 
 Cost: a long run's naive and truth maps hold tens of thousands of surfaces, a million
 samples; a nearest-wall tree query per sample was a quarter of ``albot2d run``. So the
-true walls near each map surface (within ``_NEAR_M`` of its bounding box) are found once
-per surface, and its samples are measured against those few walls in numpy, with GEOS's
-own point-to-segment formula (so the distances equal the tree's). Only samples farther
-than ``_NEAR_M`` from every such wall (then possibly nearer to another) fall back to
-the tree query.
+true walls near each map surface (within 0.5 m of its bounding box) are found once per
+surface, and its samples are measured against those few walls in numpy, with GEOS's own
+point-to-segment formula (so the distances equal the tree's up to rounding). Samples
+farther than that from every candidate (a drifted map) are searched again within 2 m,
+then 8 m, and only the rest with the tree query.
 """
 
 from __future__ import annotations
@@ -70,8 +70,9 @@ def sample_segments(segments: ArrayLike, spacing_m: float) -> NDArray[np.float64
     return a + t[:, None] * (b - a)
 
 
-# Walls within this distance of a map surface's bounding box are its candidates (metres).
-_NEAR_M = 0.5
+# Walls within this distance of a map surface's bounding box are its candidates (metres);
+# samples farther from all of them than that are searched again with the next distance.
+_NEAR_M = (0.5, 2.0, 8.0)
 # Point-wall pairs measured per numpy chunk (bounds the memory: ~40 bytes a pair).
 _CHUNK_PAIRS = 1 << 20
 
@@ -100,42 +101,57 @@ def _sample_distances(
     if len(samples) == 0 or len(truth) == 0:
         return _nearest_distance(samples, truth)
     counts = np.maximum(np.ceil(segment_lengths(segs) / spacing_m).astype(np.int64), 1) + 1
-    first = np.cumsum(counts) - counts
-    lo = np.minimum(segs[:, :2], segs[:, 2:]) - _NEAR_M
-    hi = np.maximum(segs[:, :2], segs[:, 2:]) + _NEAR_M
+    owner = np.repeat(np.arange(len(segs)), counts)
     tree = shapely.STRtree(shapely.linestrings(truth.reshape(-1, 2, 2)))
-    seg_of, wall = tree.query(shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]))
-    order = np.lexsort((wall, seg_of))
-    seg_of, wall = seg_of[order], wall[order]
-    walls_per_seg = np.bincount(seg_of, minlength=len(segs))
-    wall_start = np.cumsum(walls_per_seg) - walls_per_seg
     dist = np.full(len(samples), np.inf)
-    pairs_per_seg = counts * walls_per_seg
-    # Chunks of whole surfaces with about _CHUNK_PAIRS sample-wall pairs each.
-    bounds = np.searchsorted(np.cumsum(pairs_per_seg), np.arange(1, 1 + pairs_per_seg.sum()
-                             // _CHUNK_PAIRS) * _CHUNK_PAIRS)  # fmt: skip
-    for s0, s1 in zip(np.r_[0, bounds], np.r_[bounds, len(segs)], strict=True):
-        if s1 <= s0:
-            continue
-        sl = np.arange(s0, s1)
-        sl = sl[walls_per_seg[sl] > 0]
-        if not len(sl):
-            continue
-        # Every (sample, candidate wall) pair of these surfaces.
-        n_pairs = counts[sl] * walls_per_seg[sl]
-        pair_seg = np.repeat(sl, n_pairs)
-        k = np.arange(int(n_pairs.sum())) - np.repeat(np.cumsum(n_pairs) - n_pairs, n_pairs)
-        w = walls_per_seg[pair_seg]
-        sample = first[pair_seg] + k // w
-        cand = wall[wall_start[pair_seg] + k % w]
-        d = _point_segment_distance(samples[sample, 0], samples[sample, 1], truth[cand])
-        # Pairs come sample by sample, so each sample's pairs are one contiguous group.
-        group = np.flatnonzero(np.r_[True, sample[1:] != sample[:-1]])
-        dist[sample[group]] = np.minimum.reduceat(d, group)
-    far = np.flatnonzero(dist > _NEAR_M)
-    if len(far):
-        dist[far] = _nearest_distance(samples[far], truth)
+    pending = np.arange(len(samples))
+    for radius in _NEAR_M:
+        dist[pending] = _bounded_distances(samples, pending, owner[pending], segs, truth,
+                                           tree, radius)  # fmt: skip
+        # A sample nearer than ``radius`` to a candidate has its exact nearest wall.
+        pending = pending[~(dist[pending] <= radius)]
+        if not len(pending):
+            return dist
+    dist[pending] = _nearest_distance(samples[pending], truth)
     return dist
+
+
+def _bounded_distances(
+    samples: NDArray[np.float64], pending: NDArray[np.int64], owner: NDArray[np.int64],
+    segs: NDArray[np.float64], truth: NDArray[np.float64], tree: shapely.STRtree,
+    radius: float,
+) -> NDArray[np.float64]:  # fmt: skip
+    """Per pending sample, its distance to the nearest wall within ``radius`` of its
+    surface's bounding box (``inf`` when there is none)."""
+    used = np.unique(owner)
+    lo = np.minimum(segs[used, :2], segs[used, 2:]) - radius
+    hi = np.maximum(segs[used, :2], segs[used, 2:]) + radius
+    which, wall = tree.query(shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]))
+    order = np.lexsort((wall, which))
+    which, wall = which[order], wall[order]
+    walls_per = np.zeros(len(segs), np.int64)
+    walls_per[used] = np.bincount(which, minlength=len(used))
+    wall_start = np.zeros(len(segs), np.int64)
+    wall_start[used] = np.cumsum(walls_per[used]) - walls_per[used]
+    out = np.full(len(pending), np.inf)
+    per_sample = walls_per[owner]
+    has = np.flatnonzero(per_sample > 0)
+    ends = np.cumsum(per_sample[has])
+    # Chunks of about _CHUNK_PAIRS (sample, candidate wall) pairs.
+    cuts = np.searchsorted(ends, np.arange(_CHUNK_PAIRS, ends[-1] if len(ends) else 0,
+                                           _CHUNK_PAIRS), side="right")  # fmt: skip
+    for c0, c1 in zip(np.r_[0, cuts], np.r_[cuts, len(has)], strict=True):
+        rows = has[c0:c1]
+        if not len(rows):
+            continue
+        w = per_sample[rows]
+        row = np.repeat(rows, w)
+        k = np.arange(len(row)) - np.repeat(np.cumsum(w) - w, w)
+        cand = wall[wall_start[owner[row]] + k]
+        pts = samples[pending[row]]
+        d = _point_segment_distance(pts[:, 0], pts[:, 1], truth[cand])
+        out[rows] = np.minimum.reduceat(d, np.cumsum(w) - w)
+    return out
 
 
 def _nearest_distance(points: NDArray[np.float64], segments: NDArray[np.float64]) -> NDArray:
