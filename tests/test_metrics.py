@@ -116,13 +116,22 @@ def test_sample_segments_spacing_and_endpoints() -> None:
     np.testing.assert_allclose(pts[:5, 0], [0, 0.25, 0.5, 0.75, 1.0])
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_map_sample_distances_equal_the_nearest_wall_tree_query(seed: int) -> None:
+@pytest.mark.parametrize(("seed", "small_blocks"), [(0, False), (1, False), (2, True)])
+def test_map_sample_distances_equal_the_nearest_wall_tree_query(
+    seed: int, small_blocks: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """The bounded per-surface candidate search gives every sample the tree's nearest-wall
     distance (up to rounding), including samples far from every wall."""
+    import importlib
+
     import shapely
 
     from albot2d.evaluation.map_quality import _sample_distances, sample_segments
+
+    if small_blocks:  # many blocks and chunks, as on a long run's maps
+        module = importlib.import_module("albot2d.evaluation.map_quality")
+        monkeypatch.setattr(module, "_BLOCK_SAMPLES", 700)
+        monkeypatch.setattr(module, "_CHUNK_PAIRS", 900)
 
     rng = np.random.default_rng(seed)
     walls = rng.uniform(0.0, 20.0, (60, 4))

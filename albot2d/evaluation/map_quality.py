@@ -73,8 +73,10 @@ def sample_segments(segments: ArrayLike, spacing_m: float) -> NDArray[np.float64
 # Walls within this distance of a map surface's bounding box are its candidates (metres);
 # samples farther from all of them than that are searched again with the next distance.
 _NEAR_M = (0.5, 2.0, 8.0)
-# Point-wall pairs measured per numpy chunk (bounds the memory: ~40 bytes a pair).
-_CHUNK_PAIRS = 1 << 20
+# Point-wall pairs measured per numpy chunk (bounds the memory: ~150 bytes a pair).
+_CHUNK_PAIRS = 1 << 18
+# Samples measured per block of map surfaces.
+_BLOCK_SAMPLES = 1 << 17
 
 
 def _point_segment_distance(
@@ -96,13 +98,29 @@ def _point_segment_distance(
 def _sample_distances(
     segs: NDArray[np.float64], spacing_m: float, truth: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    """Distance from each sample of ``segs`` (``sample_segments`` order) to the truth."""
+    """Distance from each sample of ``segs`` (``sample_segments`` order) to the truth.
+
+    Blocks of surfaces with about ``_BLOCK_SAMPLES`` samples each are sampled and measured
+    in turn, so memory stays bounded however large the map."""
+    if len(segs) == 0 or len(truth) == 0:
+        return _nearest_distance(sample_segments(segs, spacing_m), truth)
+    counts = np.maximum(np.ceil(segment_lengths(segs) / spacing_m).astype(np.int64), 1) + 1
+    cuts = np.searchsorted(np.cumsum(counts), np.arange(_BLOCK_SAMPLES, counts.sum(),
+                                                        _BLOCK_SAMPLES))  # fmt: skip
+    tree = shapely.STRtree(shapely.linestrings(truth.reshape(-1, 2, 2)))
+    return np.concatenate([
+        _block_distances(segs[s0:s1], spacing_m, truth, tree)
+        for s0, s1 in zip(np.r_[0, cuts], np.r_[cuts, len(segs)], strict=True) if s1 > s0
+    ])  # fmt: skip
+
+
+def _block_distances(
+    segs: NDArray[np.float64], spacing_m: float, truth: NDArray[np.float64],
+    tree: shapely.STRtree,
+) -> NDArray[np.float64]:  # fmt: skip
     samples = sample_segments(segs, spacing_m)
-    if len(samples) == 0 or len(truth) == 0:
-        return _nearest_distance(samples, truth)
     counts = np.maximum(np.ceil(segment_lengths(segs) / spacing_m).astype(np.int64), 1) + 1
     owner = np.repeat(np.arange(len(segs)), counts)
-    tree = shapely.STRtree(shapely.linestrings(truth.reshape(-1, 2, 2)))
     dist = np.full(len(samples), np.inf)
     pending = np.arange(len(samples))
     for radius in _NEAR_M:
