@@ -54,10 +54,11 @@ PARAMS = st.builds(
     sigma=st.sampled_from([0.0, 0.005, 0.02]),
     dropout=st.sampled_from([0.0, 0.05]),
     params=PARAMS,
+    mount=st.sampled_from([Pose(), Pose(0.16, 0.0, 0.0), Pose(0.1, -0.05, 0.3)]),
 )
 def test_numba_gives_the_numpy_surfaces_on_random_worlds(
     seed: int, n_walls: int, n_beams: int, sigma: float, dropout: float,
-    params: ExtractionParams,
+    params: ExtractionParams, mount: Pose,
 ) -> None:  # fmt: skip
     rng = np.random.default_rng(seed)
     walls = [box(0.0, 0.0, 6.0, 4.0)]
@@ -66,11 +67,11 @@ def test_numba_gives_the_numpy_surfaces_on_random_worlds(
     walls.append(np.column_stack([centres, ends]))
     heading = float(rng.uniform(-math.pi, math.pi))
     scan = scan_of(np.vstack(walls), Pose(0.3, -0.2, heading), n_beams=n_beams,
-                   noise_sigma=sigma, rng=rng)  # fmt: skip
+                   noise_sigma=sigma, rng=rng, laser_pose=mount)  # fmt: skip
     if dropout:
         valid = scan.valid & (rng.random(n_beams) >= dropout)
         scan = Scan(np.where(valid, scan.ranges, scan.max_range_m), scan.angles, valid,
-                    scan.max_range_m)  # fmt: skip
+                    scan.max_range_m, laser_pose=mount)  # fmt: skip
     assert_same(*both(scan, params))
 
 

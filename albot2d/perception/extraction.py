@@ -440,6 +440,7 @@ def extract_surfaces(
 def _extract_numba(scan: Scan, params: ExtractionParams) -> Surfaces:
     assert _numba_extract is not None  # loaded by numba_available()
     lam = math.radians(params.breakpoint_lambda_deg)
+    mount = scan.laser_pose
     max_dphi, segs, occluded, ab, uncertain = _numba_extract(
         np.ascontiguousarray(scan.ranges, dtype=np.float64),
         np.ascontiguousarray(scan.angles, dtype=np.float64),
@@ -449,17 +450,15 @@ def _extract_numba(scan: Scan, params: ExtractionParams) -> Surfaces:
         params.split_distance_m, params.merge_distance_m, params.min_points,
         params.continuation_distance_m, params.max_endpoint_gap_m,
         math.sin(math.radians(params.corner_min_angle_deg)), params.corner_max_shift_m,
+        # The laser pose, as ``transform_segments`` uses it (the same float operations).
+        float(mount.x), float(mount.y), math.cos(mount.theta), math.sin(mount.theta),
     )  # fmt: skip
     if scan.n_beams > 1 and max_dphi >= lam:
         raise InputError(
             f"ExtractionParams.breakpoint_lambda_deg={params.breakpoint_lambda_deg!r} must "
             f"exceed the scan's beam spacing ({math.degrees(max_dphi):.3g} deg)"
         )
-    if not len(segs):
-        return Surfaces.empty()
-    segs = transform_segments(scan.laser_pose.as_array(), segs)
-    finite_gap = math.isfinite(params.max_endpoint_gap_m)
-    return Surfaces(segs, occluded, ab, uncertain if finite_gap else None)
+    return Surfaces.adopt(segs, occluded, ab, uncertain)
 
 
 def _uncertain_jump_ends(

@@ -211,13 +211,15 @@ def _nothing(max_dphi):  # type: ignore[no-untyped-def]
 @njit(cache=True, nogil=True)
 def extract_kernel(  # type: ignore[no-untyped-def]
     ranges, angles, valid, max_range, lam, sigma_add, split_d, merge_d, min_points,
-    cont_d, max_gap, corner_sin, corner_max_shift,
+    cont_d, max_gap, corner_sin, corner_max_shift, pose_x, pose_y, pose_cos, pose_sin,
 ):  # fmt: skip
     """The surfaces of one scan in the laser frame (see ``extraction.extract_surfaces``).
 
     Returns ``(max_dphi, segs (M, 4), occluded (M, 2), ab (M, 2), uncertain (M, 2))``;
     ``max_dphi`` is the largest beam spacing (the caller rejects ``lam`` not above it,
     and the arrays are then empty). ``corner_max_shift <= 0`` disables corner refinement.
+    ``segs`` are mapped by the laser pose (``pose_*``: its position, cos and sin of its
+    heading) into the robot frame, in ``geometry.transform_segments``' float operations.
     """
     n = len(ranges)
     hit = np.empty(n, np.bool_)
@@ -359,6 +361,11 @@ def extract_kernel(  # type: ignore[no-untyped-def]
                 uncertain[i, side] = (
                     not occluded[i, side] and not inside and gap > max_gap
                 )  # fmt: skip
+    for i in range(m):
+        for col in (0, 2):
+            px, py = segs[i, col], segs[i, col + 1]
+            segs[i, col] = pose_x + pose_cos * px - pose_sin * py
+            segs[i, col + 1] = pose_y + pose_sin * px + pose_cos * py
     ab_out = np.empty((m, 2), np.int64)
     ab_out[:, 0] = a
     ab_out[:, 1] = b
