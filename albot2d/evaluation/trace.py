@@ -21,6 +21,7 @@ and for where its map puts the start (its trajectory's first pose).
 
 from __future__ import annotations
 
+import contextlib
 import io
 import math
 import time
@@ -34,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.errors import InputError
-from albot2d.frames import Frame
+from albot2d.frames import Frame, Scan
 from albot2d.geometry import transform_points
 from albot2d.mapping.protocol import Mapper, PerceivingMapper, StageTimer
 from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
@@ -93,8 +94,9 @@ class StepTimes:
         self.rows = 0
 
     def add_row(self, values: dict[str, float]) -> None:
-        for name in values.keys() - self.columns.keys():
-            self.columns[name] = array("d", bytes(8 * self.rows))  # zeros for earlier rows
+        for name in values:
+            if name not in self.columns:  # a new column: zeros for the earlier rows
+                self.columns[name] = array("d", bytes(8 * self.rows))
         for name, column in self.columns.items():
             column.append(values.get(name, 0.0))
         self.rows += 1
@@ -230,6 +232,8 @@ def drive_mappers(
     perceives = {name: m.perception() for name, m in mappers.items()
                  if isinstance(m, PerceivingMapper)}  # fmt: skip
     probes = {name: _Probe(m) for name, m in mappers.items()}
+    for extraction in set(perceives.values()):
+        _warm_up(extraction)
 
     def stop_here() -> None:
         if rec.reference_distance() < params.min_start_distance_m:
@@ -297,6 +301,15 @@ def drive_mappers(
     )
 
 
+def _warm_up(params: ExtractionParams) -> None:
+    """Extract a tiny synthetic scan once, so loading (or compiling) the compiled
+    extraction is not counted as the first view's extraction time."""
+    angles = np.linspace(-0.5, 0.5, 2 * params.min_points)
+    ranges = np.full(len(angles), 2.0)
+    with contextlib.suppress(InputError):  # a lambda narrower than these beams: no matter
+        extract_surfaces(Scan(ranges, angles, np.ones(len(angles), bool), 10.0), params)
+
+
 class _Probe:
     """Reads what one mapper exposes after each view, for its ``steps.csv`` columns.
 
@@ -312,17 +325,21 @@ class _Probe:
         self.has_steps = isinstance(getattr(mapper, "steps", None), list)
         self.has_map = hasattr(getattr(mapper, "map", None), "__len__")
         self.local_maps = 0
+        self.shared = False
 
     def charge_extraction(self, ns: int) -> None:
         """Count a shared extraction to this mapper's stages, as if it had extracted alone."""
+        self.shared = True
         if self.timer is not None:
             self.timer.add("extraction", ns)
 
     def record(self, row: dict[str, Any], name: str, total_ns: int) -> None:
-        """Add this view's columns (``total_ns`` includes any shared extraction)."""
+        """Add this view's columns (``total_ns`` includes any shared extraction, which has
+        its own column, ``extraction_ms``)."""
         if self.timer is not None:
             for stage, ns in self.timer.take_view().items():
-                row[f"{name}.{stage}_ms"] = ns / 1e6
+                if not (self.shared and stage == "extraction"):
+                    row[f"{name}.{stage}_ms"] = ns / 1e6
         row[f"{name}.total_ms"] = total_ns / 1e6
         steps = self.mapper.steps if self.has_steps else None  # type: ignore[attr-defined]
         if steps:
