@@ -16,7 +16,7 @@ from albot2d.mapping import (
     PerceivingMapper,
 )
 from albot2d.mapping.global_map import MapSnapshot
-from albot2d.mapping.protocol import MapperCounts
+from albot2d.mapping.protocol import MapperCounts, takes_perceived_views
 from albot2d.perception import ExtractionParams
 from albot2d.seeding import make_rng
 from albot2d.sim.simulator import Simulator
@@ -50,6 +50,18 @@ class RawScans:
         return {}
 
 
+class CountingNaive(NaiveIntegration):
+    """A plugin extending a built-in mapper's ``observe`` only: must still be called."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.calls = 0
+
+    def observe(self, frame: Frame) -> None:
+        self.calls += 1
+        super().observe(frame)
+
+
 def frames(n: int) -> list[Frame]:
     world = generate("rooms", seed=4, width_m=15.0, height_m=15.0)
     tour = world.tour(make_rng(1), kind="loop", min_length_m=20.0)
@@ -65,6 +77,7 @@ def make_mappers() -> dict[str, object]:
         "coarse": NaiveIntegration(coarse),  # another setting: its own extraction
         "albot1_coarse": Albot1(Albot1Params(extraction=coarse)),
         "raw": RawScans(),
+        "counting": CountingNaive(),
     }
 
 
@@ -76,7 +89,8 @@ def test_shared_extraction_gives_every_mapper_its_own_results_bit_for_bit() -> N
     for frame in stream:
         for mapper in alone.values():
             mapper.observe(frame)  # type: ignore[attr-defined]
-    assert sum(isinstance(m, PerceivingMapper) for m in shared.values()) == 5
+    assert sum(isinstance(m, PerceivingMapper) for m in shared.values()) == 6
+    assert sum(takes_perceived_views(m) for m in shared.values()) == 5
     for name, mapper in shared.items():
         other = alone[name]
         np.testing.assert_array_equal(mapper.trajectory(), other.trajectory())  # type: ignore[attr-defined]
@@ -87,6 +101,7 @@ def test_shared_extraction_gives_every_mapper_its_own_results_bit_for_bit() -> N
         assert mapper.counts() == other.counts()  # type: ignore[attr-defined]
     assert len(shared["albot1"].global_map().segments) > 10  # type: ignore[attr-defined]
     assert shared["albot1"].counts().local_maps > 3  # type: ignore[attr-defined]
+    assert shared["counting"].calls == 150  # type: ignore[attr-defined]
     assert shared["raw"].seen == [f.index for f in stream]  # type: ignore[attr-defined]
     # One extraction per distinct setting and view, charged to each mapper's stages.
     steps = trace.step_times

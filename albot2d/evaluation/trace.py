@@ -6,10 +6,10 @@ simulation) true poses, distance travelled, the laser hits of the last K views, 
 per mapper, per-view stage times (:class:`StepTimes`, ``steps.csv``) and the *homing stops*.
 
 Perceive once: each frame's surfaces are extracted once per distinct ``ExtractionParams``
-and passed to every ``PerceivingMapper`` that wants them (``observe_perceived``); other
-mappers get the raw frame (``observe``). A mapper's ``timing_ms`` and wall time still
-include the extraction it used, as if it had extracted alone (so the sum over mappers
-counts a shared extraction more than once).
+and passed to every ``PerceivingMapper`` that wants them (``observe_perceived``; see
+``takes_perceived_views``); other mappers get the raw frame (``observe``). A mapper's
+``timing_ms`` and wall time still include the extraction it used, as if it had extracted
+alone (so the sum over mappers counts a shared extraction more than once).
 
 Homing stops are chosen online, as a robot that stops to point home would: every
 ``stop_every_m`` metres of odometer distance (what the robot itself measures, as in the
@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from albot2d.errors import InputError
 from albot2d.frames import Frame, Scan
 from albot2d.geometry import transform_points
-from albot2d.mapping.protocol import Mapper, PerceivingMapper, StageTimer
+from albot2d.mapping.protocol import Mapper, StageTimer, takes_perceived_views
 from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
 from albot2d.validation import check_non_negative, check_positive
 
@@ -229,8 +229,8 @@ def drive_mappers(
     stops: list[Stop] = []
     passed = 0  # multiples of stop_every_m passed so far
     steps = StepTimes()
-    perceives = {name: m.perception() for name, m in mappers.items()
-                 if isinstance(m, PerceivingMapper)}  # fmt: skip
+    perceives = {name: m.perception() for name, m in mappers.items()  # type: ignore[attr-defined]
+                 if takes_perceived_views(m)}  # fmt: skip
     probes = {name: _Probe(m) for name, m in mappers.items()}
     for extraction in set(perceives.values()):
         _warm_up(extraction)

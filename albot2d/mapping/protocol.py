@@ -10,7 +10,9 @@ Perceive once: a mapper that works on extracted surfaces can also implement
 ``albot2d.evaluation.drive_mappers`` then extracts each frame's surfaces once per distinct
 ``ExtractionParams`` and shares them; ``observe_perceived(frame, view)`` must do exactly
 what ``observe(frame)`` does after extracting ``view``. Mappers that want raw scans
-implement ``observe`` only and still get every frame.
+implement ``observe`` only and still get every frame, and so does a subclass that
+overrides ``observe`` but not ``observe_perceived`` (``takes_perceived_views``), so a
+plugin extending a built-in mapper's ``observe`` keeps working.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from albot2d.geometry import Pose
 from albot2d.mapping.global_map import MapSnapshot
 from albot2d.perception import ExtractionParams, Surfaces
 
-__all__ = ["Mapper", "MapperCounts", "PerceivingMapper", "StageTimer"]
+__all__ = ["Mapper", "MapperCounts", "PerceivingMapper", "StageTimer", "takes_perceived_views"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -114,3 +116,18 @@ class PerceivingMapper(Mapper, Protocol):
 
     def observe_perceived(self, frame: Frame, view: Surfaces) -> None:
         """Consume the next frame, its surfaces ``view`` extracted with ``perception()``."""
+
+
+def takes_perceived_views(mapper: object) -> bool:
+    """Whether a driver may call ``mapper.observe_perceived`` instead of ``observe``.
+
+    True for a ``PerceivingMapper`` whose ``observe`` is defined no later in its class
+    hierarchy than its ``observe_perceived``: a subclass that overrides only ``observe``
+    (to add to it) must be fed through its ``observe``.
+    """
+    if not isinstance(mapper, PerceivingMapper):
+        return False
+    mro = type(mapper).__mro__
+    defines = [next((i for i, c in enumerate(mro) if name in vars(c)), len(mro))
+               for name in ("observe", "observe_perceived")]  # fmt: skip
+    return defines[0] >= defines[1]
