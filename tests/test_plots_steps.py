@@ -67,6 +67,11 @@ def test_plot_step_times_draws_every_time_line_and_the_remembered_marks() -> Non
     marks = [line for line in ax.get_lines() if line.get_marker() == "|"]
     assert len(marks) == 1 and len(marks[0].get_xdata()) == len(range(0, 50, 7))
     assert ax.get_yscale() == "log"
+    # A long run is drawn per bin: the median and (faint) the slowest view of each bin.
+    binned = plot_step_times(some_steps(), ax=Figure().subplots(), bins=10)
+    total = next(ln for ln in binned.get_lines() if ln.get_label() == "albot1.total")
+    assert len(total.get_xdata()) == 10
+    assert max(ln.get_ydata().max() for ln in binned.get_lines() if ln.get_marker() != "|") >= 2.5
     assert render_step_times_png(some_steps()).startswith(PNG_MAGIC)
 
 
