@@ -74,9 +74,9 @@ def sample_segments(segments: ArrayLike, spacing_m: float) -> NDArray[np.float64
 # samples farther from all of them than that are searched again with the next distance.
 _NEAR_M = (0.5, 2.0, 8.0)
 # Point-wall pairs measured per numpy chunk (bounds the memory: ~150 bytes a pair).
-_CHUNK_PAIRS = 1 << 18
+_CHUNK_PAIRS = 1 << 16
 # Samples measured per block of map surfaces.
-_BLOCK_SAMPLES = 1 << 17
+_BLOCK_SAMPLES = 1 << 15
 
 
 def _point_segment_distance(
