@@ -50,11 +50,38 @@ def test_robot_move_10cm(benchmark, office) -> None:
     assert result.distance_m > 0.0 or result.collided
 
 
-def test_laser_scan_181(benchmark, office) -> None:
-    laser = Laser(office.obstacle_segments)
+@pytest.mark.parametrize("noise_backend", ["numpy", "numba"])
+def test_laser_scan_181(benchmark, office, noise_backend: str) -> None:
+    """A noisy scan: the noise model as numpy calls (today's) or one compiled call."""
+    if noise_backend == "numba":
+        pytest.importorskip("numba")
+    benchmark.group = "laser scan 181 beams"
+    laser = Laser(office.obstacle_segments, noise_backend=noise_backend)
     rng = make_rng(0)
+    laser.scan(office.start, rng)  # compile (or load the cache) first
     scan = benchmark(laser.scan, office.start, rng)
     assert scan.valid.any()
+
+
+def test_simulator_with_albot1_steps_per_second(benchmark, office) -> None:
+    """Simulator + Albot1 (extraction included) per step: the unit of a mapping run."""
+    from albot2d.mapping import Albot1
+
+    tour = office.tour(make_rng(1), kind="loop", min_length_m=60.0)
+    sim = Simulator(office, seed=3, odometry=NOISE_PRESETS["typical"])
+    frames = list(itertools.islice(sim.drive(tour, "dataset1"), 5))
+    Albot1().observe(frames[0])  # compile (or load the cache) first
+
+    def run() -> int:
+        mapper, count = Albot1(), 0
+        for frame in itertools.islice(sim.drive(tour, "dataset1"), 1500):
+            mapper.observe(frame)
+            count += 1
+        return count
+
+    count = benchmark.pedantic(run, rounds=3, iterations=1)
+    benchmark.extra_info["steps_per_s"] = count / benchmark.stats.stats.mean
+    assert count == 1500
 
 
 @pytest.mark.parametrize("with_obstacles", [False, True])

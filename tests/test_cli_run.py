@@ -35,9 +35,9 @@ def test_run_writes_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFix
     report = json.loads((out / "report.json").read_text())
     assert report["command"] == "run" and report["run"]["frames"] == 80
     expected = {"paths.png", "maps.png", "homing.png", "albot1_map.png", "albot1_history.png",
-                "albot1_route.png", "naive_map.png", "truth_map.png"}
+                "albot1_route.png", "naive_map.png", "truth_map.png", "steps.png"}
     assert set(report["figures"]) == expected
-    assert {p.name for p in out.iterdir()} == expected | {"report.json"}
+    assert {p.name for p in out.iterdir()} == expected | {"report.json", "steps.csv"}
     umask = os.umask(0o022)
     os.umask(umask)
     for name in [*expected, "report.json"]:
@@ -141,3 +141,37 @@ def test_unusable_output_dirs(tmp_path: Path, capsys: pytest.CaptureFixture) -> 
     assert len(err) == 1 and str(blocker) in err[0]
     assert main(["run", *TINY]) == 2
     assert "--out" in capsys.readouterr().err
+
+
+def test_run_profiles_every_view(tmp_path: Path) -> None:
+    """steps.csv has a row per view, report.json per-view p50/p95/max, --cprofile a pstats."""
+    import pstats
+
+    from albot2d.plots_steps import read_steps_csv
+
+    out, prof = tmp_path / "out", tmp_path / "run.prof"
+    assert main(["run", *TINY, "--max-frames", "40", "--no-figures", "--cprofile", str(prof),
+                 "--out", str(out)]) == 0  # fmt: skip
+    steps = read_steps_csv(str(out / "steps.csv"))
+    assert list(steps["view"]) == list(range(40))
+    for column in ("simulation_ms", "extraction_ms", "albot1.tracking_ms", "albot1.total_ms",
+                   "albot1.tracked", "albot1.remembered", "albot1.map_surfaces",
+                   "naive.total_ms", "truth.global_map_ms"):  # fmt: skip
+        assert column in steps, column
+    assert steps["albot1.remembered"][0] == 1 and steps["albot1.map_surfaces"][-1] > 0
+    # A mapper's total includes the shared extraction it was given.
+    assert (steps["albot1.total_ms"] >= steps["extraction_ms"]).all()
+    timing = json.loads((out / "report.json").read_text())["timing_ms"]
+    stats = timing["albot1.total"]
+    assert 0.0 < stats["p50"] <= stats["p95"] <= stats["max"]
+    assert abs(stats["mean"] - steps["albot1.total_ms"].mean()) < 1e-3
+    functions = {f for _, _, f in pstats.Stats(str(prof)).stats}
+    assert "run_experiment" in functions and "extract_surfaces" in functions
+
+
+def test_cprofile_into_a_missing_directory_is_rejected(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    assert main(["run", *TINY, "--max-frames", "5", "--no-figures", "--cprofile",
+                 str(tmp_path / "nowhere" / "x.prof"), "--out", str(tmp_path / "o")]) == 2
+    assert "--cprofile" in capsys.readouterr().err and not (tmp_path / "o").exists()

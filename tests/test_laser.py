@@ -248,3 +248,30 @@ def test_bad_params_name_the_field_and_value(cls: type, kwargs: dict, field: str
     with pytest.raises(InputError, match=field) as err:
         cls(**kwargs)
     assert repr(next(iter(kwargs.values()))) in str(err.value)
+
+
+@pytest.mark.parametrize(
+    "model",
+    [LaserNoise.sick_lms200(), noise(mixed_pixel_prob=1.0, mixed_pixel_min_jump_m=0.05),
+     noise(range_sigma_m=0.02, dropout_prob=0.2), noise(range_resolution_m=0.05),
+     noise(range_sigma_per_m=0.01, angle_jitter_deg=0.3)],
+)  # fmt: skip
+def test_compiled_noise_gives_the_numpy_scans_from_the_same_stream(model: LaserNoise) -> None:
+    pytest.importorskip("numba")
+    segs = office_segments(3)
+    params = LaserParams(n_beams=361, max_range_m=12.0)
+    fast = Laser(segs, params, model, noise_backend="numba")
+    slow = Laser(segs, params, model, noise_backend="numpy")
+    assert (fast.noise_backend, slow.noise_backend) == ("numba", "numpy")
+    rngs = np.random.default_rng(7), np.random.default_rng(7)
+    for k in range(40):
+        pose = Pose(2.0 + 0.3 * k, 1.5 + 0.1 * k, 0.4 * k)
+        a, b = fast.scan(pose, rngs[0]), slow.scan(pose, rngs[1])
+        np.testing.assert_array_equal(a.ranges, b.ranges)
+        np.testing.assert_array_equal(a.valid, b.valid)
+    assert rngs[0].random() == rngs[1].random()  # both consumed the same draws
+
+
+def test_unknown_noise_backend_is_rejected() -> None:
+    with pytest.raises(InputError, match="noise_backend"):
+        Laser(ROOM, noise_backend="gpu")

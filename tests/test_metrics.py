@@ -114,3 +114,35 @@ def test_sample_segments_spacing_and_endpoints() -> None:
     pts = sample_segments(np.array([[0, 0, 1, 0], [0, 0, 0, 0.01]], float), 0.25)
     assert len(pts) == 5 + 2
     np.testing.assert_allclose(pts[:5, 0], [0, 0.25, 0.5, 0.75, 1.0])
+
+
+@pytest.mark.parametrize(("seed", "small_blocks"), [(0, False), (1, False), (2, True)])
+def test_map_sample_distances_equal_the_nearest_wall_tree_query(
+    seed: int, small_blocks: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The bounded per-surface candidate search gives every sample the tree's nearest-wall
+    distance (up to rounding), including samples far from every wall."""
+    import importlib
+
+    import shapely
+
+    from albot2d.evaluation.map_quality import _sample_distances, sample_segments
+
+    if small_blocks:  # many blocks and chunks, as on a long run's maps
+        module = importlib.import_module("albot2d.evaluation.map_quality")
+        monkeypatch.setattr(module, "_BLOCK_SAMPLES", 700)
+        monkeypatch.setattr(module, "_CHUNK_PAIRS", 900)
+
+    rng = np.random.default_rng(seed)
+    walls = rng.uniform(0.0, 20.0, (60, 4))
+    walls[:5, 2:] = walls[:5, :2]  # degenerate (point) walls too
+    near = walls[rng.integers(0, 60, 300)] + rng.normal(0.0, 0.05, (300, 4))
+    far = rng.uniform(-30.0, 50.0, (40, 4))  # many samples > 0.5 m from any wall
+    segs = np.vstack([near, far, [[3.0, 3.0, 3.0, 3.0]]])
+    samples = sample_segments(segs, 0.05)
+    tree = shapely.STRtree(shapely.linestrings(walls.reshape(-1, 2, 2)))
+    _, expected = tree.query_nearest(shapely.points(samples), return_distance=True,
+                                     all_matches=False)  # fmt: skip
+    got = _sample_distances(segs, 0.05, walls)
+    assert (got > 0.5).any() and (got < 0.01).any()
+    np.testing.assert_allclose(got, expected, rtol=0.0, atol=1e-12)

@@ -84,6 +84,8 @@ def register(subparsers: Any) -> None:
                    help="re-run the run recorded in a report (give only --out with it)")
     p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    p.add_argument("--cprofile", metavar="FILE",
+                   help="also write a cProfile pstats file of the run (python -m pstats FILE)")
     p.set_defaults(handler=run)
 
 
@@ -198,6 +200,34 @@ def _render(result: Any, no_figures: bool, command: str) -> dict[str, bytes]:
         return {}
 
 
+def _step_figure(result: Any, no_figures: bool) -> dict[str, bytes]:
+    if no_figures:
+        return {}
+    try:
+        from albot2d.plots_steps import render_step_times_png
+
+        return {"steps.png": render_step_times_png(result.trace.step_times)}
+    except ImportError:
+        return {}  # _render already said that matplotlib is missing
+
+
+def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]:
+    """``compute`` run under cProfile, its pstats written to ``path`` (``--cprofile``)."""
+    if path is None:
+        return compute
+
+    def profiled() -> Any:
+        import cProfile
+
+        profiler = cProfile.Profile()
+        try:
+            return profiler.runcall(compute)
+        finally:
+            profiler.dump_stats(path)
+
+    return profiled
+
+
 def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, bytes]) -> None:
     """Write the figures and report.json atomically; report.json is renamed into place last."""
     from albot2d.evaluation.report import REPORT_NAME, report_json
@@ -224,8 +254,11 @@ def finish(
         if stage is not None and not no_figures:
             stage("figures")
         figures = _render(result, no_figures, command)
+        figures.update(_step_figure(result, no_figures))
         result.report["figures"] = sorted(figures)
-        write_outputs(out, result.report, figures)
+        # steps.csv: one row per view (stage times, counters), for profiling a run.
+        files = figures | {"steps.csv": result.trace.step_times.to_csv().encode("utf-8")}
+        write_outputs(out, result.report, files)
     except BaseException:
         _remove_if_empty(out, created)
         raise
@@ -287,6 +320,8 @@ def run(args: argparse.Namespace) -> int:
         spec = _spec(args)
         params = scoring_params(args)
     _check_spec(spec)
+    if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():
+        raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
     out, created = prepare_out_dir(args.out)
     bar = None
 
@@ -307,7 +342,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = finish(
             out, created, "run",
-            lambda: run_experiment(spec, params, on_start=start, on_frame=frame, on_stage=stage),
+            _profiled(args.cprofile, lambda: run_experiment(
+                spec, params, on_start=start, on_frame=frame, on_stage=stage)),
             args.no_figures, stage,
         )  # fmt: skip
     finally:

@@ -26,7 +26,7 @@ from albot2d.evaluation.report import (
 )
 from albot2d.evaluation.rpe import RPEResult, RPEStats, relative_pose_error
 from albot2d.evaluation.scoring import EvaluationParams, score_mappers
-from albot2d.evaluation.trace import HomingParams, Trace, drive_mappers
+from albot2d.evaluation.trace import HomingParams, StepTimes, Trace, drive_mappers
 
 __all__ = [
     "DEFAULT_MAPPERS",
@@ -41,6 +41,7 @@ __all__ = [
     "RPEResult",
     "RPEStats",
     "RunSpec",
+    "StepTimes",
     "Trace",
     "drive_mappers",
     "evaluation_params_from_report",

@@ -163,6 +163,7 @@ def replay_log(
         log={"path": os.fspath(log_path), "anomalies": anomalies.as_dict()},
         odometry=odometry,
         mappers=scores,
+        timing_ms=trace.step_times.summary_ms(),  # per-view stage times (steps.csv)
         figures=[],
         wall_time_s=time.perf_counter() - t0,
     )

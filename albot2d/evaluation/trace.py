@@ -3,7 +3,13 @@
 ``drive_mappers`` feeds each frame to every mapper in turn (so a long run is streamed once,
 never held in memory) and records a :class:`Trace`: per-frame timestamps, odometry and (in
 simulation) true poses, distance travelled, the laser hits of the last K views, wall time
-per mapper, and the *homing stops*.
+per mapper, per-view stage times (:class:`StepTimes`, ``steps.csv``) and the *homing stops*.
+
+Perceive once: each frame's surfaces are extracted once per distinct ``ExtractionParams``
+and passed to every ``PerceivingMapper`` that wants them (``observe_perceived``; see
+``takes_perceived_views``); other mappers get the raw frame (``observe``). A mapper's
+``timing_ms`` and wall time still include the extraction it used, as if it had extracted
+alone (so the sum over mappers counts a shared extraction more than once).
 
 Homing stops are chosen online, as a robot that stops to point home would: every
 ``stop_every_m`` metres of odometer distance (what the robot itself measures, as in the
@@ -15,23 +21,28 @@ and for where its map puts the start (its trajectory's first pose).
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 import time
+from array import array
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.evaluation.egocentric import EgocentricParams, in_robot_frame, seen_window_local
-from albot2d.frames import Frame
+from albot2d.frames import Frame, Scan
 from albot2d.geometry import transform_points
-from albot2d.mapping.protocol import Mapper
+from albot2d.mapping.protocol import Mapper, StageTimer, takes_perceived_views
+from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
 from albot2d.validation import check_non_negative, check_positive
 
-__all__ = ["HomingParams", "Stop", "Trace", "drive_mappers"]
+__all__ = ["HomingParams", "StepTimes", "Stop", "Trace", "drive_mappers"]
 
 FloatArray = NDArray[np.float64]
 
@@ -75,6 +86,65 @@ class Stop:
     maps: dict[str, tuple[FloatArray, int]] = field(default_factory=dict)
 
 
+class StepTimes:
+    """Per-view columns of ``steps.csv``: stage times (ms) and a few counters per view.
+
+    Columns: ``view`` (frame index), ``simulation_ms`` (waiting for the frame: the
+    simulator step, or reading a log), ``extraction_ms`` (the shared extraction, summed
+    over distinct settings), then per mapper ``NAME.STAGE_ms`` (its ``StageTimer`` stages,
+    when it has one as ``.timer``) and ``NAME.total_ms``, and for mappers that expose them
+    ``NAME.tracked`` (surfaces tracked at this view), ``NAME.remembered`` (local maps
+    remembered at this view) and ``NAME.map_surfaces`` (surfaces in its global map now).
+    A stage a view did not run counts 0. Columns are compact ``array('d')``: 8 bytes a cell.
+    """
+
+    def __init__(self) -> None:
+        self.columns: dict[str, array[float]] = {}
+        self.rows = 0
+
+    def add_row(self, values: dict[str, float]) -> None:
+        for name in values:
+            if name not in self.columns:  # a new column: zeros for the earlier rows
+                self.columns[name] = array("d", bytes(8 * self.rows))
+        for name, column in self.columns.items():
+            column.append(values.get(name, 0.0))
+        self.rows += 1
+
+    def column(self, name: str) -> NDArray[np.float64]:
+        return np.frombuffer(self.columns[name], dtype=np.float64).copy()
+
+    def stage_names(self) -> list[str]:
+        """The time columns (``*_ms``), in the order they first appeared."""
+        return [name for name in self.columns if name.endswith("_ms")]
+
+    def summary_ms(self) -> dict[str, dict[str, float]]:
+        """Per time column: mean, p50, p95 and max milliseconds per view."""
+        out: dict[str, dict[str, float]] = {}
+        for name in self.stage_names():
+            v = self.column(name)
+            if not len(v):
+                continue
+            p50, p95 = np.percentile(v, [50, 95])
+            out[name.removesuffix("_ms")] = {
+                "mean": float(v.mean()), "p50": float(p50), "p95": float(p95),
+                "max": float(v.max()),
+            }  # fmt: skip
+        return out
+
+    def to_csv(self) -> str:
+        """The table as CSV text (``view`` and counters as integers, times in ms)."""
+        names = list(self.columns)
+        data = np.column_stack([self.column(n) for n in names]) if names else np.zeros((0, 0))
+        buf = io.StringIO()
+        buf.write(",".join(names) + "\n")
+        integer = [not n.endswith("_ms") for n in names]
+        for row in data:
+            cells = (str(int(x)) if whole else f"{x:.4f}"
+                     for x, whole in zip(row, integer, strict=True))  # fmt: skip
+            buf.write(",".join(cells) + "\n")
+        return buf.getvalue()
+
+
 @dataclass(eq=False)
 class Trace:
     """What a run left behind (rows are frames in the order observed)."""
@@ -91,6 +161,7 @@ class Trace:
     wall_ms: dict[str, float] = field(default_factory=dict)
     final: Stop | None = None
     egocentric: EgocentricParams = field(default_factory=EgocentricParams)
+    step_times: StepTimes = field(default_factory=StepTimes)
 
     @property
     def n_frames(self) -> int:
@@ -190,6 +261,12 @@ def drive_mappers(
     wall_ns = dict.fromkeys(mappers, 0)
     stops: list[Stop] = []
     passed = 0  # multiples of stop_every_m passed so far
+    steps = StepTimes()
+    perceives = {name: m.perception() for name, m in mappers.items()  # type: ignore[attr-defined]
+                 if takes_perceived_views(m)}  # fmt: skip
+    probes = {name: _Probe(m) for name, m in mappers.items()}
+    for extraction in set(perceives.values()):
+        _warm_up(extraction)
 
     def capture() -> Stop:
         estimates = {name: _estimate(m) for name, m in mappers.items()}
@@ -202,14 +279,36 @@ def drive_mappers(
             return
         stops.append(capture())
 
-    for frame in frames:
-        if max_frames is not None and len(rec.stamps) >= max_frames:
+    stream = iter(frames)
+    while max_frames is None or len(rec.stamps) < max_frames:
+        t0 = time.perf_counter_ns()
+        frame = next(stream, None)
+        if frame is None:
             break
+        row: dict[str, float] = {"view": frame.index,
+                                 "simulation_ms": (time.perf_counter_ns() - t0) / 1e6}
         rec.add(frame)
+        views: dict[ExtractionParams, tuple[Surfaces, int]] = {}
+        for extraction in perceives.values():
+            if extraction not in views:
+                t0 = time.perf_counter_ns()
+                view = extract_surfaces(frame.scan, extraction)
+                views[extraction] = (view, time.perf_counter_ns() - t0)
+        if views:
+            row["extraction_ms"] = sum(ns for _, ns in views.values()) / 1e6
         for name, mapper in mappers.items():
+            shared_ns = 0
             t0 = time.perf_counter_ns()
-            mapper.observe(frame)
-            wall_ns[name] += time.perf_counter_ns() - t0
+            if name in perceives:
+                view, shared_ns = views[perceives[name]]
+                probes[name].charge_extraction(shared_ns)
+                mapper.observe_perceived(frame, view)  # type: ignore[attr-defined]
+            else:
+                mapper.observe(frame)
+            elapsed = time.perf_counter_ns() - t0 + shared_ns
+            wall_ns[name] += elapsed
+            probes[name].record(row, name, elapsed)
+        steps.add_row(row)
         # Stop when the odometer enters a new multiple of the spacing (floor division, not
         # a running sum, so the spacing's rounding cannot accumulate).
         multiple = int(rec.travelled[-1] // params.stop_every_m)
@@ -239,4 +338,55 @@ def drive_mappers(
         wall_ms={name: ns / 1e6 for name, ns in wall_ns.items()},
         final=final,
         egocentric=ego,
+        step_times=steps,
     )
+
+
+def _warm_up(params: ExtractionParams) -> None:
+    """Extract a tiny synthetic scan once, so loading (or compiling) the compiled
+    extraction is not counted as the first view's extraction time."""
+    angles = np.linspace(-0.5, 0.5, 2 * params.min_points)
+    ranges = np.full(len(angles), 2.0)
+    with contextlib.suppress(InputError):  # a lambda narrower than these beams: no matter
+        extract_surfaces(Scan(ranges, angles, np.ones(len(angles), bool), 10.0), params)
+
+
+class _Probe:
+    """Reads what one mapper exposes after each view, for its ``steps.csv`` columns.
+
+    Optional, by duck typing: a ``StageTimer`` as ``.timer`` (stage times), a ``.steps``
+    list of records with ``.tracked`` (Albot1's ``StepRecord``) and a ``.map`` with a
+    length (its global map); ``counts().local_maps`` gives the maps remembered.
+    """
+
+    def __init__(self, mapper: Mapper) -> None:
+        self.mapper = mapper
+        timer = getattr(mapper, "timer", None)
+        self.timer = timer if isinstance(timer, StageTimer) else None
+        self.has_steps = isinstance(getattr(mapper, "steps", None), list)
+        self.has_map = hasattr(getattr(mapper, "map", None), "__len__")
+        self.local_maps = 0
+        self.shared = False
+
+    def charge_extraction(self, ns: int) -> None:
+        """Count a shared extraction to this mapper's stages, as if it had extracted alone."""
+        self.shared = True
+        if self.timer is not None:
+            self.timer.add("extraction", ns)
+
+    def record(self, row: dict[str, Any], name: str, total_ns: int) -> None:
+        """Add this view's columns (``total_ns`` includes any shared extraction, which has
+        its own column, ``extraction_ms``)."""
+        if self.timer is not None:
+            for stage, ns in self.timer.take_view().items():
+                if not (self.shared and stage == "extraction"):
+                    row[f"{name}.{stage}_ms"] = ns / 1e6
+        row[f"{name}.total_ms"] = total_ns / 1e6
+        steps = self.mapper.steps if self.has_steps else None  # type: ignore[attr-defined]
+        if steps:
+            row[f"{name}.tracked"] = getattr(steps[-1], "tracked", 0)
+        local_maps = self.mapper.counts().local_maps
+        row[f"{name}.remembered"] = local_maps - self.local_maps
+        self.local_maps = local_maps
+        if self.has_map:
+            row[f"{name}.map_surfaces"] = len(self.mapper.map)  # type: ignore[attr-defined]

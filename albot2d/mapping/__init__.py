@@ -9,7 +9,7 @@ from albot2d.mapping.global_map import (
     UpdateReport,
     view_polygon,
 )
-from albot2d.mapping.protocol import Mapper, MapperCounts, StageTimer
+from albot2d.mapping.protocol import Mapper, MapperCounts, PerceivingMapper, StageTimer
 from albot2d.mapping.route_map import LocalMap, Method, RouteMap
 from albot2d.mapping.triangulation import (
     Affordances,
@@ -31,6 +31,7 @@ __all__ = [
     "MapperCounts",
     "Method",
     "NaiveIntegration",
+    "PerceivingMapper",
     "RouteMap",
     "StageTimer",
     "StepRecord",

@@ -185,6 +185,12 @@ class Albot1:
     def observe(self, frame: Frame) -> None:
         with self.timer.stage("extraction"):
             view = extract_surfaces(frame.scan, self.params.extraction)
+        self.observe_perceived(frame, view)
+
+    def perception(self) -> ExtractionParams:
+        return self.params.extraction
+
+    def observe_perceived(self, frame: Frame, view: Surfaces) -> None:
         self.observe_view(frame.index, frame.timestamp, view, frame.odom_increment)
 
     def pose(self) -> Pose:

@@ -6,7 +6,8 @@
   bound available in simulation only.
 
 Both use the same surface extraction as Albot1 so their maps are comparable, and
-implement the mapper protocol (``albot2d.mapping.protocol.Mapper``).
+implement the mapper protocol (``albot2d.mapping.protocol.PerceivingMapper``: a driver
+that already extracted a frame's surfaces passes them to ``observe_perceived``).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from albot2d.frames import Frame
 from albot2d.geometry import Pose, transform_segments
 from albot2d.mapping.global_map import GlobalMap, MapSnapshot
 from albot2d.mapping.protocol import MapperCounts, StageTimer
-from albot2d.perception import ExtractionParams, extract_surfaces
+from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
 
 __all__ = ["GroundTruthIntegration", "NaiveIntegration"]
 
@@ -39,9 +40,15 @@ class _ViewIntegrator:
     def _source_pose(self, frame: Frame) -> Pose:
         raise NotImplementedError
 
+    def perception(self) -> ExtractionParams:
+        return self.extraction
+
     def observe(self, frame: Frame) -> None:
         with self.timer.stage("extraction"):
             view = extract_surfaces(frame.scan, self.extraction)
+        self.observe_perceived(frame, view)
+
+    def observe_perceived(self, frame: Frame, view: Surfaces) -> None:
         source = self._source_pose(frame)
         if self._origin is None:
             self._origin = source

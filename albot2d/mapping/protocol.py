@@ -3,6 +3,16 @@
 A mapper consumes ``Frame``s one at a time (``observe``) and can be asked at any moment
 for its pose estimate, its global map and its counters. ``trajectory()`` gives the pose
 estimate of every frame observed so far, as the mapper now believes it.
+
+Perceive once: a mapper that works on extracted surfaces can also implement
+``PerceivingMapper`` (``perception()`` names the ``ExtractionParams`` it wants and
+``observe_perceived(frame, view)`` takes the frame with its surfaces already extracted).
+``albot2d.evaluation.drive_mappers`` then extracts each frame's surfaces once per distinct
+``ExtractionParams`` and shares them; ``observe_perceived(frame, view)`` must do exactly
+what ``observe(frame)`` does after extracting ``view``. Mappers that want raw scans
+implement ``observe`` only and still get every frame, and so does a subclass that
+overrides ``observe`` but not ``observe_perceived`` (``takes_perceived_views``), so a
+plugin extending a built-in mapper's ``observe`` keeps working.
 """
 
 from __future__ import annotations
@@ -19,8 +29,9 @@ from numpy.typing import NDArray
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
 from albot2d.mapping.global_map import MapSnapshot
+from albot2d.perception import ExtractionParams, Surfaces
 
-__all__ = ["Mapper", "MapperCounts", "StageTimer"]
+__all__ = ["Mapper", "MapperCounts", "PerceivingMapper", "StageTimer", "takes_perceived_views"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -34,11 +45,16 @@ class MapperCounts:
 
 
 class StageTimer:
-    """Accumulates wall time per named stage with ``perf_counter_ns`` (≈ 100 ns per use)."""
+    """Accumulates wall time per named stage with ``perf_counter_ns`` (≈ 100 ns per use).
+
+    Besides the run totals it keeps the time of each stage since the last ``take_view()``,
+    so a driver can record per-view stage times (``steps.csv``).
+    """
 
     def __init__(self) -> None:
         self.total_ns: dict[str, int] = {}
         self.calls: dict[str, int] = {}
+        self.view_ns: dict[str, int] = {}
 
     @contextmanager
     def stage(self, name: str) -> Iterator[None]:
@@ -46,8 +62,18 @@ class StageTimer:
         try:
             yield
         finally:
-            self.total_ns[name] = self.total_ns.get(name, 0) + time.perf_counter_ns() - t0
-            self.calls[name] = self.calls.get(name, 0) + 1
+            self.add(name, time.perf_counter_ns() - t0)
+
+    def add(self, name: str, ns: int) -> None:
+        """Count ``ns`` nanoseconds measured elsewhere (e.g. a shared extraction) to ``name``."""
+        self.total_ns[name] = self.total_ns.get(name, 0) + ns
+        self.calls[name] = self.calls.get(name, 0) + 1
+        self.view_ns[name] = self.view_ns.get(name, 0) + ns
+
+    def take_view(self) -> dict[str, int]:
+        """Nanoseconds per stage since the previous call (the view just processed)."""
+        out, self.view_ns = self.view_ns, {}
+        return out
 
     def mean_ms_per(self, n_views: int) -> dict[str, float]:
         """Mean milliseconds per view for each stage (total stage time / views)."""
@@ -79,3 +105,29 @@ class Mapper(Protocol):
 
     def timings_ms(self) -> dict[str, float]:
         """Mean milliseconds per view for each processing stage."""
+
+
+@runtime_checkable
+class PerceivingMapper(Mapper, Protocol):
+    """A mapper that can take a frame's surfaces extracted for it (see the module docstring)."""
+
+    def perception(self) -> ExtractionParams:
+        """The extraction settings this mapper's views are made with."""
+
+    def observe_perceived(self, frame: Frame, view: Surfaces) -> None:
+        """Consume the next frame, its surfaces ``view`` extracted with ``perception()``."""
+
+
+def takes_perceived_views(mapper: object) -> bool:
+    """Whether a driver may call ``mapper.observe_perceived`` instead of ``observe``.
+
+    True for a ``PerceivingMapper`` whose ``observe`` is defined no later in its class
+    hierarchy than its ``observe_perceived``: a subclass that overrides only ``observe``
+    (to add to it) must be fed through its ``observe``.
+    """
+    if not isinstance(mapper, PerceivingMapper):
+        return False
+    mro = type(mapper).__mro__
+    defines = [next((i for i, c in enumerate(mro) if name in vars(c)), len(mro))
+               for name in ("observe", "observe_perceived")]  # fmt: skip
+    return defines[0] >= defines[1]

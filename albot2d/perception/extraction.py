@@ -30,11 +30,17 @@ that plain rule (``continuation_distance_m``, on by default): an end whose farth
 still lies on the surface's line is a wall thinning out at a grazing angle, not a corner, so
 it is occluded too. On the MIT CSAIL log this cuts the mean error of endpoints used for
 matching by about a third (0.095 → 0.067 m between views ≈ 0.4 s apart, ground-truth motion).
+
+Backends: with numba installed (the ``fast`` extra) a compiled kernel
+(``extraction_numba``) runs the same pipeline as scalar loops in one call, about 20× faster
+than these ~100 small numpy calls, with the same surfaces; ``backend`` chooses ("auto"
+takes numba when it imports, like the raycaster).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,7 +53,10 @@ from albot2d.perception.endpoints import jump_end_gaps, refine_corners
 from albot2d.perception.surfaces import Surfaces
 from albot2d.validation import check_in_range, check_non_negative, check_positive
 
-__all__ = ["ExtractionParams", "extract_surfaces"]
+__all__ = ["EXTRACTION_BACKENDS", "ExtractionParams", "extract_surfaces", "numba_available"]
+
+#: ``extract_surfaces(backend=...)``: "auto" takes the compiled kernel when numba imports.
+EXTRACTION_BACKENDS = ("auto", "numpy", "numba")
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -348,17 +357,45 @@ def _occlusion(
     return np.column_stack(flags)
 
 
-def extract_surfaces(scan: Scan, params: ExtractionParams | None = None) -> Surfaces:
+_numba_extract: Callable[..., tuple] | None = None  # type: ignore[type-arg]
+_numba_missing = False
+
+
+def numba_available() -> bool:
+    """Whether the compiled extraction can be used: numba (the ``fast`` extra) imports."""
+    global _numba_extract, _numba_missing
+    if _numba_extract is None and not _numba_missing:
+        try:
+            from albot2d.perception.extraction_numba import extract_kernel
+        except ImportError:
+            _numba_missing = True
+        else:
+            _numba_extract = extract_kernel
+    return _numba_extract is not None
+
+
+def extract_surfaces(
+    scan: Scan, params: ExtractionParams | None = None, *, backend: str = "auto"
+) -> Surfaces:
     """The surfaces (straight line segments) seen in ``scan``, in the robot frame.
 
     Surfaces come in scan order; endpoint 0 is the one from the lower beam index.
     ``beams`` holds each surface's first and last supporting beam (a split point is the
-    last beam of one surface and the first of the next).
+    last beam of one surface and the first of the next). ``backend``: "numpy", "numba"
+    (needs the ``fast`` extra) or "auto" (numba when it imports); both give the same
+    surfaces.
     """
     params = ExtractionParams() if params is None else params
     n = scan.n_beams
     if n < params.min_points:
         return Surfaces.empty()
+    if backend == "auto" or backend == "numba":
+        if numba_available():
+            return _extract_numba(scan, params)
+        if backend == "numba":
+            raise InputError("backend='numba' needs numba: pip install 'albot2d[fast]'")
+    elif backend != "numpy":
+        raise InputError(f"backend must be one of {EXTRACTION_BACKENDS}, got {backend!r}")
     hit, r = _hits(scan, params)
     x, y = r * np.cos(scan.angles), r * np.sin(scan.angles)
     joined = _joined(scan, hit, r, x, y, params)
@@ -398,6 +435,30 @@ def extract_surfaces(scan: Scan, params: ExtractionParams | None = None) -> Surf
         )
     segs = transform_segments(scan.laser_pose.as_array(), segs)
     return Surfaces(segs, occluded, ab, uncertain)
+
+
+def _extract_numba(scan: Scan, params: ExtractionParams) -> Surfaces:
+    assert _numba_extract is not None  # loaded by numba_available()
+    lam = math.radians(params.breakpoint_lambda_deg)
+    mount = scan.laser_pose
+    max_dphi, segs, occluded, ab, uncertain = _numba_extract(
+        np.ascontiguousarray(scan.ranges, dtype=np.float64),
+        np.ascontiguousarray(scan.angles, dtype=np.float64),
+        np.ascontiguousarray(scan.valid, dtype=np.bool_),
+        float(params.max_range_m), lam,
+        params.breakpoint_sigma_factor * params.range_sigma_m,
+        params.split_distance_m, params.merge_distance_m, params.min_points,
+        params.continuation_distance_m, params.max_endpoint_gap_m,
+        math.sin(math.radians(params.corner_min_angle_deg)), params.corner_max_shift_m,
+        # The laser pose, as ``transform_segments`` uses it (the same float operations).
+        float(mount.x), float(mount.y), math.cos(mount.theta), math.sin(mount.theta),
+    )  # fmt: skip
+    if scan.n_beams > 1 and max_dphi >= lam:
+        raise InputError(
+            f"ExtractionParams.breakpoint_lambda_deg={params.breakpoint_lambda_deg!r} must "
+            f"exceed the scan's beam spacing ({math.degrees(max_dphi):.3g} deg)"
+        )
+    return Surfaces.adopt(segs, occluded, ab, uncertain)
 
 
 def _uncertain_jump_ends(

@@ -79,6 +79,24 @@ class Surfaces:
         return ~self.occluded & ~self.uncertain
 
     @classmethod
+    def adopt(
+        cls,
+        segments: FloatArray,
+        occluded: NDArray[np.bool_],
+        beams: NDArray[np.int64],
+        uncertain: NDArray[np.bool_],
+    ) -> Surfaces:
+        """Surfaces taking ownership of fresh arrays of the right dtypes and shapes
+        (``(N, 4)`` float64, ``(N, 2)`` bool, int64, bool): made read-only, not copied.
+        For producers that just built them (the compiled extraction: saves ~10 µs)."""
+        out = object.__new__(cls)
+        for name, arr in (("segments", segments), ("occluded", occluded), ("beams", beams),
+                          ("uncertain", uncertain)):  # fmt: skip
+            arr.flags.writeable = False
+            object.__setattr__(out, name, arr)
+        return out
+
+    @classmethod
     def empty(cls) -> Surfaces:
         return cls(np.zeros((0, 4)), np.zeros((0, 2), bool), np.zeros((0, 2), np.int64))
 

@@ -17,6 +17,9 @@ enabled (so a zero-noise laser consumes no randomness and returns exact ranges):
 6. dropouts — each valid beam independently returns nothing with ``dropout_prob``.
 
 Invalid beams report ``max_range_m`` (as CARMEN logs report no-return readings).
+
+Steps 2–6 run as one compiled call (``laser_numba``) when numba (the ``fast`` extra)
+imports, on the same draws, with the same ranges bit for bit; ``noise_backend`` chooses.
 The default mount is the robot's rotation centre (``mount_x_m = 0``); a Pioneer-style
 front mount is ``mount_x_m = 0.16``.
 """
@@ -24,6 +27,7 @@ front mount is ``mount_x_m = 0.16``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -153,7 +157,13 @@ class Laser:
         static_segments: ArrayLike | RayCaster,
         params: LaserParams | None = None,
         noise: LaserNoise | None = None,
+        *,
+        noise_backend: str = "auto",
     ) -> None:
+        if noise_backend not in ("auto", "numpy", "numba"):
+            raise InputError(
+                f"noise_backend must be auto, numpy or numba, got {noise_backend!r}"
+            )
         self.params = params if params is not None else LaserParams()
         self.noise = noise if noise is not None else LaserNoise()
         if isinstance(static_segments, RayCaster):
@@ -164,6 +174,11 @@ class Laser:
         self.angles.flags.writeable = False
         self._fan = BeamFan.from_angles(self.angles)
         self._mount = self.params.mount_pose
+        # The name, not the kernel: a Laser pickles small and loads numba where it runs.
+        compiled = noise_backend != "numpy" and _noise_kernel() is not None
+        if noise_backend == "numba" and not compiled:
+            raise InputError("noise_backend='numba' needs numba: pip install 'albot2d[fast]'")
+        self.noise_backend = "numba" if compiled else "numpy"
 
     @classmethod
     def for_world(
@@ -212,6 +227,41 @@ class Laser:
         )
         hit = r <= p.max_range_m
         np.minimum(r, p.max_range_m, out=r)  # no-return beams stay invalid whatever happens
+        if self.noise_backend == "numba":
+            ranges, valid = self._compiled_noise(r, hit, rng)
+        else:
+            ranges, valid = self._numpy_noise(r, hit, rng)
+        return Scan(
+            ranges=ranges,
+            angles=self.angles,
+            valid=valid,
+            max_range_m=p.max_range_m,
+            timestamp=float(timestamp),
+            laser_pose=self._mount,
+        )
+
+    def _compiled_noise(
+        self, r: FloatArray, hit: NDArray[np.bool_], rng: np.random.Generator
+    ) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """Steps 2–6 in one compiled call on exactly the numpy path's draws, in its order."""
+        p, nz, n = self.params, self.noise, self.n_beams
+        mixed = rng.random((3, n - 1)) if nz.mixed_pixel_prob > 0.0 else _NO_DRAWS_2D
+        noisy = nz.range_sigma_m > 0.0 or nz.range_sigma_per_m > 0.0
+        normal = rng.standard_normal(n) if noisy else _NO_DRAWS
+        dropout = rng.random(n) if nz.dropout_prob > 0.0 else _NO_DRAWS
+        res = nz.range_resolution_m
+        kernel = _noise_kernel()
+        assert kernel is not None  # checked in __init__
+        return kernel(
+            r, hit, nz.mixed_pixel_prob, nz.mixed_pixel_min_jump_m, mixed, nz.range_sigma_m,
+            nz.range_sigma_per_m, normal, 1.0 / res if res > 0.0 else 0.0, res,
+            p.min_range_m, p.max_range_m, nz.dropout_prob, dropout,
+        )  # fmt: skip
+
+    def _numpy_noise(
+        self, r: FloatArray, hit: NDArray[np.bool_], rng: np.random.Generator
+    ) -> tuple[FloatArray, NDArray[np.bool_]]:
+        p, nz = self.params, self.noise
         if nz.mixed_pixel_prob > 0.0:
             _mix_pixels(r, hit, nz, rng)
         if nz.range_sigma_m > 0.0 or nz.range_sigma_per_m > 0.0:
@@ -226,15 +276,26 @@ class Laser:
         valid = hit & (r >= p.min_range_m) & (r < p.max_range_m)
         if nz.dropout_prob > 0.0:
             valid &= rng.random(self.n_beams) >= nz.dropout_prob
-        ranges = np.where(valid, r, p.max_range_m)
-        return Scan(
-            ranges=ranges,
-            angles=self.angles,
-            valid=valid,
-            max_range_m=p.max_range_m,
-            timestamp=float(timestamp),
-            laser_pose=self._mount,
-        )
+        return np.where(valid, r, p.max_range_m), valid
+
+
+_NO_DRAWS = np.zeros(0)
+_NO_DRAWS_2D = np.zeros((3, 0))
+
+
+_kernel: list[Callable[..., tuple[FloatArray, NDArray[np.bool_]]] | None] = []
+
+
+def _noise_kernel() -> Callable[..., tuple[FloatArray, NDArray[np.bool_]]] | None:
+    """``laser_numba.apply_noise`` when numba imports, else None (the numpy path)."""
+    if not _kernel:
+        try:
+            from albot2d.sim.laser_numba import apply_noise
+        except ImportError:
+            _kernel.append(None)
+        else:
+            _kernel.append(apply_noise)
+    return _kernel[0]
 
 
 def _mix_pixels(

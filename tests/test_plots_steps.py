@@ -1,0 +1,83 @@
+"""The step-time figure: drawn from a run's StepTimes or its steps.csv, matplotlib lazily."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from albot2d.evaluation.trace import StepTimes
+
+pytest.importorskip("matplotlib")
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def some_steps() -> StepTimes:
+    steps = StepTimes()
+    rng = np.random.default_rng(0)
+    for view in range(50):
+        row = {
+            "view": view,
+            "simulation_ms": 0.1,
+            "extraction_ms": 0.05,
+            "albot1.tracking_ms": float(rng.uniform(0.1, 0.3)),
+            "albot1.total_ms": float(rng.uniform(0.5, 1.0)),
+            "albot1.remembered": view % 7 == 0,
+        }
+        if view % 7 == 0:  # a stage only some views run: 0 elsewhere
+            row["albot1.global_map_ms"] = 2.0
+            row["albot1.total_ms"] += 2.0
+        steps.add_row(row)  # type: ignore[arg-type]
+    return steps
+
+
+def test_step_times_table_fills_missing_stages_and_round_trips_through_csv(
+    tmp_path: Path,
+) -> None:
+    from albot2d.plots_steps import read_steps_csv
+
+    steps = some_steps()
+    assert steps.rows == 50
+    gm = steps.column("albot1.global_map_ms")
+    assert list(np.flatnonzero(gm)) == list(range(0, 50, 7))
+    path = tmp_path / "steps.csv"
+    path.write_text(steps.to_csv())
+    back = read_steps_csv(str(path))
+    assert set(back) == set(steps.columns)
+    np.testing.assert_allclose(back["albot1.total_ms"], steps.column("albot1.total_ms"),
+                               atol=1e-4)  # fmt: skip
+    summary = steps.summary_ms()
+    assert summary["albot1.global_map"]["max"] == 2.0 and summary["albot1.global_map"]["p50"] == 0
+    assert "albot1.remembered" not in summary and "view" not in summary
+
+
+def test_plot_step_times_draws_every_time_line_and_the_remembered_marks() -> None:
+    from matplotlib.figure import Figure
+
+    from albot2d.plots_steps import plot_step_times, render_step_times_png
+
+    ax = Figure().subplots()
+    assert plot_step_times(some_steps(), ax=ax) is ax
+    labels = [line.get_label() for line in ax.get_lines()]
+    assert {"simulation", "extraction", "albot1.total"} <= set(labels)
+    marks = [line for line in ax.get_lines() if line.get_marker() == "|"]
+    assert len(marks) == 1 and len(marks[0].get_xdata()) == len(range(0, 50, 7))
+    assert ax.get_yscale() == "log"
+    # A long run is drawn per bin: the median and (faint) the slowest view of each bin.
+    binned = plot_step_times(some_steps(), ax=Figure().subplots(), bins=10)
+    total = next(ln for ln in binned.get_lines() if ln.get_label() == "albot1.total")
+    assert len(total.get_xdata()) == 10
+    assert max(ln.get_ydata().max() for ln in binned.get_lines() if ln.get_marker() != "|") >= 2.5
+    assert render_step_times_png(some_steps()).startswith(PNG_MAGIC)
+
+
+def test_plots_steps_imports_without_matplotlib() -> None:
+    code = "import sys; sys.modules['matplotlib'] = None; import albot2d.plots_steps; print('ok')"
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=root, timeout=60)  # fmt: skip
+    assert out.stdout.strip() == "ok", out.stderr
