@@ -21,6 +21,7 @@ from albot2d.sim.laser import LaserNoise
 from albot2d.sim.odometry import NOISE_PRESETS
 from albot2d.sim.simulator import Simulator
 from tests.albot1_checks import UpdateRecorder, check_local_map_rule
+from tests.strategies import examples
 from worldgen.strategies import worlds
 
 SMALL_WORLDS = worlds(kinds=("rooms", "corridors", "office", "open"), max_size_m=20.0)
@@ -40,7 +41,7 @@ def run(world, seed: int, *, laser_noise: LaserNoise, odometry: str, length_m: f
     return m, frames, recorder
 
 
-@settings(max_examples=5)
+@settings(max_examples=examples(5))
 @given(SMALL_WORLDS, st.integers(0, 2**16))
 def test_invariants_hold_under_noise(world, seed: int) -> None:  # type: ignore[no-untyped-def]
     m, frames, recorder = run(world, seed, laser_noise=LaserNoise(), odometry="typical")
@@ -50,7 +51,7 @@ def test_invariants_hold_under_noise(world, seed: int) -> None:  # type: ignore[
     assert m.trajectory().shape == (len(frames), 3)
 
 
-@settings(max_examples=5)
+@settings(max_examples=examples(5))
 @given(SMALL_WORLDS, st.integers(0, 2**16))
 def test_zero_noise_localises_each_local_map_exactly(world, seed: int) -> None:  # type: ignore[no-untyped-def]
     m, frames, _ = run(world, seed, laser_noise=LaserNoise.zero(), odometry="none")
@@ -82,7 +83,7 @@ def test_zero_noise_localises_each_local_map_exactly(world, seed: int) -> None: 
         assert q.accuracy_m_mean is not None and q.accuracy_m_mean <= 0.35
 
 
-@settings(max_examples=2)
+@settings(max_examples=examples(2))
 @given(SMALL_WORLDS, st.integers(0, 2**16))
 def test_same_seed_same_run(world, seed: int) -> None:  # type: ignore[no-untyped-def]
     a, _, _ = run(world, seed, laser_noise=LaserNoise(), odometry="typical", length_m=12.0)

@@ -18,6 +18,7 @@ from albot2d.frames import Scan
 from albot2d.geometry import Pose
 from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
 from tests.perception_helpers import box, scan_of
+from tests.strategies import examples
 
 pytest.importorskip("numba")
 
@@ -46,7 +47,7 @@ PARAMS = st.builds(
 )
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(
     seed=st.integers(0, 2**32 - 1),
     n_walls=st.integers(0, 12),

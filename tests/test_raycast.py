@@ -126,7 +126,8 @@ def test_index_equals_brute_force_and_hits_lie_on_walls(
     assert np.all(got[hit] <= r_max * (1 + 1e-12))
     # A ray grazing a segment end meets the line at a float-precision angle: exempt.
     hit &= ~grazing(segs, (ox, oy), angles)
-    pts = np.column_stack([ox + got * np.cos(angles), oy + got * np.sin(angles)])[hit]
+    r, a = got[hit], angles[hit]  # misses are inf: keep them out of the products
+    pts = np.column_stack([ox + r * np.cos(a), oy + r * np.sin(a)])
     if len(pts):
         assert point_segment_distance(pts, segs).min(axis=1).max() < EXACT_M
 

@@ -27,6 +27,7 @@ from albot2d.sim.laser import LaserNoise
 from albot2d.sim.odometry import NOISE_PRESETS, OdometryNoise
 from albot2d.sim.robot import KinematicRobot
 from albot2d.sim.simulator import Simulator
+from tests.strategies import examples
 from worldgen.space import build_space
 from worldgen.world import DynamicObstacle, Roadmap, Tour, World
 
@@ -282,7 +283,7 @@ def test_physics_params_validated(field: str, value: float) -> None:
         PhysicsParams(**{field: value})
 
 
-@settings(max_examples=10)
+@settings(max_examples=examples(10))
 @given(
     points=st.lists(st.tuples(st.floats(0.3, 11.7), st.floats(0.3, 7.7)), min_size=1,
                     max_size=5),

@@ -11,6 +11,7 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.strategies import examples
 from tests.test_worldgen_io import sample_world
 from worldgen.space import (
     COLLISION_BOX,
@@ -121,7 +122,7 @@ def test_convex_parts_cover_a_polygon_with_a_hole() -> None:
     assert convex_parts(shapely.Polygon()) == []
 
 
-@settings(max_examples=10)
+@settings(max_examples=examples(10))
 @given(generated_worlds(max_size_m=30.0, dynamic=True), st.floats(-math.pi, math.pi))
 def test_generated_worlds_give_matching_spaces(world, angle: float) -> None:
     space = build_space(world)

@@ -20,6 +20,7 @@ from hypothesis.extra import numpy as hnp
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, polygon_ring_segments
+from tests.strategies import examples
 from worldgen.io import load, save, world_from_json, world_to_json
 from worldgen.strategies import worlds as generated_worlds
 from worldgen.world import DynamicObstacle, Roadmap, World
@@ -371,7 +372,7 @@ def test_saving_a_non_finite_world_writes_nothing(tmp_path: Path) -> None:
     assert list(tmp_path.iterdir()) == []
 
 
-@settings(max_examples=10)
+@settings(max_examples=examples(10))
 @given(generated_worlds(max_size_m=30.0, dynamic=True))
 def test_generated_worlds_round_trip_exactly(world: World) -> None:
     text = world_to_json(world)
