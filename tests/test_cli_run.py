@@ -78,11 +78,30 @@ def test_a_plugin_mapper_runs_beside_the_builtins(
     assert main(["run", *TINY, "--max-frames", "40", "--mapper", "truth", "my_mappers:Odometer",
                  "--no-figures", "--out", str(out)]) == 0
     report = json.loads((out / "report.json").read_text())
-    assert list(report["mappers"]) == ["truth", "Odometer"]
-    mine, odometry = report["mappers"]["Odometer"]["rpe"], report["odometry"]["rpe"]
+    assert list(report["mappers"]) == ["truth", "odometer"]  # the class's name attribute
+    mine, odometry = report["mappers"]["odometer"]["rpe"], report["odometry"]["rpe"]
     for key in ("trans_m_mean", "rot_deg_mean", "relations"):
         assert mine[key] == pytest.approx(odometry[key], rel=1e-9)
-    assert report["mappers"]["Odometer"]["snapshots"] is None  # no route map
+    assert report["mappers"]["odometer"]["snapshots"] is None  # no route map
+
+
+def test_the_albot2d_script_imports_plugins_from_the_current_folder(tmp_path: Path) -> None:
+    """The console script (unlike python -m) has no cwd on sys.path: main adds it."""
+    (tmp_path / "cwd_mappers.py").write_text(textwrap.dedent("""
+        from albot2d.mapping.baselines import NaiveIntegration
+
+        class LastViewOnly(NaiveIntegration):
+            name = "last_view"
+    """))
+    script = "import sys; from albot2d.cli import main; sys.exit(main(sys.argv[1:]))"
+    proc = subprocess.run(
+        [sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, {str(ROOT)!r}); {script}",
+         "run", *TINY, "--max-frames", "20", "--mapper", "cwd_mappers:LastViewOnly",
+         "--no-figures", "--json", "--out", "out"],
+        capture_output=True, text=True, cwd=tmp_path, timeout=120,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert list(json.loads(proc.stdout)["mappers"]) == ["last_view"]
 
 
 def test_unknown_mapper_in_a_subprocess_is_one_line_exit_2(tmp_path: Path) -> None:

@@ -41,7 +41,7 @@ def register(subparsers: Any) -> None:
         "fuzz", help="fuzzing campaign: many random episodes, invariants checked, reproducers",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
-    p.add_argument("--episodes", metavar="N", help="number of episodes (required)")
+    p.add_argument("--episodes", metavar="N", required=True, help="number of episodes")
     p.add_argument("--seed", metavar="S", help="campaign seed (default 0)")
     p.add_argument("--kinds", nargs="+", action="extend", metavar="KIND",
                    help="world kinds to draw from (default: all: corridors rooms open office "
@@ -65,7 +65,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue the campaign in --out (skip the episodes already done)")
     p.add_argument("--no-figures", action="store_true", help="no histograms.png")
-    p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
+    p.add_argument("--out", metavar="DIR", required=True,
+                   help="output directory (created if missing)")
     p.set_defaults(handler=run)
 
 

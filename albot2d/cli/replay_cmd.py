@@ -16,6 +16,7 @@ import sys
 from typing import Any
 
 from albot2d.cli.run_cmd import (
+    add_json_option,
     add_scoring_options,
     finish,
     positive_int,
@@ -40,8 +41,10 @@ def register(subparsers: Any) -> None:
                    help="mappers: albot1, naive or module:Class (default: albot1 naive)")
     p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")
     add_scoring_options(p)
-    p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
+    p.add_argument("--out", metavar="DIR", required=True,
+                   help="output directory (created if missing)")
     p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    add_json_option(p)
     p.set_defaults(handler=run)
 
 
@@ -81,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
         )  # fmt: skip
     finally:
         bar.close()
-    print_tables(result, out)
+    print_tables(result, out, args.json)
     used = result.report["run"].get("relations_used")
     if relations is None:
         print(f"albot2d replay: note: no relations file for {log} (give --relations), "
