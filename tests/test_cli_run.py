@@ -37,12 +37,17 @@ def test_run_writes_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFix
     expected = {"paths.png", "maps.png", "homing.png", "albot1_map.png", "albot1_history.png",
                 "albot1_route.png", "naive_map.png", "truth_map.png"}
     assert set(report["figures"]) == expected
-    assert {p.name for p in out.iterdir()} == expected | {"report.json"}
+    exports = {"groundtruth.tum", "odometry.tum"} | {
+        f"{kind}_{name}.{ext}" for name in ("albot1", "naive", "truth")
+        for kind, ext in (("traj", "tum"), ("map", "csv"))
+    }  # fmt: skip
+    assert set(report["exports"]) == exports
+    assert {p.name for p in out.iterdir()} == expected | exports | {"report.json"}
     umask = os.umask(0o022)
     os.umask(umask)
-    for name in [*expected, "report.json"]:
+    for name in [*expected, *exports, "report.json"]:
         data = (out / name).read_bytes()
-        assert data.startswith(PNG_MAGIC) or name == "report.json"
+        assert data.startswith(PNG_MAGIC) or name not in expected
         assert len(data) < 400_000
         # Ordinary file permissions, not the private ones of a temporary file.
         assert (out / name).stat().st_mode & 0o777 == 0o666 & ~umask

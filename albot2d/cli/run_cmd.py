@@ -216,7 +216,8 @@ def _render(result: Any, no_figures: bool, command: str) -> dict[str, bytes]:
 
 
 def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, bytes]) -> None:
-    """Write the figures and report.json atomically; report.json is renamed into place last."""
+    """Write the files (figures, exports) and report.json atomically; report.json is
+    renamed into place last."""
     from albot2d.evaluation.report import REPORT_NAME, report_json
 
     text = report_json(report).encode("utf-8")
@@ -234,15 +235,20 @@ def finish(
     out: Path, created: bool, command: str, compute: Callable[[], Any], no_figures: bool,
     stage: Callable[[str], None] | None = None,
 ) -> Any:
-    """Run ``compute`` (→ ExperimentResult), draw the figures, write everything; on any
-    failure remove the output directory again if this command created it."""
+    """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
+    maps, write everything; on any failure remove the output directory again if this
+    command created it."""
+    from albot2d.evaluation.export import export_files
+
     try:
         result = compute()
         if stage is not None and not no_figures:
             stage("figures")
         figures = _render(result, no_figures, command)
+        exports = export_files(result)
         result.report["figures"] = sorted(figures)
-        write_outputs(out, result.report, figures)
+        result.report["exports"] = sorted(exports)
+        write_outputs(out, result.report, {**figures, **exports})
     except BaseException:
         _remove_if_empty(out, created)
         raise
