@@ -160,6 +160,9 @@ class ExperimentResult:
     relations: Relations | None
     title: str
 
+    def __repr__(self) -> str:
+        return f"ExperimentResult({self.title!r}, {self.trace!r}, report keys {list(self.report)})"
+
 
 def world_digest(world: World) -> str:
     """SHA-256 of the world's JSON: tells whether a reproduction used the same world."""

@@ -177,13 +177,15 @@ def format_homing_table(report: Mapping[str, Any]) -> str:
     if not names or not mappers[names[0]]["homing"]:
         return "homing: no stops (the run never got far enough from its start)"
     known = mappers[names[0]]["homing"][0]["bearing_true_deg"] is not None
-    header = ["stop", "view", "odo m", "true °/m" if known else ""]
+    header = ["stop", "view", "odo m"] + (["true °/m"] if known else [])
     header += [f"{n[:12]} {'Δ°/Δm' if known else '°/m'}" for n in names]
     rows = []
     for k, first in enumerate(mappers[names[0]]["homing"]):
         true = (f"{first['bearing_true_deg']:+.1f}/{first['distance_true_m']:.1f}"
                 if known else "")
-        row = [str(k + 1), str(first["view"]), f"{first['travelled_m']:.1f}", true]
+        row = [str(k + 1), str(first["view"]), f"{first['travelled_m']:.1f}"] + (
+            [true] if known else []
+        )
         for name in names:
             e = mappers[name]["homing"][k]
             if known and e["bearing_error_deg"] is not None:

@@ -42,6 +42,9 @@ class Pose:
     y: float = 0.0
     theta: float = 0.0
 
+    def __repr__(self) -> str:
+        return f"Pose(x={float(self.x):.6g}, y={float(self.y):.6g}, theta={float(self.theta):.6g})"
+
     @classmethod
     def from_array(cls, values: ArrayLike) -> Pose:
         arr = np.asarray(values, dtype=np.float64)
