@@ -35,7 +35,7 @@ def test_run_writes_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFix
     report = json.loads((out / "report.json").read_text())
     assert report["command"] == "run" and report["run"]["frames"] == 80
     expected = {"paths.png", "maps.png", "homing.png", "albot1_map.png", "albot1_history.png",
-                "albot1_route.png", "naive_map.png", "truth_map.png"}
+                "albot1_route.png", "naive_map.png", "truth_map.png", "errors.png"}
     assert set(report["figures"]) == expected
     exports = {"groundtruth.tum", "odometry.tum"} | {
         f"{kind}_{name}.{ext}" for name in ("albot1", "naive", "truth")

@@ -72,6 +72,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--out", metavar="DIR", required=True,
                    help="output directory (created if missing)")
     p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    p.add_argument("--animate", action="store_true",
+                   help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
+                        "over time beside the truth")
     add_json_option(p)
     p.set_defaults(handler=run)
 
@@ -202,13 +205,22 @@ def _remove_if_empty(out: Path, created: bool) -> None:
             out.rmdir()  # only succeeds when nothing was left in it
 
 
-def _render(result: Any, no_figures: bool, command: str) -> dict[str, bytes]:
+def _render(result: Any, no_figures: bool, command: str, animate: bool = False) -> dict[str, bytes]:
     if no_figures:
         return {}
     try:
         from albot2d.plots_maps import render_experiment_figures
 
-        return render_experiment_figures(result)
+        figures = render_experiment_figures(result)
+        if animate:
+            from albot2d.plots_anim import render_map_animation
+
+            animation = render_map_animation(result)
+            if not animation:
+                print(f"albot2d {command}: note: no animation (no mapper keeps a map history; "
+                      "give --mapper albot1)", file=sys.stderr)
+            figures.update(animation)
+        return figures
     except ImportError as exc:
         print(f"albot2d {command}: note: no figures ({exc}); pip install 'albot2d[viz]'",
               file=sys.stderr)
@@ -233,7 +245,7 @@ def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, by
 
 def finish(
     out: Path, created: bool, command: str, compute: Callable[[], Any], no_figures: bool,
-    stage: Callable[[str], None] | None = None,
+    stage: Callable[[str], None] | None = None, animate: bool = False,
 ) -> Any:
     """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
     maps, write everything; on any failure remove the output directory again if this
@@ -244,7 +256,7 @@ def finish(
         result = compute()
         if stage is not None and not no_figures:
             stage("figures")
-        figures = _render(result, no_figures, command)
+        figures = _render(result, no_figures, command, animate)
         exports = export_files(result)
         result.report["figures"] = sorted(figures)
         result.report["exports"] = sorted(exports)
@@ -342,7 +354,7 @@ def run(args: argparse.Namespace) -> int:
         result = finish(
             out, created, "run",
             lambda: run_experiment(spec, params, on_start=start, on_frame=frame, on_stage=stage),
-            args.no_figures, stage,
+            args.no_figures, stage, animate=args.animate,
         )  # fmt: skip
     finally:
         if bar is not None:
