@@ -32,6 +32,9 @@ def test_run_writes_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFix
     assert main(["run", *TINY, "--max-frames", "80", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "albot1" in printed and "naive" in printed and "odometry" in printed
+    # The title says what ran: part of the tour (--max-frames), not the whole tour.
+    assert " m of a loop tour " in printed.splitlines()[0] and "80 views" in printed
+    assert max(len(x) for x in printed.splitlines()[1:] if not x.startswith("->")) <= 100
     report = json.loads((out / "report.json").read_text())
     assert report["command"] == "run" and report["run"]["frames"] == 80
     expected = {"paths.png", "maps.png", "homing.png", "albot1_map.png", "albot1_history.png",
