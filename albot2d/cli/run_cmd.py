@@ -363,7 +363,7 @@ def run(args: argparse.Namespace) -> int:
     if recorded is not None:
         # A fuzzing reproducer is a report plus a "reproducer" section (the episode, the
         # world JSON, what failed): only the report part is compared.
-        ignore = ("figures", "albot2d_version", "reproducer")
+        ignore = ("figures", "exports", "albot2d_version", "reproducer")
         diff = _differences(
             {k: v for k, v in without_timings(recorded).items() if k not in ignore},
             {k: v for k, v in without_timings(result.report).items() if k not in ignore},
