@@ -27,6 +27,7 @@ def albot2d(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     )  # fmt: skip
 
 
+@pytest.mark.filterwarnings("error")  # e.g. "No artists with labels found to put in legend"
 def test_run_writes_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     out = tmp_path / "out"
     assert main(["run", *TINY, "--max-frames", "80", "--out", str(out)]) == 0
