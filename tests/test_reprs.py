@@ -32,4 +32,4 @@ def test_compact_reprs() -> None:
     assert repr(frames[0].scan).startswith("Scan(181 beams, ")
     assert repr(mapper.route).startswith(f"RouteMap({len(mapper.route)} local maps: 1 start")
     assert "view=Surfaces(segments=<(" in repr(mapper.route[-1])
-    assert repr(Pose(1.0, 2.5, -0.25)) == "Pose(x=1, y=2.5, theta=-0.25)"
+    assert repr(Pose(1.0, 2.5, -0.25)) == "Pose(x=1.0, y=2.5, theta=-0.25)"

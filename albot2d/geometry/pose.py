@@ -43,7 +43,8 @@ class Pose:
     theta: float = 0.0
 
     def __repr__(self) -> str:
-        return f"Pose(x={float(self.x):.6g}, y={float(self.y):.6g}, theta={float(self.theta):.6g})"
+        # Plain floats (not ``np.float64(...)``), full precision: exact but short.
+        return f"Pose(x={float(self.x)!r}, y={float(self.y)!r}, theta={float(self.theta)!r})"
 
     @classmethod
     def from_array(cls, values: ArrayLike) -> Pose:
