@@ -90,11 +90,11 @@ def test_animation_gif(result: ExperimentResult) -> None:
     assert not np.array_equal(frames[0], frames[1])  # the map and the robot move
 
 
-def test_animation_mp4_when_ffmpeg_is_installed(result: ExperimentResult) -> None:
+def test_animation_mp4_when_ffmpeg_is_installed(request: pytest.FixtureRequest) -> None:
     from albot2d.plots_anim import ffmpeg_available, render_map_animation
 
     if not ffmpeg_available():
         pytest.skip("no ffmpeg executable: --animate writes the GIF only")
-    files = render_map_animation(result, moments=3, dpi=40)
+    files = render_map_animation(request.getfixturevalue("result"), moments=3, dpi=40)
     assert set(files) == {"albot1_map.gif", "albot1_map.mp4"}
     assert files["albot1_map.mp4"][4:8] == b"ftyp"  # an MP4 container
