@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from worldgen.world import Tour, World
 
 __all__ = [
+    "draw_direction_arrows",
     "plot_paths",
     "plot_world",
     "render_paths_png",
@@ -242,6 +243,30 @@ def _xy(points: Any) -> np.ndarray:
     return arr[:, :2] if arr.ndim == 2 and arr.shape[1] >= 2 else arr.reshape(0, 2)
 
 
+def draw_direction_arrows(
+    ax: Axes, points: Any, *, color: str, count: int = 10, size: float = 11.0, zorder: int = 8
+) -> None:
+    """Arrow heads at ``count`` evenly spaced places along a path (``(N, 2+)`` points),
+    pointing the way it was driven."""
+    xy = _xy(points)
+    if len(xy) < 2:
+        return
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+    total = float(along[-1])
+    if total <= 0.0:
+        return
+    at = (np.arange(count) + 0.5) * total / count
+    back = np.maximum(at - total / (8.0 * count), 0.0)
+    heads = np.column_stack([np.interp(at, along, xy[:, 0]), np.interp(at, along, xy[:, 1])])
+    tails = np.column_stack([np.interp(back, along, xy[:, 0]), np.interp(back, along, xy[:, 1])])
+    for head, tail in zip(heads, tails, strict=True):
+        if np.allclose(head, tail):
+            continue
+        ax.annotate("", xy=tuple(head), xytext=tuple(tail), zorder=zorder, annotation_clip=True,
+                    arrowprops={"arrowstyle": "-|>", "color": color, "lw": 0.0,
+                                "mutation_scale": size, "shrinkA": 0.0, "shrinkB": 0.0})
+
+
 def plot_paths(
     world: World,
     true_xy: Any,
@@ -263,11 +288,15 @@ def plot_paths(
     if len(true_xy):
         ax.plot(*true_xy.T, "-", color=TRUE_PATH_COLOR, lw=1.4, zorder=7)
         ax.plot(*true_xy[-1], "o", color=TRUE_PATH_COLOR, ms=5, zorder=7)
+        draw_direction_arrows(ax, true_xy, color=TRUE_PATH_COLOR)
     if len(odom_xy):
         ax.plot(*odom_xy.T, "--", color=ODOM_PATH_COLOR, lw=1.2, zorder=7)
         ax.plot(*odom_xy[-1], "o", color=ODOM_PATH_COLOR, ms=5, zorder=7)
-    handles.append(Line2D([], [], color=TRUE_PATH_COLOR, lw=1.4, label="true path"))
-    handles.append(Line2D([], [], color=ODOM_PATH_COLOR, lw=1.2, ls="--", label="odometry"))
+        draw_direction_arrows(ax, odom_xy, color=ODOM_PATH_COLOR)
+    handles.append(Line2D([], [], color=TRUE_PATH_COLOR, lw=1.4, marker=">",
+                          label="true path (→ direction, ● end)"))
+    handles.append(Line2D([], [], color=ODOM_PATH_COLOR, lw=1.2, ls="--", marker=">",
+                          label="odometry"))
     if collided is not None and len(true_xy):
         hits = true_xy[np.asarray(collided, dtype=bool)]
         if len(hits):

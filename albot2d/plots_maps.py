@@ -6,7 +6,12 @@
 - ``plot_route``: Albot1's route map as its chain of remembered views (viewpoints coloured
   by how each was localised, the views' surfaces faint).
 - ``plot_homing``: homing errors (or, on real logs, estimates) at each stop.
+- ``plot_errors_vs_distance``: heading and position error of every mapper and of raw
+  odometry against the distance travelled (simulation).
 - ``render_experiment_figures``: every PNG of ``albot2d run``/``replay``, made in memory.
+
+Paths carry arrow heads in the direction driven; maps a colour bar (view id, old → new)
+and a legend.
 
 matplotlib is imported inside the functions; figures use the Agg canvas directly.
 """
@@ -31,6 +36,7 @@ if TYPE_CHECKING:
     from worldgen.world import World
 
 __all__ = [
+    "plot_errors_vs_distance",
     "plot_estimated_paths",
     "plot_homing",
     "plot_map",
@@ -46,6 +52,7 @@ START_COLOR = "#2e7d32"
 VIEW_COLOR = "#9575cd"
 METHOD_COLORS = {"start": START_COLOR, "triangulation": "#1565c0", "path_integration": "#e65100"}
 MAP_CMAP = "viridis"
+ODOM_COLOR = "#9e9e9e"
 PANEL_IN = 5.0
 DEFAULT_DPI = 100
 # The paper's Table 1: Albot1 oriented within ±7° and ±3 m after about 100 m.
@@ -129,7 +136,8 @@ def plot_map(
 
     _draw_world(ax, world)
     segs = _anchor(start_pose, np.asarray(segments, np.float64).reshape(-1, 4))
-    lines = LineCollection(segs.reshape(-1, 2, 2), linewidths=1.6, cmap=MAP_CMAP, zorder=3)
+    lines = LineCollection(segs.reshape(-1, 2, 2), linewidths=1.6, cmap=MAP_CMAP, zorder=3,
+                           label="map surfaces")
     if map_ids is not None and len(segs):
         lines.set_array(np.asarray(map_ids, dtype=np.float64))
         lo, hi = id_range if id_range is not None else (int(np.min(map_ids)), int(np.max(map_ids)))
@@ -138,13 +146,19 @@ def plot_map(
         lines.set_color("#212121")
     ax.add_collection(lines)
     parts: list[FloatArray] = [segs.reshape(-1, 2)]
+    if world is not None and len(world.obstacle_segments):
+        ax.plot([], [], "-", color=WORLD_COLOR, lw=0.8, label="true walls")
     if true_path is not None and len(true_path):
         ax.plot(*true_path[:, :2].T, "-", color=TRUE_PATH_COLOR, lw=0.8, alpha=0.5, zorder=2,
                 label="true path")
         parts.append(true_path[:, :2])
     if est_path is not None and len(est_path):
+        from albot2d.plots import draw_direction_arrows
+
         path = _anchor_path(start_pose, np.asarray(est_path, np.float64).reshape(-1, 3))
-        ax.plot(*path[:, :2].T, "-", color=EST_PATH_COLOR, lw=1.0, zorder=4, label="estimated path")
+        ax.plot(*path[:, :2].T, "-", color=EST_PATH_COLOR, lw=1.0, zorder=4,
+                label="estimated path (→)")
+        draw_direction_arrows(ax, path, color=EST_PATH_COLOR, count=8, size=9.0, zorder=4)
         ax.plot(*path[0, :2], "*", color=START_COLOR, ms=12, zorder=5, label="start")
         ax.plot(*path[-1, :2], "o", color=EST_PATH_COLOR, ms=6, zorder=5, label="robot")
         parts.append(path[:, :2])
@@ -228,34 +242,52 @@ def plot_homing(fig: Figure, mappers: Mapping[str, Mapping[str, Any]]) -> None:
         ax.set_xlabel("distance travelled (odometer, m)")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8)
     if not any(entries.values()):
         ax_b.set_title("no homing stops (the run never got far from its start)", fontsize=10)
-    fig.suptitle("Orientation to the start at each stop (paper Table 1)")
+    fig.suptitle("Orientation to the start at each stop: error against the truth (paper Table 1)"
+                 if with_truth else
+                 "Orientation to the start at each stop: estimates (no ground truth)")
 
 
 def plot_estimated_paths(ax: Axes, result: ExperimentResult) -> None:
     """Raw odometry and every mapper's estimated path, all in the first pose's frame
     (for logs without ground truth)."""
+    from matplotlib import colormaps
+
     from albot2d.geometry import between_arrays
+    from albot2d.plots import draw_direction_arrows
 
     trace = result.trace
     odom = between_arrays(trace.odom_poses[0], trace.odom_poses)
-    ax.plot(*odom[:, :2].T, "--", color="#616161", lw=1.0, label="odometry")
+    # Odometry is drawn wide and light underneath: a mapper that follows it (naive
+    # integration does exactly) is drawn on top and said to be identical.
+    ax.plot(*odom[:, :2].T, "-", color=ODOM_COLOR, lw=4.0, alpha=0.6, zorder=2,
+            label="raw odometry")
     parts = [odom[:, :2]]
-    for name, mapper in trace.mappers.items():
+    colors = colormaps["tab10"].colors
+    styles = ["-", "--", "-.", ":"]
+    for k, (name, mapper) in enumerate(trace.mappers.items()):
         est = np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3)
-        ax.plot(*est[:, :2].T, "-", lw=1.0, label=name)
+        same = est.shape == odom.shape and np.allclose(est[:, :2], odom[:, :2], atol=1e-6)
+        color = colors[k % len(colors)]
+        ax.plot(*est[:, :2].T, styles[k % len(styles)], color=color, lw=1.2, zorder=3 + k,
+                label=f"{name} (= odometry)" if same else name)
+        draw_direction_arrows(ax, est, color=color, count=8, size=9.0, zorder=3 + k)
         parts.append(est[:, :2])
-    ax.plot(0.0, 0.0, "*", color=START_COLOR, ms=12, label="start")
+    ax.plot(0.0, 0.0, "*", color=START_COLOR, ms=12, zorder=10, label="start")
     _set_extent(ax, _extent(parts))
-    ax.legend(fontsize=8)
-    ax.set_title(f"{result.title}\nestimated paths (first pose's frame)", fontsize=10)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(fontsize=8, loc="best", framealpha=0.8)
+    ax.set_title(f"{result.title}\nestimated paths (→ direction; first pose's frame)",
+                 fontsize=10)
 
 
 # -- the figures of a run --------------------------------------------------------------
 def _grid(n: int) -> tuple[int, int]:
-    cols = 1 if n == 1 else 2 if n <= 4 else 3
+    cols = n if n <= 3 else 2 if n == 4 else 3
     return (n + cols - 1) // cols, cols
 
 
@@ -289,8 +321,13 @@ def _paths_panel(ax: Axes, result: ExperimentResult, extent: Any) -> None:
 
         plot_paths(result.world, trace.true_poses, trace.odom_poses, collided=trace.collided,
                    ax=ax)
-        ax.get_legend().remove()
-        ax.set_title("world, true path (blue) and odometry (red)", fontsize=10)
+        legend = ax.get_legend()
+        keep = [h for h in legend.legend_handles
+                if h.get_label() in ("walls", "true path (→ direction, ● end)", "odometry",
+                                     "collision", "start")]
+        legend.remove()
+        ax.legend(handles=keep, loc="upper right", fontsize=7, framealpha=0.8)
+        ax.set_title("world, true path and odometry", fontsize=10)
         _set_extent(ax, extent)
     else:
         plot_estimated_paths(ax, result)
@@ -324,6 +361,59 @@ def _colorbar(fig: Figure, lines: Any, ax: Any) -> None:
         fig.colorbar(lines, ax=ax, shrink=0.8, label="local map / view id (old → new)")
 
 
+def error_curves(result: ExperimentResult) -> dict[str, tuple[FloatArray, FloatArray]]:
+    """Per mapper and ``odometry``: (position error m, heading error deg) at every view,
+    each trajectory anchored at the true start pose (needs the truth)."""
+    from albot2d.evaluation.alignment import in_world_frame
+    from albot2d.geometry import between_arrays, wrap_angle
+
+    trace = result.trace
+    truth = trace.true_poses
+    assert truth is not None
+    odom = between_arrays(trace.odom_poses[0], trace.odom_poses)
+    paths = {"odometry": odom}
+    for name, mapper in trace.mappers.items():
+        paths[name] = np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3)
+    out = {}
+    for name, poses in paths.items():
+        world = in_world_frame(poses, truth[0])
+        position = np.hypot(*(world[:, :2] - truth[:, :2]).T)
+        heading = np.degrees(np.asarray(wrap_angle(world[:, 2] - truth[:, 2])))
+        out[name] = (position, heading)
+    return out
+
+
+def plot_errors_vs_distance(fig: Figure, result: ExperimentResult) -> None:
+    """Heading error and position error of every mapper and raw odometry against the
+    true distance travelled, each trajectory anchored at the true start (simulation)."""
+    trace = result.trace
+    truth = trace.true_poses
+    assert truth is not None
+    travelled = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(truth[:, :2], axis=0).T))])
+    ax_h, ax_p = fig.subplots(2, 1, sharex=True)
+    curves = error_curves(result)
+    odometry = curves["odometry"]
+    for name, (position, heading) in curves.items():
+        if name == "odometry":  # wide and light underneath, so a mapper equal to it shows
+            style: dict[str, Any] = {"color": ODOM_COLOR, "lw": 4.0, "alpha": 0.6, "zorder": 2}
+            label = "raw odometry"
+        else:
+            style = {"lw": 1.2, "zorder": 3}
+            same = np.allclose(position, odometry[0], atol=1e-6)
+            label = f"{name} (= odometry)" if same else name
+        ax_h.plot(travelled, heading, label=label, **style)
+        ax_p.plot(travelled, position, label=label, **style)
+    ax_h.axhline(0.0, color="#616161", lw=0.8)
+    ax_h.set_ylabel("heading error (deg, + = turned too far left)")
+    ax_p.set_ylabel("position error (m)")
+    ax_p.set_xlabel("distance travelled (true, m)")
+    for ax in (ax_h, ax_p):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper left")
+    fig.suptitle(f"{result.title}\nerror of each pose estimate against the truth (every "
+                 "trajectory starts at the true start pose, no alignment)", fontsize=9)
+
+
 def render_experiment_figures(
     result: ExperimentResult, *, dpi: int = DEFAULT_DPI
 ) -> dict[str, bytes]:
@@ -350,11 +440,16 @@ def render_experiment_figures(
     axes = np.atleast_1d(fig.subplots(rows, cols)).ravel()
     _paths_panel(axes[0], result, extent)
     for ax, name in zip(axes[1:], names, strict=False):
-        _map_panel(ax, result, name, extent=extent)
+        _colorbar(fig, _map_panel(ax, result, name, extent=extent), ax)
+        ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
     for ax in axes[len(names) + 1:]:
         ax.set_visible(False)
     fig.suptitle(result.title)
     out["maps.png"] = _png(fig, dpi)
+    if trace.true_poses is not None:
+        fig = _figure(11.0, 7.5)
+        plot_errors_vs_distance(fig, result)
+        out["errors.png"] = _png(fig, dpi)
     for name, ext in zip(names, extents, strict=True):
         pw, ph = _panel_size(result, ext)
         fig = _figure(pw * 1.6, ph * 1.6)
@@ -377,6 +472,8 @@ def render_experiment_figures(
             lines = _map_panel(ax, result, name, row=snap["row"], update=snap["update"],
                                extent=ext, title=title)
             lines.set_clim(*id_range)
+            _colorbar(fig, lines, ax)
+            ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
         for ax in axes[len(snaps):]:
             ax.set_visible(False)
         fig.suptitle(f"{name}'s global map as it evolves (transient: old parts are deleted)")

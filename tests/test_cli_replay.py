@@ -185,3 +185,28 @@ def test_mit_csail_first_frames(shared_data: Path, tmp_path: Path) -> None:
     assert albot1["counts"]["views"] == 200 and albot1["rpe"]["relations"] == n
     assert 0 < albot1["counts"]["local_maps"] <= 200
     assert (out / "albot1_history.png").read_bytes().startswith(PNG_MAGIC)
+
+
+def test_a_log_is_found_in_the_data_folder(
+    run_dir: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """ALBOT2D_DATA (or --data) is the data folder: LOG is looked up in it and in raw/,
+    and the relations in its relations/ folder (the shared data's layout)."""
+    data = tmp_path / "data"
+    (data / "raw").mkdir(parents=True)
+    (data / "relations").mkdir()
+    (data / "raw" / "mine.clf").write_bytes((run_dir / "log.clf").read_bytes())
+    (data / "relations" / "mine.relations").write_bytes((run_dir / "log.relations").read_bytes())
+    monkeypatch.chdir(tmp_path)
+    assert main(["replay", "mine.clf", "--out", "a", "--no-figures"]) == 2
+    assert "set ALBOT2D_DATA or --data" in capsys.readouterr().err
+    monkeypatch.setenv("ALBOT2D_DATA", str(data))
+    assert main(["replay", "mine.clf", "--max-frames", "40", "--no-figures", "--json",
+                 "--out", "b"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["params"]["log"].endswith("raw/mine.clf")
+    assert report["run"]["relations"] > 0
+    monkeypatch.delenv("ALBOT2D_DATA")
+    assert main(["replay", "raw/mine.clf", "--data", str(data), "--max-frames", "40",
+                 "--no-figures", "--out", "c"]) == 0

@@ -27,22 +27,32 @@ def albot2d(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     )  # fmt: skip
 
 
+@pytest.mark.filterwarnings("error")  # e.g. "No artists with labels found to put in legend"
 def test_run_writes_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     out = tmp_path / "out"
     assert main(["run", *TINY, "--max-frames", "80", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "albot1" in printed and "naive" in printed and "odometry" in printed
+    # The title says what ran: part of the tour (--max-frames), not the whole tour.
+    assert " m of a loop tour " in printed.splitlines()[0] and "80 views" in printed
+    assert max(len(x) for x in printed.splitlines()[1:] if not x.startswith("->")) <= 100
     report = json.loads((out / "report.json").read_text())
     assert report["command"] == "run" and report["run"]["frames"] == 80
     expected = {"paths.png", "maps.png", "homing.png", "albot1_map.png", "albot1_history.png",
-                "albot1_route.png", "naive_map.png", "truth_map.png", "steps.png"}
+                "albot1_route.png", "naive_map.png", "truth_map.png", "errors.png",
+                "steps.png"}
     assert set(report["figures"]) == expected
-    assert {p.name for p in out.iterdir()} == expected | {"report.json", "steps.csv"}
+    exports = {"groundtruth.tum", "odometry.tum"} | {
+        f"{kind}_{name}.{ext}" for name in ("albot1", "naive", "truth")
+        for kind, ext in (("traj", "tum"), ("map", "csv"))
+    }  # fmt: skip
+    assert set(report["exports"]) == exports
+    assert {p.name for p in out.iterdir()} == expected | exports | {"report.json", "steps.csv"}
     umask = os.umask(0o022)
     os.umask(umask)
-    for name in [*expected, "report.json"]:
+    for name in [*expected, *exports, "report.json"]:
         data = (out / name).read_bytes()
-        assert data.startswith(PNG_MAGIC) or name == "report.json"
+        assert data.startswith(PNG_MAGIC) or name not in expected
         assert len(data) < 400_000
         # Ordinary file permissions, not the private ones of a temporary file.
         assert (out / name).stat().st_mode & 0o777 == 0o666 & ~umask
@@ -78,11 +88,30 @@ def test_a_plugin_mapper_runs_beside_the_builtins(
     assert main(["run", *TINY, "--max-frames", "40", "--mapper", "truth", "my_mappers:Odometer",
                  "--no-figures", "--out", str(out)]) == 0
     report = json.loads((out / "report.json").read_text())
-    assert list(report["mappers"]) == ["truth", "Odometer"]
-    mine, odometry = report["mappers"]["Odometer"]["rpe"], report["odometry"]["rpe"]
+    assert list(report["mappers"]) == ["truth", "odometer"]  # the class's name attribute
+    mine, odometry = report["mappers"]["odometer"]["rpe"], report["odometry"]["rpe"]
     for key in ("trans_m_mean", "rot_deg_mean", "relations"):
         assert mine[key] == pytest.approx(odometry[key], rel=1e-9)
-    assert report["mappers"]["Odometer"]["snapshots"] is None  # no route map
+    assert report["mappers"]["odometer"]["snapshots"] is None  # no route map
+
+
+def test_the_albot2d_script_imports_plugins_from_the_current_folder(tmp_path: Path) -> None:
+    """The console script (unlike python -m) has no cwd on sys.path: main adds it."""
+    (tmp_path / "cwd_mappers.py").write_text(textwrap.dedent("""
+        from albot2d.mapping.baselines import NaiveIntegration
+
+        class LastViewOnly(NaiveIntegration):
+            name = "last_view"
+    """))
+    script = "import sys; from albot2d.cli import main; sys.exit(main(sys.argv[1:]))"
+    proc = subprocess.run(
+        [sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, {str(ROOT)!r}); {script}",
+         "run", *TINY, "--max-frames", "20", "--mapper", "cwd_mappers:LastViewOnly",
+         "--no-figures", "--json", "--out", "out"],
+        capture_output=True, text=True, cwd=tmp_path, timeout=120,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert list(json.loads(proc.stdout)["mappers"]) == ["last_view"]
 
 
 def test_unknown_mapper_in_a_subprocess_is_one_line_exit_2(tmp_path: Path) -> None:

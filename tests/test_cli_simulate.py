@@ -85,7 +85,7 @@ def test_simulate_from_a_world_file(tmp_path: Path) -> None:
         (["--kind", "rooms", "--tour-kind", "spiral"], "unknown tour kind 'spiral'"),
         (["--world", "missing.json"], "missing.json"),
         (["--world", "w.json", "--kind", "rooms"], "not both"),
-        ([], "give --world world.json or --kind KIND"),
+        (["--kind", "rooms", "--max-frames", "0"], "--max-frames must be a positive integer"),
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(
@@ -112,7 +112,8 @@ def test_out_is_required_and_must_be_a_directory(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     assert main(["simulate", "--kind", "rooms"]) == 2
-    assert "give --out DIR" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "the following arguments are required: --out" in err
     afile = tmp_path / "file"
     afile.write_text("x")
     assert main(["simulate", "--kind", "rooms", "--out", str(afile)]) == 2
@@ -130,3 +131,29 @@ def test_render_paths_png_handles_drift_and_empty_paths() -> None:
     png = render_paths_png(world, true_xy, odom_xy, collided=[False, True], title="t")
     assert png.startswith(PNG_MAGIC)
     assert render_paths_png(world, np.zeros((0, 3)), []).startswith(PNG_MAGIC)
+
+
+def test_simulate_logs_exactly_the_frames_run_maps(tmp_path: Path) -> None:
+    """Same options, same defaults (office world, typical noise): the same frames."""
+    from albot2d.cli import build_parser
+    from albot2d.cli.run_cmd import spec_from_args
+    from albot2d.evaluation import run_experiment
+
+    options = ["--seed", "3", "--tour-length", "20", "--max-frames", "60"]
+    out = tmp_path / "sim"
+    assert main(["simulate", *options, "--no-png", "--out", str(out)]) == 0
+    run = read_run(out)
+    assert run.params["odometry_preset"] == "typical"
+    assert run.params["world_source"] == "generate('office', seed=3)"
+    logged = list(read_frames(out / "log.clf"))
+    spec = spec_from_args(build_parser().parse_args(["run", *options, "--out", "x"]))
+    result = run_experiment(spec)
+    trace = result.trace
+    assert len(logged) == trace.n_frames == 60
+    odom = np.array([f.odom_pose.as_array() for f in logged])
+    truth = np.array([f.true_pose.as_array() for f in run.frames])
+    # The log stores poses with 6 decimals; the odometry is noisy (typical), not the truth.
+    assert np.allclose(odom, trace.odom_poses, atol=2e-6)
+    assert np.allclose(truth, trace.true_poses, atol=2e-6)
+    assert not np.allclose(odom, truth, atol=1e-3)
+    assert np.allclose([f.timestamp for f in logged], trace.timestamps, atol=1e-6)

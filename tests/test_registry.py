@@ -11,7 +11,7 @@ import pytest
 
 from albot2d.errors import InputError
 from albot2d.mapping import Mapper
-from albot2d.mapping.registry import BUILTIN_MAPPERS, mapper_factory, resolve_mappers
+from albot2d.mapping.registry import BUILTIN_MAPPERS, mapper_factory, report_name, resolve_mappers
 
 
 def test_builtins_build_protocol_mappers() -> None:
@@ -40,8 +40,11 @@ def test_user_plugin_by_module_and_class(tmp_path: Path, monkeypatch: pytest.Mon
     monkeypatch.syspath_prepend(str(tmp_path))
     try:
         factories = resolve_mappers(["albot1", "my_mapper:Mine"])
-        assert list(factories) == ["albot1", "Mine"]
-        assert isinstance(factories["Mine"](), Mapper)
+        assert list(factories) == ["albot1", "mine"]  # the class's ``name`` attribute
+        assert isinstance(factories["mine"](), Mapper)
+        # A class without a usable name attribute is reported under its class name.
+        unnamed = type("Unnamed", (factories["mine"],), {"name": ""})
+        assert report_name("my_mapper:Unnamed", unnamed) == "Unnamed"
         with pytest.raises(InputError, match="missing pose"):
             mapper_factory("my_mapper:Broken")
         with pytest.raises(InputError, match="no class 'Nope'"):

@@ -1,18 +1,25 @@
 """The ``albot2d`` command line: one module per subcommand, each with ``register(subparsers)``.
 
 User errors (``InputError``, missing or unwritable files) print one line and exit 2,
-with no traceback and no partial output file.
+with no traceback and no partial output file. ``albot2d`` alone prints the help;
+``albot2d --version`` the version. Help texts are the modules' docstrings without their
+reStructuredText markup.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import re
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from albot2d.errors import InputError
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "main", "plain_text"]
+
+_RST_LITERAL = re.compile(r"``(.+?)``", re.DOTALL)
 
 
 def _command_modules() -> list:
@@ -23,20 +30,53 @@ def _command_modules() -> list:
     return [importlib.import_module(f"albot2d.cli.{name}") for name in names]
 
 
+def plain_text(text: str | None) -> str | None:
+    """A docstring as terminal text: ````--out DIR```` → ``--out DIR``."""
+    return None if text is None else _RST_LITERAL.sub(r"\1", text)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors on one line (like every other error) and exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    from albot2d import __version__
+
+    parser = _Parser(
         prog="albot2d",
         description="2D robot simulator and the Albot1 view-based cognitive mapper.",
+        epilog="Run `albot2d COMMAND --help` for a command's options. Real logs: see "
+        "`albot2d replay --help` (ALBOT2D_DATA).",
     )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    parser.add_argument("--version", action="version", version=f"albot2d {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in _command_modules():
         module.register(sub)
+    for command in sub.choices.values():
+        command.description = plain_text(command.description)
     return parser
+
+
+def _import_from_cwd() -> None:
+    """Plugin mappers (``module:Class``) import from the current folder, as with ``python -m``."""
+    cwd = os.getcwd()
+    if cwd not in sys.path and "" not in sys.path:
+        sys.path.append(cwd)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, a usage error: return its status
+        return exc.code if isinstance(exc.code, int) else 2
+    if args.command is None:
+        parser.print_help()
+        return 0
+    _import_from_cwd()
     try:
         return int(args.handler(args) or 0)
     except InputError as exc:

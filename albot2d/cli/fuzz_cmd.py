@@ -47,7 +47,7 @@ def register(subparsers: Any) -> None:
         "fuzz", help="fuzzing campaign: many random episodes, invariants checked, reproducers",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
-    p.add_argument("--episodes", metavar="N", help="number of episodes (required)")
+    p.add_argument("--episodes", metavar="N", required=True, help="number of episodes")
     p.add_argument("--seed", metavar="S", help="campaign seed (default 0)")
     p.add_argument("--kinds", nargs="+", action="extend", metavar="KIND",
                    help="world kinds to draw from (default: all: corridors rooms open office "
@@ -71,7 +71,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue the campaign in --out (skip the episodes already done)")
     p.add_argument("--no-figures", action="store_true", help="no histograms.png")
-    p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
+    p.add_argument("--out", metavar="DIR", required=True,
+                   help="output directory (created if missing)")
     p.set_defaults(handler=run)
 
 
@@ -257,7 +258,7 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
         print(f"reproduce: crash: {type(exc).__name__}: {exc} (drawing the episode)")
         return 1
     # A mapper that cannot be imported here is bad input, not a reproduced crash.
-    run_cmd._check_spec(spec.run_spec())
+    run_cmd.check_spec(spec.run_spec())
     out, created = run_cmd.prepare_out_dir(args.out)
     result = None
     try:

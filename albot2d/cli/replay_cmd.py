@@ -7,15 +7,25 @@ pose error (overall, short < 2 s, long ≥ 2 s), process counts, timings and hom
 estimates (true values null), plus the map figures. The relations file is ``--relations``
 or, if not given, ``LOG.relations`` beside the log or ``../relations/LOG.relations``.
 A malformed log line stops the replay with its file and line; nothing is written then.
+
+Real data: a LOG that is not found as given is looked up in the data folder, --data DIR
+or else the environment variable ALBOT2D_DATA, as DIR/LOG or DIR/raw/LOG (with its
+relations in DIR/relations/), e.g. ALBOT2D_DATA=~/slam-data albot2d replay
+mit-csail.clf.gz --out out-mit/. The MIT CSAIL log and its relations come from the
+Freiburg SLAM benchmark (Kümmerle et al. 2009, ais.informatik.uni-freiburg.de/slamevaluation);
+any CARMEN log with FLASER or ROBOTLASER1 lines works.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+from pathlib import Path
 from typing import Any
 
 from albot2d.cli.run_cmd import (
+    add_json_option,
     add_scoring_options,
     finish,
     positive_int,
@@ -24,8 +34,28 @@ from albot2d.cli.run_cmd import (
     progress_bar,
     scoring_params,
 )
+from albot2d.errors import InputError
 
-__all__ = ["register", "run"]
+__all__ = ["DATA_ENV", "find_log", "register", "run"]
+
+DATA_ENV = "ALBOT2D_DATA"
+
+
+def find_log(text: str, data: str | None) -> Path:
+    """``LOG`` as given, else in the data folder (``data`` or ``$ALBOT2D_DATA``)."""
+    log = Path(text).expanduser()
+    if log.is_file():
+        return log
+    folder = data if data is not None else os.environ.get(DATA_ENV)
+    tried = [str(log)]
+    if folder and not log.is_absolute():
+        root = Path(folder).expanduser()
+        for candidate in (root / log, root / "raw" / log):
+            if candidate.is_file():
+                return candidate
+            tried.append(str(candidate))
+    hint = "" if folder else f" (set {DATA_ENV} or --data to look it up in a data folder)"
+    raise InputError(f"{text}: no such log file; tried {', '.join(tried)}{hint}")
 
 
 def register(subparsers: Any) -> None:
@@ -33,32 +63,32 @@ def register(subparsers: Any) -> None:
         "replay", help="run the mappers on a CARMEN log and score them against its relations",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
-    p.add_argument("log", metavar="LOG.clf[.gz]", help="a CARMEN log (plain or gzip)")
+    p.add_argument("log", metavar="LOG.clf[.gz]",
+                   help="a CARMEN log (plain or gzip), as a path or in the data folder")
+    p.add_argument("--data", metavar="DIR",
+                   help=f"data folder where LOG is looked up (default: ${DATA_ENV})")
     p.add_argument("--relations", metavar="FILE",
                    help="Kümmerle relations file (default: found beside the log)")
     p.add_argument("--mapper", nargs="+", action="extend", metavar="NAME",
                    help="mappers: albot1, naive or module:Class (default: albot1 naive)")
     p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")
     add_scoring_options(p)
-    p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
+    p.add_argument("--out", metavar="DIR", required=True,
+                   help="output directory (created if missing)")
     p.add_argument("--no-figures", action="store_true", help="write report.json only")
     p.add_argument("--strict", action="store_true",
                    help="refuse a log with anomalies (bad ranges, timestamps out of order)")
+    add_json_option(p)
     p.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from albot2d.errors import InputError
     from albot2d.evaluation import DEFAULT_REPLAY_MAPPERS, find_relations, replay_log
     from albot2d.evaluation.replay import check_replay_mappers
     from albot2d.logs.relations import read_relations
     from albot2d.mapping.registry import resolve_mappers
 
-    log = Path(args.log)
-    if not log.is_file():
-        raise InputError(f"{log}: no such log file")
+    log = find_log(args.log, args.data)
     mappers = tuple(args.mapper or DEFAULT_REPLAY_MAPPERS)
     check_replay_mappers(mappers)
     resolve_mappers(list(mappers))
@@ -84,13 +114,13 @@ def run(args: argparse.Namespace) -> int:
         )  # fmt: skip
     finally:
         bar.close()
-    print_tables(result, out)
     anomalies = result.report["log"]["anomalies"]
     if any(anomalies[k] for k in anomalies if not k.startswith("frames_")):
         from albot2d.logs.anomalies import LogAnomalies
 
         print(f"albot2d replay: warning: {log}: {LogAnomalies(**anomalies).summary()} "
               "(--strict refuses such a log)", file=sys.stderr)
+    print_tables(result, out, args.json)
     used = result.report["run"].get("relations_used")
     if relations is None:
         print(f"albot2d replay: note: no relations file for {log} (give --relations), "

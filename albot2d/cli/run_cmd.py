@@ -31,7 +31,10 @@ from albot2d.errors import InputError
 __all__ = [
     "DEFAULT_KIND",
     "DEFAULT_NOISE",
+    "add_json_option",
+    "add_run_options",
     "add_scoring_options",
+    "check_spec",
     "finish",
     "positive_int",
     "positive_number",
@@ -39,6 +42,7 @@ __all__ = [
     "register",
     "run",
     "scoring_params",
+    "spec_from_args",
 ]
 
 DEFAULT_KIND = "office"
@@ -58,6 +62,27 @@ def register(subparsers: Any) -> None:
         "run", help="run the main experiment: world → tour → every mapper → report + figures",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
+    add_run_options(p)
+    p.add_argument("--mapper", nargs="+", action="extend", metavar="NAME",
+                   help="mappers: albot1, naive, truth, slam ([slam] extra) or module:Class "
+                        "(default: albot1 naive truth)")
+    add_scoring_options(p)
+    p.add_argument("--reproduce", metavar="report.json",
+                   help="re-run the run recorded in a report (give only --out with it)")
+    p.add_argument("--out", metavar="DIR", required=True,
+                   help="output directory (created if missing)")
+    p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    p.add_argument("--animate", action="store_true",
+                   help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
+                        "over time beside the truth")
+    p.add_argument("--cprofile", metavar="FILE",
+                   help="also write a cProfile pstats file of the run (python -m pstats FILE)")
+    add_json_option(p)
+    p.set_defaults(handler=run)
+
+
+def add_run_options(p: argparse.ArgumentParser) -> None:
+    """World and driving options, shared by ``run`` and ``simulate`` (same defaults)."""
     world = p.add_argument_group("world (default: --kind office --seed 0)")
     world.add_argument("--world", metavar="world.json", help="a world file (albot2d world)")
     world.add_argument("--kind", help="generate a world: corridors, rooms, open, office, mixed")
@@ -76,17 +101,11 @@ def register(subparsers: Any) -> None:
     drive.add_argument("--tour-length", metavar="METRES",
                        help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})")
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
-    p.add_argument("--mapper", nargs="+", action="extend", metavar="NAME",
-                   help="mappers: albot1, naive, truth, slam ([slam] extra) or module:Class "
-                        "(default: albot1 naive truth)")
-    add_scoring_options(p)
-    p.add_argument("--reproduce", metavar="report.json",
-                   help="re-run the run recorded in a report (give only --out with it)")
-    p.add_argument("--out", metavar="DIR", help="output directory (created if missing)")
-    p.add_argument("--no-figures", action="store_true", help="write report.json only")
-    p.add_argument("--cprofile", metavar="FILE",
-                   help="also write a cProfile pstats file of the run (python -m pstats FILE)")
-    p.set_defaults(handler=run)
+
+
+def add_json_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true",
+                   help="print report.json on stdout instead of the tables")
 
 
 def add_scoring_options(p: argparse.ArgumentParser) -> None:
@@ -123,7 +142,8 @@ def scoring_params(args: argparse.Namespace, base: Any = None) -> Any:
     return dataclasses.replace(base, homing=homing, map_quality=quality, snapshots=snapshots)
 
 
-def _spec(args: argparse.Namespace) -> Any:
+def spec_from_args(args: argparse.Namespace) -> Any:
+    """The RunSpec of ``run``'s (and ``simulate``'s) options, with the shared defaults."""
     from albot2d.evaluation import DEFAULT_MAPPERS, RunSpec
 
     params = world_params(args)
@@ -139,12 +159,12 @@ def _spec(args: argparse.Namespace) -> Any:
         laser_noise=args.laser_noise or DEFAULT_LASER_NOISE,
         tour_kind=args.tour_kind or DEFAULT_TOUR_KIND,
         tour_length_m=positive_number(args.tour_length, "--tour-length") or DEFAULT_TOUR_LENGTH_M,
-        mappers=tuple(args.mapper or DEFAULT_MAPPERS),
+        mappers=tuple(getattr(args, "mapper", None) or DEFAULT_MAPPERS),
         max_frames=positive_int(args.max_frames, "--max-frames"),
     )
 
 
-def _check_spec(spec: Any) -> None:
+def check_spec(spec: Any) -> None:
     """Everything a run needs that can be checked without running it."""
     from albot2d.mapping.registry import resolve_mappers
     from albot2d.sim.driving import get_profile
@@ -187,13 +207,22 @@ def _remove_if_empty(out: Path, created: bool) -> None:
             out.rmdir()  # only succeeds when nothing was left in it
 
 
-def _render(result: Any, no_figures: bool, command: str) -> dict[str, bytes]:
+def _render(result: Any, no_figures: bool, command: str, animate: bool = False) -> dict[str, bytes]:
     if no_figures:
         return {}
     try:
         from albot2d.plots_maps import render_experiment_figures
 
-        return render_experiment_figures(result)
+        figures = render_experiment_figures(result)
+        if animate:
+            from albot2d.plots_anim import render_map_animation
+
+            animation = render_map_animation(result)
+            if not animation:
+                print(f"albot2d {command}: note: no animation (no mapper keeps a map history; "
+                      "give --mapper albot1)", file=sys.stderr)
+            figures.update(animation)
+        return figures
     except ImportError as exc:
         print(f"albot2d {command}: note: no figures ({exc}); pip install 'albot2d[viz]'",
               file=sys.stderr)
@@ -229,7 +258,8 @@ def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]
 
 
 def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, bytes]) -> None:
-    """Write the figures and report.json atomically; report.json is renamed into place last."""
+    """Write the files (figures, exports) and report.json atomically; report.json is
+    renamed into place last."""
     from albot2d.evaluation.report import REPORT_NAME, report_json
 
     text = report_json(report).encode("utf-8")
@@ -245,19 +275,25 @@ def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, by
 
 def finish(
     out: Path, created: bool, command: str, compute: Callable[[], Any], no_figures: bool,
-    stage: Callable[[str], None] | None = None,
+    stage: Callable[[str], None] | None = None, animate: bool = False,
 ) -> Any:
-    """Run ``compute`` (→ ExperimentResult), draw the figures, write everything; on any
-    failure remove the output directory again if this command created it."""
+    """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
+    maps, write everything; on any failure remove the output directory again if this
+    command created it."""
+    from albot2d.evaluation.export import export_files
+
     try:
         result = compute()
         if stage is not None and not no_figures:
             stage("figures")
-        figures = _render(result, no_figures, command)
+        figures = _render(result, no_figures, command, animate)
         figures.update(_step_figure(result, no_figures))
+        exports = export_files(result)
         result.report["figures"] = sorted(figures)
+        result.report["exports"] = sorted(exports)
         # steps.csv: one row per view (stage times, counters), for profiling a run.
-        files = figures | {"steps.csv": result.trace.step_times.to_csv().encode("utf-8")}
+        files = {**figures, **exports,
+                 "steps.csv": result.trace.step_times.to_csv().encode("utf-8")}
         write_outputs(out, result.report, files)
     except BaseException:
         _remove_if_empty(out, created)
@@ -272,18 +308,25 @@ def progress_bar(total: float | None, unit: str, desc: str) -> Any:
                 disable=not sys.stderr.isatty(), dynamic_ncols=True)
 
 
-def print_tables(result: Any, out: Path) -> None:
+def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
+    """The result tables on stdout, or (``--json``) the report itself."""
     from albot2d.evaluation.report import (
         REPORT_NAME,
         format_homing_table,
         format_summary_table,
+        report_json,
     )
 
     report = result.report
+    if as_json:
+        print(report_json(report))
+        return
     print(f"{result.title}  ({report['wall_time_s']:.1f} s)")
     print(format_summary_table(report))
     print(format_homing_table(report))
-    print(f"-> {out / REPORT_NAME} + {len(report['figures'])} figures")
+    files = report["figures"] + report.get("exports", [])
+    print(f"-> {out / REPORT_NAME} + {len(files)} files ({', '.join(files)})"
+          if len(files) <= 4 else f"-> {out / REPORT_NAME} + {len(files)} files")
 
 
 def _differences(a: Any, b: Any, path: str = "") -> list[str]:
@@ -317,23 +360,32 @@ def run(args: argparse.Namespace) -> int:
         spec = RunSpec.from_report(recorded, where=args.reproduce)
         params = evaluation_params_from_report(recorded)
     else:
-        spec = _spec(args)
+        spec = spec_from_args(args)
         params = scoring_params(args)
-    _check_spec(spec)
+    check_spec(spec)
     if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():
         raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
     out, created = prepare_out_dir(args.out)
     bar = None
 
     def start(world: Any, tour: Any) -> None:
+        # With --max-frames the run ends after that many views, not at the tour's end.
         nonlocal bar
-        bar = progress_bar(round(tour.length_m, 1), "m", "run")
+        if spec.max_frames is not None:
+            bar = progress_bar(spec.max_frames, " views", "run")
+        else:
+            bar = progress_bar(round(tour.length_m, 1), "m", "run")
 
     def frame(f: Any, travelled: float) -> None:
-        if bar is not None:
+        if bar is None:
+            return
+        if spec.max_frames is not None:
+            bar.n = f.index + 1
+            bar.set_postfix_str(f"{travelled:.0f} m", refresh=False)
+        else:
             bar.n = round(min(travelled, bar.total), 1)
             bar.set_postfix_str(f"{f.index + 1} views", refresh=False)
-            bar.update(0)
+        bar.update(0)
 
     def stage(name: str) -> None:
         if bar is not None:
@@ -344,16 +396,16 @@ def run(args: argparse.Namespace) -> int:
             out, created, "run",
             _profiled(args.cprofile, lambda: run_experiment(
                 spec, params, on_start=start, on_frame=frame, on_stage=stage)),
-            args.no_figures, stage,
+            args.no_figures, stage, animate=args.animate,
         )  # fmt: skip
     finally:
         if bar is not None:
             bar.close()
-    print_tables(result, out)
+    print_tables(result, out, args.json)
     if recorded is not None:
         # A fuzzing reproducer is a report plus a "reproducer" section (the episode, the
         # world JSON, what failed): only the report part is compared.
-        ignore = ("figures", "albot2d_version", "reproducer")
+        ignore = ("figures", "exports", "albot2d_version", "reproducer")
         diff = _differences(
             {k: v for k, v in without_timings(recorded).items() if k not in ignore},
             {k: v for k, v in without_timings(result.report).items() if k not in ignore},

@@ -4,9 +4,17 @@
 - ``replay``: ``replay_log(path)`` — the same on a recorded CARMEN log and its relations;
 - ``trace`` / ``scoring``: stream frames through the mappers once, then score the trace;
 - ``report``: report.json's header, writing, reading and the printed tables;
-- ``rpe``, ``homing``, ``map_quality``: the metrics themselves.
+- ``rpe``, ``homing``, ``map_quality``: the metrics themselves;
+- ``alignment``: a mapper's frame → the world frame, APE after SE(2) alignment;
+- ``export``: TUM trajectories and CSV maps of a run folder.
 """
 
+from albot2d.evaluation.alignment import (
+    AbsolutePoseError,
+    absolute_pose_error,
+    in_world_frame,
+    map_in_world_frame,
+)
 from albot2d.evaluation.experiment import (
     DEFAULT_MAPPERS,
     ExperimentResult,
@@ -32,6 +40,7 @@ __all__ = [
     "DEFAULT_MAPPERS",
     "DEFAULT_REPLAY_MAPPERS",
     "REPORT_NAME",
+    "AbsolutePoseError",
     "EvaluationParams",
     "ExperimentResult",
     "HomingParams",
@@ -43,6 +52,7 @@ __all__ = [
     "RunSpec",
     "StepTimes",
     "Trace",
+    "absolute_pose_error",
     "drive_mappers",
     "evaluation_params_from_report",
     "find_relations",
@@ -50,6 +60,8 @@ __all__ = [
     "format_summary_table",
     "homing",
     "homing_to_start",
+    "in_world_frame",
+    "map_in_world_frame",
     "map_quality",
     "read_report",
     "relative_pose_error",

@@ -42,6 +42,7 @@ __all__ = [
     "ExperimentResult",
     "RunSpec",
     "evaluation_params_from_report",
+    "make_simulator",
     "plan_tour",
     "run_experiment",
     "world_digest",
@@ -160,6 +161,9 @@ class ExperimentResult:
     relations: Relations | None
     title: str
 
+    def __repr__(self) -> str:
+        return f"ExperimentResult({self.title!r}, {self.trace!r}, report keys {list(self.report)})"
+
 
 def world_digest(world: World) -> str:
     """SHA-256 of the world's JSON: tells whether a reproduction used the same world."""
@@ -183,7 +187,8 @@ def plan_tour(world: World, kind: str, min_length_m: float) -> Tour:
     return _plan_tour(world, kind=kind, length_m=min_length_m)
 
 
-def _simulator(world: World, spec: RunSpec) -> Any:
+def make_simulator(world: World, spec: RunSpec) -> Any:
+    """The simulator of a run, seeded like ``albot2d simulate``."""
     from albot2d.sim.laser import LaserNoise
     from albot2d.sim.odometry import noise_preset
     from albot2d.sim.simulator import Simulator
@@ -217,7 +222,7 @@ def run_experiment(
     profile = get_profile(spec.profile)
     world = build_world(spec)
     tour = plan_tour(world, spec.tour_kind, spec.tour_length_m)
-    sim = _simulator(world, spec)
+    sim = make_simulator(world, spec)
     frames = sim.drive(tour, profile)
     if on_start is not None:
         on_start(world, tour)
@@ -270,6 +275,9 @@ def run_experiment(
         figures=[],
         wall_time_s=time.perf_counter() - t0,
     )
-    title = (f"{world.kind} seed {world.seed}  {profile.name}  {tour.kind} tour "
-             f"{tour.length_m:.0f} m  odometry noise {spec.noise}  {trace.n_frames} views")
+    driven = f"{tour.kind} tour {tour.length_m:.0f} m"
+    if spec.max_frames is not None:  # cut short: say how much of the tour was driven
+        driven = f"{run_info['travelled_m']:.0f} m of a {driven}"
+    title = (f"{world.kind} seed {world.seed}  {profile.name}  {driven}  "
+             f"odometry noise {spec.noise}  {trace.n_frames} views")
     return ExperimentResult(report, trace, world, tour, relations, title)

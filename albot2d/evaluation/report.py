@@ -140,41 +140,57 @@ def _table(header: list[str], rows: list[list[str]]) -> str:
 
 
 def format_summary_table(report: Mapping[str, Any]) -> str:
-    """One row per mapper (and raw odometry): counts, RPE, homing worst case, map quality."""
-    header = ["", "views", "maps", "tri", "PI", "RPE m", "RPE deg", "short deg", "long m",
-              "long deg", "home |Δ°|max", "|Δm|max", "map acc m", "p95 m", "complete"]
-    rows = [["odometry", "", "", "", "", *_rpe_cells(report["odometry"].get("rpe")),
-             "", "", "", "", ""]]
+    """Two tables of one row per mapper (and raw odometry), each under 100 columns:
+    accuracy (RPE overall/short/long, APE, worst homing error) and process/map quality."""
+    header = ["", "RPE m", "RPE deg", "short deg", "long m", "long deg", "APE m",
+              "home max°", "max m"]
+    odometry = report["odometry"]
+    rows = [["odometry", *_rpe_cells(odometry.get("rpe")),
+             _num((odometry.get("ape") or {}).get("trans_m_rmse"), ".3f"), "", ""]]
     for name, m in report["mappers"].items():
-        c, h, q = m["counts"], m.get("homing_summary") or {}, m["map"]
+        h = m.get("homing_summary") or {}
         rows.append([
-            name, str(c["views"]), str(c["local_maps"]), str(c["triangulations"]),
-            str(c["path_integrations"]), *_rpe_cells(m.get("rpe")),
+            name, *_rpe_cells(m.get("rpe")), _num((m.get("ape") or {}).get("trans_m_rmse"), ".3f"),
             _num(h.get("bearing_abs_max_deg"), ".1f"), _num(h.get("distance_abs_max_m"), ".2f"),
+        ])  # fmt: skip
+    header2 = ["", "views", "local maps", "triangulated", "integrated", "surfaces",
+               "map acc m", "p95 m", "complete"]
+    rows2 = []
+    for name, m in report["mappers"].items():
+        c, q = m["counts"], m["map"]
+        rows2.append([
+            name, str(c["views"]), str(c["local_maps"]), str(c["triangulations"]),
+            str(c["path_integrations"]), _num(c.get("global_map_surfaces"), "d"),
             _num(q.get("accuracy_m_mean"), ".3f"), _num(q.get("accuracy_m_p95"), ".3f"),
             _num(q.get("completeness"), ".2f"),
         ])  # fmt: skip
-    return _table(header, rows)
+    return _table(header, rows) + "\n\n" + _table(header2, rows2)
 
 
 def format_homing_table(report: Mapping[str, Any]) -> str:
     """Per stop: distance travelled, true bearing/distance to the start, and each mapper's
-    estimate (errors in brackets when the truth is known)."""
+    error (bearing °/distance m) when the truth is known, else its estimate."""
     mappers = report["mappers"]
     names = list(mappers)
     if not names or not mappers[names[0]]["homing"]:
         return "homing: no stops (the run never got far enough from its start)"
-    header = ["stop", "view", "odo m", "true °/m"] + [f"{n} °/m (Δ)" for n in names]
+    known = mappers[names[0]]["homing"][0]["bearing_true_deg"] is not None
+    header = ["stop", "view", "odo m"] + (["true °/m"] if known else [])
+    header += [f"{n[:12]} {'Δ°/Δm' if known else '°/m'}" for n in names]
     rows = []
     for k, first in enumerate(mappers[names[0]]["homing"]):
         true = (f"{first['bearing_true_deg']:+.1f}/{first['distance_true_m']:.1f}"
-                if first["bearing_true_deg"] is not None else "-")
-        row = [str(k + 1), str(first["view"]), f"{first['travelled_m']:.1f}", true]
+                if known else "")
+        row = [str(k + 1), str(first["view"]), f"{first['travelled_m']:.1f}"] + (
+            [true] if known else []
+        )
         for name in names:
             e = mappers[name]["homing"][k]
-            cell = f"{e['bearing_est_deg']:+.1f}/{e['distance_est_m']:.1f}"
-            if e["bearing_error_deg"] is not None:
-                cell += f" ({e['bearing_error_deg']:+.1f}/{e['distance_error_m']:+.1f})"
-            row.append(cell)
+            if known and e["bearing_error_deg"] is not None:
+                row.append(f"{e['bearing_error_deg']:+.1f}/{e['distance_error_m']:+.1f}")
+            else:
+                row.append(f"{e['bearing_est_deg']:+.1f}/{e['distance_est_m']:.1f}")
         rows.append(row)
-    return _table(header, rows)
+    title = ("homing: error of each mapper's bearing/distance to the start (estimates in "
+             "report.json)" if known else "homing: each mapper's bearing/distance to the start")
+    return title + "\n" + _table(header, rows)

@@ -1,7 +1,8 @@
 """Score a :class:`~albot2d.evaluation.trace.Trace`: the per-mapper sections of report.json.
 
 For each mapper: process counts, homing at the trace's stops, relative pose error against
-the relations, map quality against the true walls, end-pose error, per-stage timings, and
+the relations, absolute pose error after SE(2) alignment (``alignment.ape_section``),
+map quality against the true walls, end-pose error, per-stage timings, and
 (for view-based mappers with a route map) the moments at which its map history is shown.
 Sections that need the truth (simulation) hold ``None`` on real logs.
 """
@@ -16,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.errors import InputError
+from albot2d.evaluation.alignment import ape_section
 from albot2d.evaluation.egocentric import EgocentricQuality, egocentric_quality
 from albot2d.evaluation.homing import homing
 from albot2d.evaluation.map_quality import MapQualityParams, map_quality
@@ -267,6 +269,7 @@ def odometry_section(
     return {
         "rpe": rpe_section(trace, trace.odom_poses, relations, params.rpe_split_s),
         "end_pose_error": end_pose_error(trace, trace.odom_poses),
+        "ape": ape_section(trace.timestamps, trace.odom_poses, trace.true_poses),
     }
 
 
@@ -293,6 +296,7 @@ def score_mappers(
             "homing_summary": homing_summary(entries),
             "rpe": rpe_section(trace, poses, relations, params.rpe_split_s),
             "end_pose_error": end_pose_error(trace, poses),
+            "ape": ape_section(trace.timestamps, poses, trace.true_poses),
             "map": map_section(trace, mapper, world_segments, params.map_quality, name),
             "snapshots": snapshots_section(trace, mapper, params.snapshots),
             "revisits": revisits_section(mapper, REVISIT_GAP_MAPS),

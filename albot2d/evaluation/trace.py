@@ -167,6 +167,11 @@ class Trace:
     def n_frames(self) -> int:
         return len(self.timestamps)
 
+    def __repr__(self) -> str:
+        metres = float(self.travelled_m[-1]) if self.n_frames else 0.0
+        return (f"Trace({self.n_frames} frames, {metres:.1f} m, truth={self.has_truth}, "
+                f"{len(self.stops)} stops, mappers={list(self.mappers)})")
+
     @property
     def has_truth(self) -> bool:
         return self.true_poses is not None

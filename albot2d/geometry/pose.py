@@ -42,6 +42,10 @@ class Pose:
     y: float = 0.0
     theta: float = 0.0
 
+    def __repr__(self) -> str:
+        # Plain floats (not ``np.float64(...)``), full precision: exact but short.
+        return f"Pose(x={float(self.x)!r}, y={float(self.y)!r}, theta={float(self.theta)!r})"
+
     @classmethod
     def from_array(cls, values: ArrayLike) -> Pose:
         arr = np.asarray(values, dtype=np.float64)

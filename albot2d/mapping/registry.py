@@ -13,7 +13,7 @@ from collections.abc import Callable
 from albot2d.errors import InputError
 from albot2d.mapping.protocol import Mapper
 
-__all__ = ["BUILTIN_MAPPERS", "mapper_factory", "resolve_mappers"]
+__all__ = ["BUILTIN_MAPPERS", "mapper_factory", "report_name", "resolve_mappers"]
 
 
 def _albot1() -> Mapper:
@@ -116,13 +116,21 @@ def mapper_factory(spec: str) -> Callable[[], Mapper]:
     return cls  # type: ignore[no-any-return]
 
 
+def report_name(spec: str, factory: Callable[[], Mapper]) -> str:
+    """The name a mapper is reported under: a built-in's name, else the class's ``name``
+    attribute when it is a non-empty string, else the class name."""
+    if spec in BUILTIN_MAPPERS or spec.startswith("albot1["):
+        return spec
+    name = getattr(factory, "name", None)
+    return name if isinstance(name, str) and name else spec.partition(":")[2]
+
+
 def resolve_mappers(specs: list[str]) -> dict[str, Callable[[], Mapper]]:
-    """Factories keyed by report name (a built-in name, or the class name for plugins)."""
+    """Factories keyed by report name (a built-in name, or a plugin's ``name``)."""
     out: dict[str, Callable[[], Mapper]] = {}
     for spec in specs:
         factory = mapper_factory(spec)
-        builtin = spec in BUILTIN_MAPPERS or spec.startswith("albot1[")
-        name = spec if builtin else spec.partition(":")[2]
+        name = report_name(spec, factory)
         if name in out:
             raise InputError(f"mapper {name!r} given twice")
         out[name] = factory

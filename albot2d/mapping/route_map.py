@@ -44,6 +44,11 @@ class LocalMap:
     tracked: int = 0
     timestamp: float = 0.0
 
+    def __repr__(self) -> str:
+        return (f"LocalMap(map_id={self.map_id}, frame_index={self.frame_index}, "
+                f"method={self.method!r}, pose={self.pose!r}, tracked={self.tracked}, "
+                f"timestamp={self.timestamp:.6g}, view={self.view!r})")
+
 
 @dataclass(eq=False)
 class RouteMap:
@@ -53,6 +58,11 @@ class RouteMap:
 
     def __len__(self) -> int:
         return len(self.maps)
+
+    def __repr__(self) -> str:
+        methods = [m.method for m in self.maps]
+        counts = ", ".join(f"{methods.count(k)} {k}" for k in dict.fromkeys(methods))
+        return f"RouteMap({len(self.maps)} local maps{': ' + counts if counts else ''})"
 
     def __iter__(self) -> Iterator[LocalMap]:
         return iter(self.maps)

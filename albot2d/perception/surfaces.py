@@ -63,6 +63,12 @@ class Surfaces:
     beams: NDArray[np.int64]
     uncertain: NDArray[np.bool_] | None = None
 
+    def __repr__(self) -> str:
+        from albot2d.reprs import compact_fields
+
+        return compact_fields("Surfaces", segments=self.segments, occluded=self.occluded,
+                              beams=self.beams, uncertain=self.uncertain)
+
     def __post_init__(self) -> None:
         segs = as_segments(self.segments)
         n = len(segs)
