@@ -215,11 +215,13 @@ class ScanMatchingSLAM(_ViewIntegrator):
 
 @dataclass(frozen=True, slots=True)
 class SlamParams:
-    """The ``slam`` mapper's settings: front end, loop closures, pose graph."""
+    """The ``slam`` mapper's settings: front end, loop closures, pose graph, and whether
+    wheel odometry joins scan matching between keyframes (``use_wheel_odometry``)."""
 
     scan_matching: ScanMatchingParams = field(default_factory=ScanMatchingParams)
     loops: LoopClosureParams = field(default_factory=LoopClosureParams)
     graph: PoseGraphParams = field(default_factory=PoseGraphParams)
+    use_wheel_odometry: bool = True
 
 
 class LoopClosingSLAM:
@@ -266,6 +268,7 @@ class LoopClosingSLAM:
         self._kf_fe: list[NDArray[np.float64]] = []
         self._kf_points: list[NDArray[np.float64]] = []
         self._kf_path_m: list[float] = []
+        self._kf_odom: list[NDArray[np.float64]] = []
         self.keyframe_rows: list[int] = []  # the view (0-based, in observed order) of each
 
     # -- the mapper protocol -------------------------------------------------------------
@@ -279,7 +282,7 @@ class LoopClosingSLAM:
         self._path_m += float(np.hypot(*(fe[:2] - self._last_fe[:2])))
         self._last_fe = fe
         if self._needs_keyframe(fe):
-            self._add_keyframe(fe, frame.scan.points())
+            self._add_keyframe(fe, frame.scan.points(), frame.odom_pose.as_array())
         self._segments.append(view.segments)
         self._view_kf.append(len(self._kf_fe) - 1)
         self._offsets.append(between_arrays(self._kf_fe[-1], fe))
@@ -337,19 +340,21 @@ class LoopClosingSLAM:
         self, i: int, j: int, guess: NDArray[np.float64] | None = None
     ) -> ClosureCheck:
         """Register keyframe ``i``'s local map onto keyframe ``j``'s (``guess``: ``i``'s pose
-        in ``j``'s frame to start from; default the current estimate). Adds nothing."""
+        in ``j``'s frame to start from; default the current estimate; the correction is
+        always judged against the current estimate). Adds nothing."""
         n, est = self.params.loops.submap_keyframes, self.graph.estimate
         if not (0 <= j < len(est) and 0 <= i < len(est) and i != j):
             raise ValueError(f"keyframes {i}, {j}: need two different ones of {len(est)}")
-        if guess is None:
-            guess = between_arrays(est[j], est[i])
+        estimate = between_arrays(est[j], est[i])
+        guess = estimate if guess is None else np.asarray(guess, dtype=np.float64)
         query_ids = range(max(0, i - n + 1), i + 1)
         lo, hi = max(0, j - n), min(len(est), j + n + 1)
         target_ids = [k for k in range(lo, hi) if abs(k - i) >= n]
         query = self._submap(query_ids, i)
         target = self._submap(target_ids, j)
         path = abs(self._kf_path_m[i] - self._kf_path_m[j])
-        return self.verifier.check(i, j, query, target, np.asarray(guess, np.float64), path)
+        scan = self._kf_points[i]
+        return self.verifier.check(i, j, query, scan, target, guess, path, estimate)
 
     def propose_closure(
         self, i: int, j: int, guess: NDArray[np.float64] | None = None
@@ -378,18 +383,26 @@ class LoopClosingSLAM:
         return bool(np.hypot(motion[0], motion[1]) >= p.keyframe_distance_m
                     or abs(motion[2]) >= np.radians(p.keyframe_angle_deg))  # fmt: skip
 
-    def _add_keyframe(self, fe: NDArray[np.float64], points: NDArray[np.float64]) -> None:
+    def _add_keyframe(
+        self, fe: NDArray[np.float64], points: NDArray[np.float64], odom: NDArray[np.float64]
+    ) -> None:
         if self._kf_fe:
             motion = between_arrays(self._kf_fe[-1], fe)
-            self.graph.add_keyframe(motion, compose_arrays(self.graph.estimate[-1], motion))
+            wheel = between_arrays(self._kf_odom[-1], odom)
+            if not self.params.use_wheel_odometry:
+                wheel = None
+            self.graph.add_keyframe(motion, compose_arrays(self.graph.estimate[-1], motion), wheel)
         else:
             self.graph.add_keyframe(None, fe)
         self._kf_fe.append(fe)
+        self._kf_odom.append(odom)
         self._kf_points.append(np.asarray(points, dtype=np.float64))
         self._kf_path_m.append(self._path_m)
         self.keyframe_rows.append(len(self._segments))
         for j in self._candidates(len(self._kf_fe) - 1):
             self.propose_closure(len(self._kf_fe) - 1, j)
+        with self.timer.stage("optimisation"):
+            self.graph.optimise()  # runs only when due
 
     def _candidates(self, i: int) -> list[int]:
         """Older keyframes near keyframe ``i`` under the current estimate, nearest first."""

@@ -9,9 +9,10 @@ Verification registers the two *local maps*, not single scans: the scans of the 
 against those of the keyframes around ``j`` (placed in ``j``'s frame by the current
 estimate). Registration is KISS-ICP's point-to-map ICP (robust kernel, points lifted to a
 few height layers as in the front end) started from the current estimate of the relative
-pose. The result is accepted only if
+pose; keyframe ``i``'s own scan is then registered from that result with a tight gate, so
+the closure is about the keyframe's own pose. The result is accepted only if
 
-- enough of the query points (``min_inlier_ratio``, ``min_inliers``) lie within
+- enough of the query points and of the scan's (``min_inlier_ratio``, ``min_inliers``) lie within
   ``inlier_distance_m`` of a target point after alignment, and
 - the correction it makes to the current estimate stays within the drift allowance
   (``max_correction_m`` + ``max_correction_per_m`` × path since ``j``,
@@ -53,7 +54,8 @@ class LoopClosureParams:
       to ``i``; target: as many on each side of ``j``).
     - ``voxel_size_m``: voxel size of the registration map and of the query's downsampling.
     - ``max_correspondence_m`` / ``kernel_m``: ICP correspondence gate and robust kernel.
-    - ``inlier_distance_m``, ``min_inlier_ratio``, ``min_inliers``: the fitness test.
+    - ``inlier_distance_m``, ``min_inlier_ratio``, ``min_inliers``: the fitness test of the
+      local maps; ``min_scan_inliers``: of keyframe ``i``'s own scan after refinement.
     - ``max_correction_m`` + ``max_correction_per_m`` × path since ``j``, and
       ``max_correction_deg``: the largest change to the current relative estimate accepted.
     """
@@ -65,14 +67,15 @@ class LoopClosureParams:
     search_radius_per_m: float = 0.02
     max_search_radius_m: float = 6.0
     max_candidates: int = 1
-    submap_keyframes: int = 5
+    submap_keyframes: int = 10
     voxel_size_m: float = 0.10
     max_correspondence_m: float = 1.0
     kernel_m: float = 0.2
     max_iterations: int = 100
     inlier_distance_m: float = 0.10
-    min_inlier_ratio: float = 0.70
+    min_inlier_ratio: float = 0.50
     min_inliers: int = 60
+    min_scan_inliers: int = 30
     max_correction_m: float = 0.5
     max_correction_per_m: float = 0.02
     max_correction_deg: float = 10.0
@@ -85,7 +88,7 @@ class LoopClosureParams:
         check_non_negative(self, "min_separation_m", "search_radius_per_m",
                            "max_correction_per_m")  # fmt: skip
         check_positive_int(self, "max_candidates", "submap_keyframes", "max_iterations",
-                           "min_inliers")  # fmt: skip
+                           "min_inliers", "min_scan_inliers")  # fmt: skip
         check_in_range(self, "min_inlier_ratio", 0.0, 1.0)
 
 
@@ -156,54 +159,85 @@ class LoopVerifier:
         n, k = len(points), len(self._heights)
         return np.column_stack([np.tile(points, (k, 1)), np.repeat(self._heights, n)])
 
+    def _align(
+        self, points: NDArray[np.float64], target_map: Any, start: NDArray[np.float64],
+        max_correspondence_m: float, kernel_m: float,
+    ) -> NDArray[np.float64]:  # fmt: skip
+        matrix = self._registration.align_points_to_map(
+            points=self._lift(points), voxel_map=target_map, initial_guess=_se2_matrix(start),
+            max_correspondance_distance=max_correspondence_m, kernel=kernel_m,
+        )  # fmt: skip
+        return np.array([matrix[0, 3], matrix[1, 3], np.arctan2(matrix[1, 0], matrix[0, 0])])
+
+    def _fitness(
+        self, pose: NDArray[np.float64], points: NDArray[np.float64], target: NDArray[np.float64]
+    ) -> tuple[int, float]:
+        distances = _nearest_distances(transform_points(pose, points), target)
+        inliers = int(np.count_nonzero(distances <= self.params.inlier_distance_m))
+        return inliers, inliers / max(len(points), 1)
+
     def check(
         self,
         i: int,
         j: int,
         query: NDArray[np.float64],
+        scan: NDArray[np.float64],
         target: NDArray[np.float64],
         guess: NDArray[np.float64],
         path_m: float,
+        estimate: NDArray[np.float64] | None = None,
     ) -> ClosureCheck:
-        """Verify a candidate. ``query``: points in ``i``'s frame; ``target``: points in
-        ``j``'s frame; ``guess``: ``i``'s pose in ``j``'s frame now; ``path_m``: path driven
-        from ``j`` to ``i`` (sets the drift allowance)."""
+        """Verify a candidate. ``query``: the local map of ``i`` in ``i``'s frame; ``scan``:
+        keyframe ``i``'s own scan; ``target``: the local map of ``j`` in ``j``'s frame;
+        ``guess``: ``i``'s pose in ``j``'s frame to start ICP from; ``estimate``: the same
+        pose under the current map estimate, against which the correction is judged
+        (default ``guess``); ``path_m``: path driven from ``j`` to ``i`` (sets the drift
+        allowance).
+
+        The local maps are registered first (a wide basin, many points); keyframe ``i``'s
+        own scan is then registered from there with a tight gate, so the closure constrains
+        the keyframe's own pose even if its neighbours' estimates disagree with it."""
+        estimate = guess if estimate is None else estimate
         p = self.params
         query = voxel_downsample_2d(query, p.voxel_size_m)
+        scan = voxel_downsample_2d(scan, p.voxel_size_m)
         target = voxel_downsample_2d(target, p.voxel_size_m / 2)
         if len(query) < p.min_inliers or len(target) < p.min_inliers:
-            return self._verdict(i, j, guess, guess, 0.0, 0, path_m, "too few points")
+            return self._verdict(i, j, guess, estimate, 0.0, 0, path_m, "too few points")
         voxel_map = self._map_cls(voxel_size=p.voxel_size_m * 2, max_distance=1e6,
                                   max_points_per_voxel=20)  # fmt: skip
         voxel_map.add_points(self._lift(target))
-        matrix = self._registration.align_points_to_map(
-            points=self._lift(query), voxel_map=voxel_map, initial_guess=_se2_matrix(guess),
-            max_correspondance_distance=p.max_correspondence_m, kernel=p.kernel_m,
-        )  # fmt: skip
-        pose = np.array([matrix[0, 3], matrix[1, 3], np.arctan2(matrix[1, 0], matrix[0, 0])])
+        pose = self._align(query, voxel_map, guess, p.max_correspondence_m, p.kernel_m)
         if not np.all(np.isfinite(pose)):
-            return self._verdict(i, j, guess, guess, 0.0, 0, path_m, "registration failed")
-        distances = _nearest_distances(transform_points(pose, query), target)
-        inliers = int(np.count_nonzero(distances <= p.inlier_distance_m))
-        ratio = inliers / len(query)
-        reason = ""
+            return self._verdict(i, j, guess, estimate, 0.0, 0, path_m, "registration failed")
+        inliers, ratio = self._fitness(pose, query, target)
         if inliers < p.min_inliers or ratio < p.min_inlier_ratio:
             reason = f"fitness: inlier ratio {ratio:.2f}, {inliers} inliers"
-        return self._verdict(i, j, pose, guess, ratio, inliers, path_m, reason)
+            return self._verdict(i, j, pose, estimate, ratio, inliers, path_m, reason)
+        gate = 3 * p.inlier_distance_m
+        refined = self._align(scan, voxel_map, pose, gate, p.inlier_distance_m)
+        if not np.all(np.isfinite(refined)):
+            return self._verdict(i, j, pose, estimate, ratio, inliers, path_m,
+                                 "scan registration failed")  # fmt: skip
+        scan_inliers, scan_ratio = self._fitness(refined, scan, target)
+        reason = ""
+        if scan_inliers < p.min_scan_inliers or scan_ratio < p.min_inlier_ratio:
+            reason = f"scan fitness: inlier ratio {scan_ratio:.2f}, {scan_inliers} inliers"
+        return self._verdict(i, j, refined, estimate, ratio, inliers, path_m, reason)
 
     def _verdict(
         self,
         i: int,
         j: int,
         pose: NDArray[np.float64],
-        guess: NDArray[np.float64],
+        estimate: NDArray[np.float64],
         ratio: float,
         inliers: int,
         path_m: float,
         reason: str,
     ) -> ClosureCheck:
         p = self.params
-        change = between_arrays(guess, pose)
+        change = between_arrays(estimate, pose)
         correction_m = float(np.hypot(change[0], change[1]))
         correction_deg = float(np.degrees(abs(wrap_angle(change[2]))))
         allowed_m = p.max_correction_m + p.max_correction_per_m * path_m
