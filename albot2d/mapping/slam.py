@@ -215,13 +215,19 @@ class ScanMatchingSLAM(_ViewIntegrator):
 
 @dataclass(frozen=True, slots=True)
 class SlamParams:
-    """The ``slam`` mapper's settings: front end, loop closures, pose graph, and whether
-    wheel odometry joins scan matching between keyframes (``use_wheel_odometry``)."""
+    """The ``slam`` mapper's settings: front end, loop closures, pose graph, whether wheel
+    odometry joins scan matching between keyframes (``use_wheel_odometry``), and over how
+    many recent keyframes its disagreement with scan matching is measured to floor its
+    sigmas (``wheel_noise_window``)."""
 
     scan_matching: ScanMatchingParams = field(default_factory=ScanMatchingParams)
     loops: LoopClosureParams = field(default_factory=LoopClosureParams)
     graph: PoseGraphParams = field(default_factory=PoseGraphParams)
     use_wheel_odometry: bool = True
+    wheel_noise_window: int = 100
+
+    def __post_init__(self) -> None:
+        check_positive_int(self, "wheel_noise_window")
 
 
 class LoopClosingSLAM:
@@ -269,6 +275,7 @@ class LoopClosingSLAM:
         self._kf_points: list[NDArray[np.float64]] = []
         self._kf_path_m: list[float] = []
         self._kf_odom: list[NDArray[np.float64]] = []
+        self._wheel_gaps: list[tuple[float, float]] = []
         self.keyframe_rows: list[int] = []  # the view (0-based, in observed order) of each
 
     # -- the mapper protocol -------------------------------------------------------------
@@ -389,9 +396,17 @@ class LoopClosingSLAM:
         if self._kf_fe:
             motion = between_arrays(self._kf_fe[-1], fe)
             wheel = between_arrays(self._kf_odom[-1], odom)
-            if not self.params.use_wheel_odometry:
-                wheel = None
-            self.graph.add_keyframe(motion, compose_arrays(self.graph.estimate[-1], motion), wheel)
+            # How far wheel odometry strays from scan matching on this robot: a robust scale
+            # (1.4826 × median) of their disagreement over the recent keyframes floors the
+            # wheel factor's sigmas, so poor odometry (a real log) is not over-trusted.
+            gap = between_arrays(motion, wheel)
+            self._wheel_gaps.append((float(np.hypot(gap[0], gap[1])), abs(float(gap[2]))))
+            recent = np.array(self._wheel_gaps[-self.params.wheel_noise_window :])
+            floor = 1.4826 * np.median(recent, axis=0)
+            self.graph.add_keyframe(
+                motion, compose_arrays(self.graph.estimate[-1], motion),
+                wheel if self.params.use_wheel_odometry else None, (floor[0], floor[1]),
+            )  # fmt: skip
         else:
             self.graph.add_keyframe(None, fe)
         self._kf_fe.append(fe)

@@ -39,7 +39,8 @@ class PoseGraphParams:
       moved; ``odom_kernel`` (``cauchy``, ``huber``, ``none``) its robust kernel and
       ``odom_kernel_width`` the kernel's width in sigmas.
     - ``wheel_sigma_m`` / ``wheel_sigma_deg`` (+ ``_per_m``, and ``wheel_sigma_deg_per_rad``
-      per radian turned): the same for the wheel-odometry factor (Gaussian).
+      per radian turned): the same for the wheel-odometry factor (Gaussian) on a robot
+      with good odometry; the mapper raises them to what it measures (see ``slam.py``).
     - ``loop_sigma_m`` / ``loop_sigma_deg``: sigma of a verified loop closure.
     - ``loop_kernel``: robust kernel on closures (``cauchy``, ``huber`` or ``none``) and its
       width ``loop_kernel_width`` (in sigmas).
@@ -124,10 +125,12 @@ class PoseGraph:
         motion: NDArray[np.float64] | None,
         initial: NDArray[np.float64],
         wheel_motion: NDArray[np.float64] | None = None,
+        wheel_floor: tuple[float, float] = (0.0, 0.0),
     ) -> int:
         """Add a keyframe at ``initial``; ``motion``: its pose in the previous keyframe's frame
         by scan matching, ``wheel_motion`` by wheel odometry (None for the first keyframe,
-        which is anchored there). Returns its index."""
+        which is anchored there); ``wheel_floor``: lower bounds (m, rad) on the wheel
+        factor's sigmas, e.g. measured on this robot. Returns its index."""
         g, p = self._gtsam, self.params
         k = len(self._estimate)
         if k == 0:
@@ -147,9 +150,9 @@ class PoseGraph:
                 dw = float(np.hypot(wheel_motion[0], wheel_motion[1]))
                 turn = abs(float(wheel_motion[2]))
                 noise = self._diagonal(
-                    p.wheel_sigma_m + p.wheel_sigma_m_per_m * dw,
-                    np.radians(p.wheel_sigma_deg + p.wheel_sigma_deg_per_m * dw
-                               + p.wheel_sigma_deg_per_rad * turn),
+                    max(p.wheel_sigma_m + p.wheel_sigma_m_per_m * dw, wheel_floor[0]),
+                    max(np.radians(p.wheel_sigma_deg + p.wheel_sigma_deg_per_m * dw
+                                   + p.wheel_sigma_deg_per_rad * turn), wheel_floor[1]),
                 )  # fmt: skip
                 self._graph.add(g.BetweenFactorPose2(k - 1, k, g.Pose2(*wheel_motion), noise))
                 self._since += 1

@@ -73,12 +73,12 @@ class LoopClosureParams:
     kernel_m: float = 0.2
     max_iterations: int = 100
     inlier_distance_m: float = 0.10
-    min_inlier_ratio: float = 0.50
+    min_inlier_ratio: float = 0.60
     min_inliers: int = 60
     min_scan_inliers: int = 30
     max_correction_m: float = 0.5
-    max_correction_per_m: float = 0.02
-    max_correction_deg: float = 10.0
+    max_correction_per_m: float = 0.01
+    max_correction_deg: float = 5.0
 
     def __post_init__(self) -> None:
         check_positive(self, "keyframe_distance_m", "keyframe_angle_deg", "search_radius_m",
