@@ -1,19 +1,22 @@
-"""``ScanMatchingSLAM``: the paper's Albot_x as a scan-matching mapper (optional ``[slam]`` extra).
+"""The paper's Albot_x as SLAM robots (optional ``[slam]`` extra: kiss-icp, gtsam).
 
-Every scan is registered against a local voxel map by KISS-ICP (PRBonn, MIT licence), with
-the odometry increment as the prediction; the view's surfaces are then placed at the
-registered pose and integrated into one map without deletion, like ``NaiveIntegration``
-(same surface extraction, same ``GlobalMap.insert``), so the maps are comparable.
+- ``LoopClosingSLAM`` (``slam``): the scan-matching front end below, keyframes, loop
+  closures found by proximity and verified by registration (``slam_loops``), and a GTSAM
+  pose graph (``slam_graph``); every view is placed by its keyframe's optimised pose.
+- ``ScanMatchingSLAM`` (``scan_odometry``): the front end alone.
+
+Front end (``KissIcpOdometry``): every scan is registered against a local voxel map by
+KISS-ICP (PRBonn, MIT licence), with the odometry increment as the prediction. Both mappers
+keep every view's surfaces (same surface extraction as ``NaiveIntegration``), so the maps
+are comparable.
 
 KISS-ICP is a 3D pipeline. A 2D scan is lifted to 3D by copying its points to a few fixed
 heights (``layer_heights_m``): walls become vertical planes, so roll and pitch are
 constrained, and z stays put because nearest neighbours stay in their own layer. Deskewing
 is off (a scan is one instant here); the registered 4×4 pose is projected back to SE(2)
 after every scan and written back, so the out-of-plane components cannot accumulate.
-Scans with fewer than ``min_points`` hits are placed by odometry alone.
-
-It is scan-to-map odometry: KISS-ICP has no loop closure, so drift is reduced, not
-removed. One registration thread keeps runs bit-for-bit reproducible.
+Scans with fewer than ``min_points`` hits are placed by odometry alone. One registration
+thread keeps runs bit-for-bit reproducible.
 """
 
 from __future__ import annotations
@@ -218,16 +221,20 @@ class SlamParams:
     """The ``slam`` mapper's settings: front end, loop closures, pose graph, whether wheel
     odometry joins scan matching between keyframes (``use_wheel_odometry``), and over how
     many recent keyframes its disagreement with scan matching is measured to floor its
-    sigmas (``wheel_noise_window``)."""
+    sigmas (``wheel_noise_window``; the floor is ``wheel_noise_factor`` × the median
+    disagreement: 4.5 ≈ 3 robust sigmas, as wheel odometry's error is systematic as much
+    as random)."""
 
     scan_matching: ScanMatchingParams = field(default_factory=ScanMatchingParams)
     loops: LoopClosureParams = field(default_factory=LoopClosureParams)
     graph: PoseGraphParams = field(default_factory=PoseGraphParams)
     use_wheel_odometry: bool = True
     wheel_noise_window: int = 100
+    wheel_noise_factor: float = 4.5
 
     def __post_init__(self) -> None:
         check_positive_int(self, "wheel_noise_window")
+        check_positive(self, "wheel_noise_factor")
 
 
 class LoopClosingSLAM:
@@ -396,13 +403,13 @@ class LoopClosingSLAM:
         if self._kf_fe:
             motion = between_arrays(self._kf_fe[-1], fe)
             wheel = between_arrays(self._kf_odom[-1], odom)
-            # How far wheel odometry strays from scan matching on this robot: a robust scale
-            # (1.4826 × median) of their disagreement over the recent keyframes floors the
-            # wheel factor's sigmas, so poor odometry (a real log) is not over-trusted.
+            # How far wheel odometry strays from scan matching on this robot: a multiple of
+            # the median of their disagreement over the recent keyframes floors the wheel
+            # factor's sigmas, so poor odometry (a real log) is not over-trusted.
             gap = between_arrays(motion, wheel)
             self._wheel_gaps.append((float(np.hypot(gap[0], gap[1])), abs(float(gap[2]))))
             recent = np.array(self._wheel_gaps[-self.params.wheel_noise_window :])
-            floor = 1.4826 * np.median(recent, axis=0)
+            floor = self.params.wheel_noise_factor * np.median(recent, axis=0)
             self.graph.add_keyframe(
                 motion, compose_arrays(self.graph.estimate[-1], motion),
                 wheel if self.params.use_wheel_odometry else None, (floor[0], floor[1]),

@@ -5,15 +5,15 @@ along the path (``min_separation_m``) but near under the current estimate (withi
 radius that grows with the path driven since ``j``, the drift one must allow for).
 
 Verification registers the two *local maps*, not single scans: the scans of the last
-``submap_keyframes`` keyframes before ``i`` (placed in ``i``'s frame by the front end)
+``submap_keyframes`` keyframes up to ``i`` (placed in ``i``'s frame by the current estimate)
 against those of the keyframes around ``j`` (placed in ``j``'s frame by the current
 estimate). Registration is KISS-ICP's point-to-map ICP (robust kernel, points lifted to a
 few height layers as in the front end) started from the current estimate of the relative
 pose; keyframe ``i``'s own scan is then registered from that result with a tight gate, so
 the closure is about the keyframe's own pose. The result is accepted only if
 
-- enough of the query points and of the scan's (``min_inlier_ratio``, ``min_inliers``) lie within
-  ``inlier_distance_m`` of a target point after alignment, and
+- enough of the query points and of the scan's (``min_inlier_ratio``, ``min_inliers``,
+  ``min_scan_inliers``) lie within ``inlier_distance_m`` of a target point, and
 - the correction it makes to the current estimate stays within the drift allowance
   (``max_correction_m`` + ``max_correction_per_m`` × path since ``j``,
   ``max_correction_deg``): ICP that slid along a corridor or snapped onto a look-alike
