@@ -16,7 +16,8 @@ from albot2d.mapping.registry import BUILTIN_MAPPERS, mapper_factory, report_nam
 
 def test_builtins_build_protocol_mappers() -> None:
     for name, factory in BUILTIN_MAPPERS.items():
-        if name == "slam" and importlib.util.find_spec("kiss_icp") is None:
+        extra = ("kiss_icp", "gtsam")
+        if name in ("slam", "scan_odometry") and not all(map(importlib.util.find_spec, extra)):
             continue  # optional extra not installed (tests/test_slam.py covers the error)
         m = factory()
         assert isinstance(m, Mapper), name
@@ -56,7 +57,8 @@ def test_user_plugin_by_module_and_class(tmp_path: Path, monkeypatch: pytest.Mon
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
-        ("albot2", "unknown mapper 'albot2'; built-in mappers: albot1, naive, slam, truth"),
+        ("albot2", "unknown mapper 'albot2'; built-in mappers: albot1, naive, scan_odometry, "
+                   "slam, truth"),
         ("no_such_module_xyz:Cls", "cannot import module 'no_such_module_xyz'"),
     ],
 )

@@ -1,4 +1,5 @@
-"""The optional scan-matching baseline (``slam``, KISS-ICP): accuracy, protocol, determinism.
+"""The scan-matching front end alone (``scan_odometry``, KISS-ICP): accuracy, protocol,
+determinism, and the ``[slam]`` extra's clean errors (the loop closing: test_slam_loops.py).
 
 Tests that need kiss-icp skip when the ``[slam]`` extra is not installed; the clean error
 for a missing extra is tested either way (by making ``kiss_icp`` unimportable).
@@ -86,8 +87,8 @@ def test_slam_is_a_deterministic_protocol_mapper(
 ) -> None:
     _, frames = office_run
     frames = frames[:120]
-    first = BUILTIN_MAPPERS["slam"]()
-    assert isinstance(first, Mapper) and first.name == "slam"
+    first = BUILTIN_MAPPERS["scan_odometry"]()
+    assert isinstance(first, Mapper) and first.name == "scan_odometry"
     run_mapper(first, frames)
     again = run_mapper(ScanMatchingSLAM(), frames)
     traj = first.trajectory()
@@ -166,12 +167,12 @@ def test_run_cli_scores_the_slam_mapper(
     kiss: ModuleType, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "out"
-    assert main(["run", "--mapper", "albot1", "--mapper", "naive", "--mapper", "slam",
+    assert main(["run", "--mapper", "albot1", "--mapper", "scan_odometry", "--mapper", "slam",
                  "--kind", "rooms", "--width", "15", "--height", "15", "--tour-length", "20",
                  "--profile", "dataset3", "--max-frames", "60", "--no-figures",
                  "--out", str(out)]) == 0  # fmt: skip
     assert "slam" in capsys.readouterr().out
     report = json.loads((out / "report.json").read_text())
-    assert list(report["mappers"]) == ["albot1", "naive", "slam"]
+    assert list(report["mappers"]) == ["albot1", "scan_odometry", "slam"]
     slam = report["mappers"]["slam"]
     assert slam["counts"]["views"] == 60 and slam["rpe"]["relations"] > 0

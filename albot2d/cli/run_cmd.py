@@ -64,8 +64,9 @@ def register(subparsers: Any) -> None:
     )  # fmt: skip
     add_run_options(p)
     p.add_argument("--mapper", nargs="+", action="extend", metavar="NAME",
-                   help="mappers: albot1, naive, truth, slam ([slam] extra) or module:Class "
-                        "(default: albot1 naive truth)")
+                   help="mappers: albot1, naive, truth, slam and scan_odometry ([slam] extra), "
+                        "albot1[KEY=VALUE,...] (keys preset, deletion, min_tracked) or "
+                        "module:Class (default: albot1 naive truth)")
     add_scoring_options(p)
     p.add_argument("--reproduce", metavar="report.json",
                    help="re-run the run recorded in a report (give only --out with it)")

@@ -199,6 +199,10 @@ def counts_section(trace: Trace, mapper: Mapper) -> dict[str, Any]:
         "moves_between_updates_max": None,
         "metres_between_updates_mean": None,
     }
+    slam_stats = getattr(mapper, "slam_stats", None)
+    if callable(slam_stats):
+        # Loop-closing mappers: keyframes, closure candidates accepted/rejected, optimisations.
+        out["loop_closures"] = dict(slam_stats())
     route = route_of(mapper)
     if route is not None and len(route) > 1:
         rows = _map_rows(trace, route)

@@ -2,7 +2,8 @@
 
 Every factory takes no arguments and returns a fresh object that implements the mapper
 protocol. Built-in names: ``albot1``, ``naive``, ``truth`` (simulation only) and
-``slam`` (an optional scan-matching baseline, when its extra is installed).
+``slam`` (loop-closing SLAM) and ``scan_odometry`` (its scan-matching front end alone),
+when the ``[slam]`` extra is installed.
 """
 
 from __future__ import annotations
@@ -35,6 +36,12 @@ def _truth() -> Mapper:
 
 
 def _slam() -> Mapper:
+    from albot2d.mapping.slam import LoopClosingSLAM
+
+    return LoopClosingSLAM()
+
+
+def _scan_odometry() -> Mapper:
     from albot2d.mapping.slam import ScanMatchingSLAM
 
     return ScanMatchingSLAM()
@@ -45,6 +52,7 @@ BUILTIN_MAPPERS: dict[str, Callable[[], Mapper]] = {
     "naive": _naive,
     "truth": _truth,
     "slam": _slam,
+    "scan_odometry": _scan_odometry,
 }
 
 _REQUIRED = ("observe", "pose", "global_map", "trajectory", "counts", "timings_ms")

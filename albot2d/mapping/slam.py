@@ -1,24 +1,27 @@
-"""``ScanMatchingSLAM``: the paper's Albot_x as a scan-matching mapper (optional ``[slam]`` extra).
+"""The paper's Albot_x as SLAM robots (optional ``[slam]`` extra: kiss-icp, gtsam).
 
-Every scan is registered against a local voxel map by KISS-ICP (PRBonn, MIT licence), with
-the odometry increment as the prediction; the view's surfaces are then placed at the
-registered pose and integrated into one map without deletion, like ``NaiveIntegration``
-(same surface extraction, same ``GlobalMap.insert``), so the maps are comparable.
+- ``LoopClosingSLAM`` (``slam``): the scan-matching front end below, keyframes, loop
+  closures found by proximity and verified by registration (``slam_loops``), and a GTSAM
+  pose graph (``slam_graph``); every view is placed by its keyframe's optimised pose.
+- ``ScanMatchingSLAM`` (``scan_odometry``): the front end alone.
+
+Front end (``KissIcpOdometry``): every scan is registered against a local voxel map by
+KISS-ICP (PRBonn, MIT licence), with the odometry increment as the prediction. Both mappers
+keep every view's surfaces (same surface extraction as ``NaiveIntegration``), so the maps
+are comparable.
 
 KISS-ICP is a 3D pipeline. A 2D scan is lifted to 3D by copying its points to a few fixed
 heights (``layer_heights_m``): walls become vertical planes, so roll and pitch are
 constrained, and z stays put because nearest neighbours stay in their own layer. Deskewing
 is off (a scan is one instant here); the registered 4×4 pose is projected back to SE(2)
 after every scan and written back, so the out-of-plane components cannot accumulate.
-Scans with fewer than ``min_points`` hits are placed by odometry alone.
-
-It is scan-to-map odometry: KISS-ICP has no loop closure, so drift is reduced, not
-removed. One registration thread keeps runs bit-for-bit reproducible.
+Scans with fewer than ``min_points`` hits are placed by odometry alone. One registration
+thread keeps runs bit-for-bit reproducible.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -26,13 +29,24 @@ from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.frames import Frame
-from albot2d.geometry import Pose
+from albot2d.geometry import Pose, between_arrays, compose_arrays, transform_points
 from albot2d.mapping.baselines import _ViewIntegrator
-from albot2d.mapping.protocol import MapperCounts
-from albot2d.perception import ExtractionParams
+from albot2d.mapping.global_map import MapSnapshot
+from albot2d.mapping.protocol import MapperCounts, StageTimer
+from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams
+from albot2d.mapping.slam_loops import ClosureCheck, LoopClosureParams, LoopVerifier
+from albot2d.perception import ExtractionParams, extract_surfaces
 from albot2d.validation import check_non_negative, check_positive, check_positive_int
 
-__all__ = ["ScanMatchingParams", "ScanMatchingSLAM"]
+__all__ = [
+    "KissIcpOdometry",
+    "LoopClosingSLAM",
+    "ScanMatchingParams",
+    "ScanMatchingSLAM",
+    "SlamParams",
+    "lift_points",
+    "transform_points_each",
+]
 
 MISSING_EXTRA = "the slam mapper needs the optional extra: pip install 'albot2d[slam]'"
 
@@ -101,31 +115,26 @@ def _planar(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array([matrix[0, 3], matrix[1, 3], np.arctan2(matrix[1, 0], matrix[0, 0])])
 
 
-class ScanMatchingSLAM(_ViewIntegrator):
-    """Albot_x with scan matching: views placed at KISS-ICP poses (odometry as the prior).
+class KissIcpOdometry:
+    """The scan-matching front end: each frame's pose by KISS-ICP, odometry as the prior.
 
-    Counts: ``triangulations`` are the views localised by scan matching (the sensor
-    corrected the odometry), ``path_integrations`` those placed by odometry alone.
+    Poses are in the front end's own frame (the first frame's pose is the identity). The
+    ``slam`` mapper builds its pose graph on these poses; ``scan_odometry`` uses them as is.
     """
 
-    name = "slam"
-
-    def __init__(
-        self,
-        params: ScanMatchingParams | None = None,
-        extraction: ExtractionParams | None = None,
-    ) -> None:
+    def __init__(self, params: ScanMatchingParams, timer: StageTimer) -> None:
         try:
             from kiss_icp.config import KISSConfig
             from kiss_icp.kiss_icp import KissICP
         except ImportError as exc:
             raise InputError(MISSING_EXTRA) from exc
-        super().__init__(extraction)
-        self.params = params or ScanMatchingParams()
+        self.params = params
+        self.timer = timer
         self._icp: Any = KissICP(self._config(KISSConfig()))
-        self._heights = np.asarray(self.params.layer_heights_m, dtype=np.float64)
-        self._matched = 0
-        self._dead_reckoned = 0
+        self._heights = np.asarray(params.layer_heights_m, dtype=np.float64)
+        self.frames = 0
+        self.matched = 0
+        self.dead_reckoned = 0
 
     def _config(self, config: Any) -> Any:
         p = self.params
@@ -142,11 +151,12 @@ class ScanMatchingSLAM(_ViewIntegrator):
         config.adaptive_threshold.min_motion_th = p.min_motion_m
         return config
 
-    def _lift(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
-        n, k = len(points), len(self._heights)
-        return np.column_stack([np.tile(points, (k, 1)), np.repeat(self._heights, n)])
+    def lift(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(N, 2)`` points copied to every layer height: ``(N·layers, 3)``."""
+        return lift_points(points, self._heights)
 
-    def _source_pose(self, frame: Frame) -> Pose:
+    def register(self, frame: Frame) -> NDArray[np.float64]:
+        """The frame's ``(x, y, yaw)`` in the front end's frame."""
         icp = self._icp
         # KISS-ICP predicts last_pose @ last_delta: the odometry increment is the prior.
         delta = _se2_matrix(frame.odom_increment.as_array())
@@ -157,20 +167,284 @@ class ScanMatchingSLAM(_ViewIntegrator):
             had_map = not icp.local_map.empty()
             with self.timer.stage("scan_matching"):
                 icp.last_delta = delta
-                lifted = self._lift(points)
+                lifted = self.lift(points)
                 icp.register_frame(lifted, np.zeros(len(lifted)))
             estimate = _planar(icp.last_pose)
             if np.all(np.isfinite(estimate)):
-                self._matched += had_map  # the first scan only starts the map
+                self.matched += had_map  # the first scan only starts the map
             else:
                 estimate = None
         if estimate is None:
             estimate = predicted
-            self._dead_reckoned += bool(self._poses)
+            self.dead_reckoned += self.frames > 0
         icp.last_pose = _se2_matrix(estimate)
-        return Pose.from_array(estimate)
+        self.frames += 1
+        return estimate
+
+
+def lift_points(points: NDArray[np.float64], heights: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(N, 2)`` points copied to every height in ``heights``: ``(N·len(heights), 3)``."""
+    n, k = len(points), len(heights)
+    return np.column_stack([np.tile(points, (k, 1)), np.repeat(heights, n)])
+
+
+class ScanMatchingSLAM(_ViewIntegrator):
+    """Albot_x's front end alone: views placed at KISS-ICP poses (odometry as the prior).
+
+    Counts: ``triangulations`` are the views localised by scan matching (the sensor
+    corrected the odometry), ``path_integrations`` those placed by odometry alone.
+    """
+
+    name = "scan_odometry"
+
+    def __init__(
+        self,
+        params: ScanMatchingParams | None = None,
+        extraction: ExtractionParams | None = None,
+    ) -> None:
+        super().__init__(extraction)
+        self.params = params or ScanMatchingParams()
+        self.front_end = KissIcpOdometry(self.params, self.timer)
+
+    def _source_pose(self, frame: Frame) -> Pose:
+        return Pose.from_array(self.front_end.register(frame))
 
     def counts(self) -> MapperCounts:
         n = len(self._poses)
-        return MapperCounts(n, n, triangulations=self._matched,
-                            path_integrations=self._dead_reckoned)  # fmt: skip
+        fe = self.front_end
+        return MapperCounts(n, n, triangulations=fe.matched,
+                            path_integrations=fe.dead_reckoned)  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True)
+class SlamParams:
+    """The ``slam`` mapper's settings: front end, loop closures, pose graph, whether wheel
+    odometry joins scan matching between keyframes (``use_wheel_odometry``), and over how
+    many recent keyframes its disagreement with scan matching is measured to floor its
+    sigmas (``wheel_noise_window``; the floor is ``wheel_noise_factor`` × the median
+    disagreement: 4.5 ≈ 3 robust sigmas, as wheel odometry's error is systematic as much
+    as random)."""
+
+    scan_matching: ScanMatchingParams = field(default_factory=ScanMatchingParams)
+    loops: LoopClosureParams = field(default_factory=LoopClosureParams)
+    graph: PoseGraphParams = field(default_factory=PoseGraphParams)
+    use_wheel_odometry: bool = True
+    wheel_noise_window: int = 100
+    wheel_noise_factor: float = 4.5
+
+    def __post_init__(self) -> None:
+        check_positive_int(self, "wheel_noise_window")
+        check_positive(self, "wheel_noise_factor")
+
+
+class LoopClosingSLAM:
+    """Albot_x as a full SLAM robot: KISS-ICP front end, verified loop closures, GTSAM graph.
+
+    Every frame is localised by the front end. A keyframe is taken every
+    ``keyframe_distance_m`` / ``keyframe_angle_deg`` of motion; it is a node of the pose
+    graph, joined to the previous one by the front end's motion, and the place where loop
+    closures are searched for (``albot2d.mapping.slam_loops``). Every other frame hangs off
+    its keyframe by the front end's relative pose, so ``trajectory()`` and
+    ``global_map()`` (every view's surfaces, none deleted) follow the optimised keyframes:
+    the map changes shape when a loop closes.
+
+    Counts: ``local_maps`` are the keyframes, ``triangulations`` the views localised by
+    scan matching, ``path_integrations`` those placed by odometry alone; ``slam_stats()``
+    adds the loop-closure counts.
+    """
+
+    name = "slam"
+
+    def __init__(
+        self,
+        params: SlamParams | None = None,
+        extraction: ExtractionParams | None = None,
+    ) -> None:
+        self.params = params or SlamParams()
+        self.extraction = extraction or ExtractionParams()
+        self.timer = StageTimer()
+        self.graph = PoseGraph(self.params.graph)
+        self.front_end = KissIcpOdometry(self.params.scan_matching, self.timer)
+        self.verifier = LoopVerifier(
+            self.params.loops, np.asarray(self.params.scan_matching.layer_heights_m)
+        )
+        self.checks: list[ClosureCheck] = []
+        self._origin: NDArray[np.float64] | None = None
+        self._last_fe = np.zeros(3)
+        self._path_m = 0.0
+        # per view
+        self._segments: list[NDArray[np.float64]] = []
+        self._view_kf: list[int] = []
+        self._offsets: list[NDArray[np.float64]] = []
+        self._map_cache: tuple[int, int, MapSnapshot] | None = None
+        # per keyframe
+        self._kf_fe: list[NDArray[np.float64]] = []
+        self._kf_points: list[NDArray[np.float64]] = []
+        self._kf_path_m: list[float] = []
+        self._kf_odom: list[NDArray[np.float64]] = []
+        self._wheel_gaps: list[tuple[float, float]] = []
+        self.keyframe_rows: list[int] = []  # the view (0-based, in observed order) of each
+
+    # -- the mapper protocol -------------------------------------------------------------
+    def observe(self, frame: Frame) -> None:
+        with self.timer.stage("extraction"):
+            view = extract_surfaces(frame.scan, self.extraction)
+        raw = self.front_end.register(frame)
+        if self._origin is None:
+            self._origin = raw
+        fe = between_arrays(self._origin, raw)
+        self._path_m += float(np.hypot(*(fe[:2] - self._last_fe[:2])))
+        self._last_fe = fe
+        if self._needs_keyframe(fe):
+            self._add_keyframe(fe, frame.scan.points(), frame.odom_pose.as_array())
+        self._segments.append(view.segments)
+        self._view_kf.append(len(self._kf_fe) - 1)
+        self._offsets.append(between_arrays(self._kf_fe[-1], fe))
+
+    def pose(self) -> Pose:
+        if not self._segments:
+            return Pose()
+        return Pose.from_array(compose_arrays(self.graph.estimate[self._view_kf[-1]],
+                                              self._offsets[-1]))  # fmt: skip
+
+    def trajectory(self) -> NDArray[np.float64]:
+        if not self._segments:
+            return np.zeros((0, 3))
+        return compose_arrays(self.graph.estimate[np.array(self._view_kf)],
+                              np.array(self._offsets))  # fmt: skip
+
+    def global_map(self, at_update: int | None = None) -> MapSnapshot:
+        """Every view's surfaces placed by the current (optimised) poses. ``at_update`` is
+        accepted for the protocol; a SLAM map has no history of deletions."""
+        key = (len(self._segments), self.graph.optimisations)
+        if self._map_cache is not None and self._map_cache[:2] == key:
+            return self._map_cache[2]
+        with self.timer.stage("global_map"):
+            counts = np.array([len(s) for s in self._segments], dtype=np.int64)
+            owner = np.repeat(np.arange(len(counts)), counts)
+            segs = (np.concatenate(self._segments) if len(owner) else np.zeros((0, 4)))
+            poses = self.trajectory()[owner]
+            a = transform_points_each(poses, segs[:, :2])
+            b = transform_points_each(poses, segs[:, 2:])
+            snap = MapSnapshot(np.column_stack([a, b]).reshape(-1, 4), owner + 1)
+        self._map_cache = (*key, snap)
+        return snap
+
+    def counts(self) -> MapperCounts:
+        fe = self.front_end
+        return MapperCounts(len(self._segments), len(self._kf_fe), triangulations=fe.matched,
+                            path_integrations=fe.dead_reckoned)  # fmt: skip
+
+    def timings_ms(self) -> dict[str, float]:
+        return self.timer.mean_ms_per(len(self._segments))
+
+    # -- loop closing ----------------------------------------------------------------------
+    def slam_stats(self) -> dict[str, int]:
+        """Keyframes, loop-closure candidates verified / accepted / rejected, optimisations."""
+        accepted = sum(c.accepted for c in self.checks)
+        return {
+            "keyframes": len(self._kf_fe),
+            "loop_candidates": len(self.checks),
+            "loop_closures_accepted": accepted,
+            "loop_closures_rejected": len(self.checks) - accepted,
+            "optimisations": self.graph.optimisations,
+        }
+
+    def verify_closure(
+        self, i: int, j: int, guess: NDArray[np.float64] | None = None
+    ) -> ClosureCheck:
+        """Register keyframe ``i``'s local map onto keyframe ``j``'s (``guess``: ``i``'s pose
+        in ``j``'s frame to start from; default the current estimate; the correction is
+        always judged against the current estimate). Adds nothing."""
+        n, est = self.params.loops.submap_keyframes, self.graph.estimate
+        if not (0 <= j < len(est) and 0 <= i < len(est) and i != j):
+            raise ValueError(f"keyframes {i}, {j}: need two different ones of {len(est)}")
+        estimate = between_arrays(est[j], est[i])
+        guess = estimate if guess is None else np.asarray(guess, dtype=np.float64)
+        query_ids = range(max(0, i - n + 1), i + 1)
+        lo, hi = max(0, j - n), min(len(est), j + n + 1)
+        target_ids = [k for k in range(lo, hi) if abs(k - i) >= n]
+        query = self._submap(query_ids, i)
+        target = self._submap(target_ids, j)
+        path = abs(self._kf_path_m[i] - self._kf_path_m[j])
+        scan = self._kf_points[i]
+        return self.verifier.check(i, j, query, scan, target, guess, path, estimate)
+
+    def propose_closure(
+        self, i: int, j: int, guess: NDArray[np.float64] | None = None
+    ) -> ClosureCheck:
+        """Verify a candidate; if accepted, add it to the graph and optimise."""
+        with self.timer.stage("loop_closure"):
+            check = self.verify_closure(i, j, guess)
+        self.checks.append(check)
+        if check.accepted:
+            self.graph.add_loop(i, j, check.relative)
+            with self.timer.stage("optimisation"):
+                self.graph.optimise()
+        return check
+
+    def _submap(self, ids: Any, frame_kf: int) -> NDArray[np.float64]:
+        est = self.graph.estimate
+        parts = [transform_points(between_arrays(est[frame_kf], est[k]), self._kf_points[k])
+                 for k in ids]  # fmt: skip
+        return np.concatenate(parts) if parts else np.zeros((0, 2))
+
+    def _needs_keyframe(self, fe: NDArray[np.float64]) -> bool:
+        if not self._kf_fe:
+            return True
+        p = self.params.loops
+        motion = between_arrays(self._kf_fe[-1], fe)
+        return bool(np.hypot(motion[0], motion[1]) >= p.keyframe_distance_m
+                    or abs(motion[2]) >= np.radians(p.keyframe_angle_deg))  # fmt: skip
+
+    def _add_keyframe(
+        self, fe: NDArray[np.float64], points: NDArray[np.float64], odom: NDArray[np.float64]
+    ) -> None:
+        if self._kf_fe:
+            motion = between_arrays(self._kf_fe[-1], fe)
+            wheel = between_arrays(self._kf_odom[-1], odom)
+            # How far wheel odometry strays from scan matching on this robot: a multiple of
+            # the median of their disagreement over the recent keyframes floors the wheel
+            # factor's sigmas, so poor odometry (a real log) is not over-trusted.
+            gap = between_arrays(motion, wheel)
+            self._wheel_gaps.append((float(np.hypot(gap[0], gap[1])), abs(float(gap[2]))))
+            recent = np.array(self._wheel_gaps[-self.params.wheel_noise_window :])
+            floor = self.params.wheel_noise_factor * np.median(recent, axis=0)
+            self.graph.add_keyframe(
+                motion, compose_arrays(self.graph.estimate[-1], motion),
+                wheel if self.params.use_wheel_odometry else None, (floor[0], floor[1]),
+            )  # fmt: skip
+        else:
+            self.graph.add_keyframe(None, fe)
+        self._kf_fe.append(fe)
+        self._kf_odom.append(odom)
+        self._kf_points.append(np.asarray(points, dtype=np.float64))
+        self._kf_path_m.append(self._path_m)
+        self.keyframe_rows.append(len(self._segments))
+        for j in self._candidates(len(self._kf_fe) - 1):
+            self.propose_closure(len(self._kf_fe) - 1, j)
+        with self.timer.stage("optimisation"):
+            self.graph.optimise()  # runs only when due
+
+    def _candidates(self, i: int) -> list[int]:
+        """Older keyframes near keyframe ``i`` under the current estimate, nearest first."""
+        p = self.params.loops
+        if len(self._kf_points[i]) < self.params.scan_matching.min_points or i == 0:
+            return []
+        est = self.graph.estimate
+        path = self._kf_path_m[i] - np.array(self._kf_path_m[:i])
+        radius = np.minimum(p.search_radius_m + p.search_radius_per_m * path,
+                            p.max_search_radius_m)  # fmt: skip
+        dist = np.hypot(*(est[:i, :2] - est[i, :2]).T)
+        ok = (path >= p.min_separation_m) & (dist <= radius)
+        order = np.flatnonzero(ok)[np.argsort(dist[ok], kind="stable")]
+        return [int(j) for j in order[: p.max_candidates]]
+
+
+def transform_points_each(
+    poses: NDArray[np.float64], points: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Point ``k`` mapped from the frame of ``poses[k]`` into its parent frame (``(N, 2)``)."""
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    x, y = points[:, 0], points[:, 1]
+    return np.column_stack([poses[:, 0] + c * x - s * y, poses[:, 1] + s * x + c * y])

@@ -1,0 +1,195 @@
+"""The ``slam`` mapper's back end: a 2D pose graph of keyframes optimised by GTSAM.
+
+Nodes are keyframe poses (``gtsam.Pose2``); the first is anchored by a tight prior.
+Consecutive keyframes are joined by two factors: the scan-matching front end's relative
+motion and the wheel odometry's, each with a sigma growing with the motion. Scan matching
+is the more precise but now and then slips by a few degrees at a turn; under a robust
+kernel such a slip is out-voted by the odometry instead of being believed. A verified loop
+closure adds a between factor under a robust kernel too, so a false closure that slipped
+through verification is down-weighted instead of bending the whole map.
+
+Optimisation is batch Levenberg–Marquardt from the current estimate, run when a closure
+was added and every ``optimise_every`` keyframes (between runs a new keyframe is placed by
+composing the front end's motion onto the latest estimate).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from albot2d.errors import InputError
+from albot2d.validation import check_non_negative, check_positive, check_positive_int
+
+__all__ = ["MISSING_GTSAM", "PoseGraph", "PoseGraphParams"]
+
+KERNELS = ("cauchy", "huber", "none")
+MISSING_GTSAM = "the slam mapper needs the optional extra: pip install 'albot2d[slam]' (gtsam)"
+
+
+@dataclass(frozen=True, slots=True)
+class PoseGraphParams:
+    """Noise models and solver settings of the pose graph.
+
+    - ``odom_sigma_m`` / ``odom_sigma_deg``: sigma of a scan-matching keyframe-to-keyframe
+      factor at zero motion; ``odom_sigma_m_per_m`` / ``odom_sigma_deg_per_m`` add per metre
+      moved; ``odom_kernel`` (``cauchy``, ``huber``, ``none``) its robust kernel and
+      ``odom_kernel_width`` the kernel's width in sigmas.
+    - ``wheel_sigma_m`` / ``wheel_sigma_deg`` (+ ``_per_m``, and ``wheel_sigma_deg_per_rad``
+      per radian turned): the same for the wheel-odometry factor (Gaussian) on a robot
+      with good odometry; the mapper raises them to what it measures (see ``slam.py``).
+    - ``loop_sigma_m`` / ``loop_sigma_deg``: sigma of a verified loop closure.
+    - ``loop_kernel``: robust kernel on closures (``cauchy``, ``huber`` or ``none``) and its
+      width ``loop_kernel_width`` (in sigmas).
+    - ``max_iterations`` / ``relative_error_tol``: Levenberg–Marquardt stopping rules.
+    - ``optimise_every``: keyframes between optimisations when no closure asks for one.
+    """
+
+    odom_sigma_m: float = 0.02
+    odom_sigma_deg: float = 0.1
+    odom_sigma_m_per_m: float = 0.02
+    odom_sigma_deg_per_m: float = 0.2
+    odom_kernel: str = "cauchy"
+    odom_kernel_width: float = 5.0
+    wheel_sigma_m: float = 0.02
+    wheel_sigma_deg: float = 0.3
+    wheel_sigma_m_per_m: float = 0.05
+    wheel_sigma_deg_per_m: float = 0.5
+    wheel_sigma_deg_per_rad: float = 3.0
+    loop_sigma_m: float = 0.05
+    loop_sigma_deg: float = 1.0
+    loop_kernel: str = "cauchy"
+    loop_kernel_width: float = 1.0
+    max_iterations: int = 100
+    relative_error_tol: float = 1e-6
+    optimise_every: int = 10
+
+    def __post_init__(self) -> None:
+        check_positive(self, "odom_sigma_m", "odom_sigma_deg", "loop_sigma_m", "loop_sigma_deg",
+                       "loop_kernel_width", "odom_kernel_width", "relative_error_tol",
+                       "wheel_sigma_m", "wheel_sigma_deg")  # fmt: skip
+        check_non_negative(self, "odom_sigma_m_per_m", "odom_sigma_deg_per_m",
+                           "wheel_sigma_m_per_m", "wheel_sigma_deg_per_m",
+                           "wheel_sigma_deg_per_rad")  # fmt: skip
+        check_positive_int(self, "max_iterations", "optimise_every")
+        for name in ("loop_kernel", "odom_kernel"):
+            if getattr(self, name) not in KERNELS:
+                raise InputError(
+                    f"PoseGraphParams.{name} must be one of {', '.join(KERNELS)}, "
+                    f"got {getattr(self, name)!r}"
+                )
+
+
+class PoseGraph:
+    """Keyframe poses, their factors, and the current optimised estimate (``(K, 3)``)."""
+
+    def __init__(self, params: PoseGraphParams | None = None) -> None:
+        try:
+            import gtsam
+        except ImportError as exc:
+            raise InputError(MISSING_GTSAM) from exc
+        self._gtsam: Any = gtsam
+        self.params = params or PoseGraphParams()
+        self._graph: Any = gtsam.NonlinearFactorGraph()
+        self._estimate = np.zeros((0, 3))
+        self.loops: list[tuple[int, int]] = []
+        self.optimisations = 0
+        self._pending = False
+        self._since = 0
+
+    def __len__(self) -> int:
+        return len(self._estimate)
+
+    @property
+    def estimate(self) -> NDArray[np.float64]:
+        """``(K, 3)`` current keyframe poses (read-only view)."""
+        view = self._estimate.view()
+        view.flags.writeable = False
+        return view
+
+    def _diagonal(self, sigma_m: float, sigma_rad: float) -> Any:
+        return self._gtsam.noiseModel.Diagonal.Sigmas(np.array([sigma_m, sigma_m, sigma_rad]))
+
+    def _robust(self, kernel: str, width: float, noise: Any) -> Any:
+        if kernel == "none":
+            return noise
+        m = self._gtsam.noiseModel.mEstimator
+        estimator = (m.Cauchy if kernel == "cauchy" else m.Huber).Create(width)
+        return self._gtsam.noiseModel.Robust.Create(estimator, noise)
+
+    def add_keyframe(
+        self,
+        motion: NDArray[np.float64] | None,
+        initial: NDArray[np.float64],
+        wheel_motion: NDArray[np.float64] | None = None,
+        wheel_floor: tuple[float, float] = (0.0, 0.0),
+    ) -> int:
+        """Add a keyframe at ``initial``; ``motion``: its pose in the previous keyframe's frame
+        by scan matching, ``wheel_motion`` by wheel odometry (None for the first keyframe,
+        which is anchored there); ``wheel_floor``: lower bounds (m, rad) on the wheel
+        factor's sigmas, e.g. measured on this robot. Returns its index."""
+        g, p = self._gtsam, self.params
+        k = len(self._estimate)
+        if k == 0:
+            prior = self._diagonal(1e-4, 1e-5)
+            self._graph.add(g.PriorFactorPose2(0, g.Pose2(*initial), prior))
+        else:
+            if motion is None:
+                raise ValueError("every keyframe after the first needs its motion")
+            d = float(np.hypot(motion[0], motion[1]))
+            noise = self._diagonal(
+                p.odom_sigma_m + p.odom_sigma_m_per_m * d,
+                np.radians(p.odom_sigma_deg + p.odom_sigma_deg_per_m * d),
+            )
+            noise = self._robust(p.odom_kernel, p.odom_kernel_width, noise)
+            self._graph.add(g.BetweenFactorPose2(k - 1, k, g.Pose2(*motion), noise))
+            if wheel_motion is not None:
+                dw = float(np.hypot(wheel_motion[0], wheel_motion[1]))
+                turn = abs(float(wheel_motion[2]))
+                noise = self._diagonal(
+                    max(p.wheel_sigma_m + p.wheel_sigma_m_per_m * dw, wheel_floor[0]),
+                    max(np.radians(p.wheel_sigma_deg + p.wheel_sigma_deg_per_m * dw
+                                   + p.wheel_sigma_deg_per_rad * turn), wheel_floor[1]),
+                )  # fmt: skip
+                self._graph.add(g.BetweenFactorPose2(k - 1, k, g.Pose2(*wheel_motion), noise))
+                self._since += 1
+                self._pending |= self._since >= p.optimise_every
+        self._estimate = np.vstack([self._estimate, np.asarray(initial, dtype=np.float64)])
+        return k
+
+    def add_loop(self, i: int, j: int, relative: NDArray[np.float64]) -> None:
+        """A verified closure: keyframe ``j`` seen from keyframe ``i`` at ``relative``."""
+        g, p = self._gtsam, self.params
+        noise = self._diagonal(p.loop_sigma_m, np.radians(p.loop_sigma_deg))
+        noise = self._robust(p.loop_kernel, p.loop_kernel_width, noise)
+        self._graph.add(g.BetweenFactorPose2(i, j, g.Pose2(*relative), noise))
+        self.loops.append((i, j))
+        self._pending = True
+
+    def optimise(self) -> bool:
+        """Levenberg–Marquardt from the current estimate if closures were added since the
+        last run, or ``optimise_every`` keyframes with wheel odometry; returns whether it
+        ran."""
+        if not self._pending:
+            return False
+        g, p = self._gtsam, self.params
+        values = g.Values()
+        for k, pose in enumerate(self._estimate):
+            values.insert(k, g.Pose2(*pose))
+        lm = g.LevenbergMarquardtParams()
+        lm.setMaxIterations(p.max_iterations)
+        lm.setRelativeErrorTol(p.relative_error_tol)
+        result = g.LevenbergMarquardtOptimizer(self._graph, values, lm).optimize()
+        out = np.empty_like(self._estimate)
+        for k in range(len(out)):
+            pose = result.atPose2(k)
+            out[k] = (pose.x(), pose.y(), pose.theta())
+        if np.all(np.isfinite(out)):
+            self._estimate = out
+        self.optimisations += 1
+        self._pending = False
+        self._since = 0
+        return True

@@ -1,0 +1,252 @@
+"""Loop closures for the ``slam`` mapper: candidates by proximity, verified by registration.
+
+A candidate pairs the newest keyframe ``i`` with an older keyframe ``j`` that is far back
+along the path (``min_separation_m``) but near under the current estimate (within a
+radius that grows with the path driven since ``j``, the drift one must allow for).
+
+Verification registers the two *local maps*, not single scans: the scans of the last
+``submap_keyframes`` keyframes up to ``i`` (placed in ``i``'s frame by the current estimate)
+against those of the keyframes around ``j`` (placed in ``j``'s frame by the current
+estimate). Registration is KISS-ICP's point-to-map ICP (robust kernel, points lifted to a
+few height layers as in the front end) started from the current estimate of the relative
+pose; keyframe ``i``'s own scan is then registered from that result with a tight gate, so
+the closure is about the keyframe's own pose. The result is accepted only if
+
+- enough of the query points and of the scan's (``min_inlier_ratio``, ``min_inliers``,
+  ``min_scan_inliers``) lie within ``inlier_distance_m`` of a target point, and
+- the correction it makes to the current estimate stays within the drift allowance
+  (``max_correction_m`` + ``max_correction_per_m`` × path since ``j``,
+  ``max_correction_deg``): ICP that slid along a corridor or snapped onto a look-alike
+  room is rejected here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from albot2d.geometry import between_arrays, transform_points, wrap_angle
+from albot2d.validation import (
+    check_in_range,
+    check_non_negative,
+    check_positive,
+    check_positive_int,
+)
+
+__all__ = ["ClosureCheck", "LoopClosureParams", "LoopVerifier", "voxel_downsample_2d"]
+
+
+@dataclass(frozen=True, slots=True)
+class LoopClosureParams:
+    """Keyframing, candidate search and verification thresholds.
+
+    - ``keyframe_distance_m`` / ``keyframe_angle_deg``: a new keyframe after this much motion
+      since the last one (front-end estimate).
+    - ``min_separation_m``: path length (front end) between two keyframes before they may
+      close a loop.
+    - ``search_radius_m`` + ``search_radius_per_m`` × path since the candidate, at most
+      ``max_search_radius_m``: how far apart (current estimate) a candidate may be.
+    - ``max_candidates``: nearest candidates verified per keyframe.
+    - ``submap_keyframes``: keyframes whose scans form a local map (query: the last ones up
+      to ``i``; target: as many on each side of ``j``).
+    - ``voxel_size_m``: voxel size of the registration map and of the query's downsampling.
+    - ``max_correspondence_m`` / ``kernel_m``: ICP correspondence gate and robust kernel.
+    - ``inlier_distance_m``, ``min_inlier_ratio``, ``min_inliers``: the fitness test of the
+      local maps; ``min_scan_inliers``: of keyframe ``i``'s own scan after refinement.
+    - ``max_correction_m`` + ``max_correction_per_m`` × path since ``j``, and
+      ``max_correction_deg``: the largest change to the current relative estimate accepted.
+    """
+
+    keyframe_distance_m: float = 0.5
+    keyframe_angle_deg: float = 10.0
+    min_separation_m: float = 10.0
+    search_radius_m: float = 2.0
+    search_radius_per_m: float = 0.02
+    max_search_radius_m: float = 6.0
+    max_candidates: int = 1
+    submap_keyframes: int = 10
+    voxel_size_m: float = 0.10
+    max_correspondence_m: float = 1.0
+    kernel_m: float = 0.2
+    max_iterations: int = 100
+    inlier_distance_m: float = 0.10
+    min_inlier_ratio: float = 0.60
+    min_inliers: int = 60
+    min_scan_inliers: int = 30
+    max_correction_m: float = 0.5
+    max_correction_per_m: float = 0.01
+    max_correction_deg: float = 5.0
+
+    def __post_init__(self) -> None:
+        check_positive(self, "keyframe_distance_m", "keyframe_angle_deg", "search_radius_m",
+                       "max_search_radius_m", "voxel_size_m", "max_correspondence_m",
+                       "kernel_m", "inlier_distance_m", "max_correction_m",
+                       "max_correction_deg")  # fmt: skip
+        check_non_negative(self, "min_separation_m", "search_radius_per_m",
+                           "max_correction_per_m")  # fmt: skip
+        check_positive_int(self, "max_candidates", "submap_keyframes", "max_iterations",
+                           "min_inliers", "min_scan_inliers")  # fmt: skip
+        check_in_range(self, "min_inlier_ratio", 0.0, 1.0)
+
+
+@dataclass(frozen=True, slots=True)
+class ClosureCheck:
+    """The verdict on one candidate: keyframe ``j`` registered into keyframe ``i``'s frame.
+
+    ``relative`` is ``j``'s pose in ``i``'s frame after registration; ``reason`` is empty
+    when accepted, else says which test failed.
+    """
+
+    i: int
+    j: int
+    relative: NDArray[np.float64]
+    inlier_ratio: float
+    inliers: int
+    correction_m: float
+    correction_deg: float
+    accepted: bool
+    reason: str
+
+
+def voxel_downsample_2d(points: NDArray[np.float64], voxel_m: float) -> NDArray[np.float64]:
+    """One point per ``voxel_m`` grid cell (the first in input order): deterministic."""
+    if len(points) == 0:
+        return points.reshape(0, 2)
+    cells = np.floor(points / voxel_m).astype(np.int64)
+    _, first = np.unique(cells, axis=0, return_index=True)
+    return points[np.sort(first)]
+
+
+def _nearest_distances(
+    query: NDArray[np.float64], target: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Distance from each query point to its nearest target point (chunked brute force)."""
+    out = np.empty(len(query))
+    for start in range(0, len(query), 256):
+        q = query[start : start + 256]
+        d2 = ((q[:, None, :] - target[None, :, :]) ** 2).sum(axis=2)
+        out[start : start + 256] = np.sqrt(d2.min(axis=1))
+    return out
+
+
+def _se2_matrix(pose: NDArray[np.float64]) -> NDArray[np.float64]:
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    out = np.eye(4)
+    out[:2, :2] = [[c, -s], [s, c]]
+    out[:2, 3] = pose[:2]
+    return out
+
+
+class LoopVerifier:
+    """Registers a query local map onto a target local map with KISS-ICP and judges it."""
+
+    def __init__(self, params: LoopClosureParams, heights: NDArray[np.float64]) -> None:
+        from kiss_icp.mapping import VoxelHashMap
+        from kiss_icp.registration import Registration
+
+        self.params = params
+        self._heights = heights
+        self._map_cls: Any = VoxelHashMap
+        self._registration: Any = Registration(
+            max_num_iterations=params.max_iterations, convergence_criterion=1e-4,
+            max_num_threads=1,
+        )  # fmt: skip
+
+    def _lift(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        n, k = len(points), len(self._heights)
+        return np.column_stack([np.tile(points, (k, 1)), np.repeat(self._heights, n)])
+
+    def _align(
+        self, points: NDArray[np.float64], target_map: Any, start: NDArray[np.float64],
+        max_correspondence_m: float, kernel_m: float,
+    ) -> NDArray[np.float64]:  # fmt: skip
+        matrix = self._registration.align_points_to_map(
+            points=self._lift(points), voxel_map=target_map, initial_guess=_se2_matrix(start),
+            max_correspondance_distance=max_correspondence_m, kernel=kernel_m,
+        )  # fmt: skip
+        return np.array([matrix[0, 3], matrix[1, 3], np.arctan2(matrix[1, 0], matrix[0, 0])])
+
+    def _fitness(
+        self, pose: NDArray[np.float64], points: NDArray[np.float64], target: NDArray[np.float64]
+    ) -> tuple[int, float]:
+        distances = _nearest_distances(transform_points(pose, points), target)
+        inliers = int(np.count_nonzero(distances <= self.params.inlier_distance_m))
+        return inliers, inliers / max(len(points), 1)
+
+    def check(
+        self,
+        i: int,
+        j: int,
+        query: NDArray[np.float64],
+        scan: NDArray[np.float64],
+        target: NDArray[np.float64],
+        guess: NDArray[np.float64],
+        path_m: float,
+        estimate: NDArray[np.float64] | None = None,
+    ) -> ClosureCheck:
+        """Verify a candidate. ``query``: the local map of ``i`` in ``i``'s frame; ``scan``:
+        keyframe ``i``'s own scan; ``target``: the local map of ``j`` in ``j``'s frame;
+        ``guess``: ``i``'s pose in ``j``'s frame to start ICP from; ``estimate``: the same
+        pose under the current map estimate, against which the correction is judged
+        (default ``guess``); ``path_m``: path driven from ``j`` to ``i`` (sets the drift
+        allowance).
+
+        The local maps are registered first (a wide basin, many points); keyframe ``i``'s
+        own scan is then registered from there with a tight gate, so the closure constrains
+        the keyframe's own pose even if its neighbours' estimates disagree with it."""
+        estimate = guess if estimate is None else estimate
+        p = self.params
+        query = voxel_downsample_2d(query, p.voxel_size_m)
+        scan = voxel_downsample_2d(scan, p.voxel_size_m)
+        target = voxel_downsample_2d(target, p.voxel_size_m / 2)
+        if len(query) < p.min_inliers or len(target) < p.min_inliers:
+            return self._verdict(i, j, guess, estimate, 0.0, 0, path_m, "too few points")
+        voxel_map = self._map_cls(voxel_size=p.voxel_size_m * 2, max_distance=1e6,
+                                  max_points_per_voxel=20)  # fmt: skip
+        voxel_map.add_points(self._lift(target))
+        pose = self._align(query, voxel_map, guess, p.max_correspondence_m, p.kernel_m)
+        if not np.all(np.isfinite(pose)):
+            return self._verdict(i, j, guess, estimate, 0.0, 0, path_m, "registration failed")
+        inliers, ratio = self._fitness(pose, query, target)
+        if inliers < p.min_inliers or ratio < p.min_inlier_ratio:
+            reason = f"fitness: inlier ratio {ratio:.2f}, {inliers} inliers"
+            return self._verdict(i, j, pose, estimate, ratio, inliers, path_m, reason)
+        gate = 3 * p.inlier_distance_m
+        refined = self._align(scan, voxel_map, pose, gate, p.inlier_distance_m)
+        if not np.all(np.isfinite(refined)):
+            return self._verdict(i, j, pose, estimate, ratio, inliers, path_m,
+                                 "scan registration failed")  # fmt: skip
+        scan_inliers, scan_ratio = self._fitness(refined, scan, target)
+        reason = ""
+        if scan_inliers < p.min_scan_inliers or scan_ratio < p.min_inlier_ratio:
+            reason = f"scan fitness: inlier ratio {scan_ratio:.2f}, {scan_inliers} inliers"
+        return self._verdict(i, j, refined, estimate, ratio, inliers, path_m, reason)
+
+    def _verdict(
+        self,
+        i: int,
+        j: int,
+        pose: NDArray[np.float64],
+        estimate: NDArray[np.float64],
+        ratio: float,
+        inliers: int,
+        path_m: float,
+        reason: str,
+    ) -> ClosureCheck:
+        p = self.params
+        change = between_arrays(estimate, pose)
+        correction_m = float(np.hypot(change[0], change[1]))
+        correction_deg = float(np.degrees(abs(wrap_angle(change[2]))))
+        allowed_m = p.max_correction_m + p.max_correction_per_m * path_m
+        if not reason and (correction_m > allowed_m or correction_deg > p.max_correction_deg):
+            reason = (
+                f"correction {correction_m:.2f} m / {correction_deg:.1f}° beyond the "
+                f"drift allowance {allowed_m:.2f} m / {p.max_correction_deg:.1f}°"
+            )
+        # relative: keyframe j seen from keyframe i (the between factor i → j)
+        relative = between_arrays(pose, np.zeros(3))
+        return ClosureCheck(i, j, relative, ratio, inliers, correction_m, correction_deg,
+                            not reason, reason)  # fmt: skip
