@@ -14,7 +14,14 @@ from hypothesis import strategies as st
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
-from albot2d.sim.driving import PROFILES, DrivingProfile, Step, TourController, get_profile
+from albot2d.sim.driving import (
+    PROFILES,
+    DrivingProfile,
+    Step,
+    TourController,
+    get_profile,
+    merge_straight,
+)
 from albot2d.sim.robot import KinematicRobot
 
 SIZE = 40.0
@@ -48,7 +55,7 @@ waypoint_lists = st.lists(
 )
 
 
-@pytest.mark.parametrize("name", ["dataset1", "dataset3", "start_stop"])
+@pytest.mark.parametrize("name", ["dataset1", "dataset3", "start_stop", "start_stop_v1"])
 @given(points=waypoint_lists, heading=st.floats(-math.pi, math.pi))
 def test_steps_respect_profile_limits_and_reach_every_waypoint(
     name: str, points: list, heading: float
@@ -63,9 +70,11 @@ def test_steps_respect_profile_limits_and_reach_every_waypoint(
     assert all(0.0 < m <= profile.move_step_m * (1 + 1e-9) for m in moves)
     assert robot.pose.distance_to(Pose(*wp[-1])) <= profile.waypoint_tolerance_m
     assert all(s.view for s in steps if s.kind == "move")
-    assert all(s.view == profile.view_after_turn for s in steps if s.kind == "turn")
-    # Each leg is driven in the fewest equal steps: ceil(length / move_step).
-    legs = np.hypot(*np.diff(wp, axis=0).T)
+    min_view = math.radians(profile.turn_view_min_deg)
+    assert all(s.view == (profile.view_after_turn and abs(s.amount) >= min_view)
+               for s in steps if s.kind == "turn")
+    # Each (merged) leg is driven in the fewest equal steps: ceil(length / move_step).
+    legs = np.hypot(*np.diff(merge_straight(wp, profile.merge_offset_m), axis=0).T)
     legs = legs[legs > profile.waypoint_tolerance_m]
     expected = sum(math.ceil(length / profile.move_step_m - 1e-9) for length in legs)
     assert len(moves) == expected
@@ -87,7 +96,55 @@ def test_start_stop_moves_are_about_three_metres() -> None:
     moves = np.array([s.amount for s in steps if s.kind == "move"])
     assert moves.max() <= 3.0 + 1e-9
     assert 2.5 <= moves.mean() <= 3.0
-    assert len([s for s in steps if s.kind == "turn"]) == 2  # one turn per corner
+    # each 90° corner is two 45° turn instructions, each followed by a view
+    turns = [s for s in steps if s.kind == "turn"]
+    assert [s.amount for s in turns] == pytest.approx([math.radians(45.0)] * 4)
+    assert all(s.view for s in steps)
+
+
+def test_start_stop_drives_through_collinear_roadmap_legs() -> None:
+    # a 12 m straight made of 1.5 m roadmap legs with 1 cm wiggles: four 3 m moves
+    xs = np.arange(2.0, 14.01, 1.5)
+    ys = 5.0 + 0.01 * (np.arange(len(xs)) % 2)
+    wp = np.column_stack([xs, ys])
+    steps, robot = drive(wp, "start_stop", Pose(2.0, 5.0, 0.0))
+    moves = [s.amount for s in steps if s.kind == "move"]
+    assert moves == pytest.approx([3.0] * 4, abs=1e-3)
+    assert all(s.view for s in steps if s.kind == "move")
+    assert robot.pose.distance_to(Pose(14.0, 5.0)) < 1e-6
+    # the earlier reading stops at every roadmap waypoint
+    old, _ = drive(wp, "start_stop_v1", Pose(2.0, 5.0, 0.0))
+    assert len([s for s in old if s.kind == "move"]) == 8
+
+
+def test_start_stop_u_turn_is_three_sixty_degree_steps_with_views() -> None:
+    wp = np.array([[5.0, 5.0], [8.0, 5.0], [5.0, 5.0]])
+    steps, robot = drive(wp, "start_stop", Pose(5.0, 5.0, 0.0))
+    turns = [s for s in steps if s.kind == "turn"]
+    assert len(turns) == 3
+    assert [abs(s.amount) for s in turns] == pytest.approx([math.radians(60.0)] * 3)
+    assert all(s.view for s in turns)
+    assert robot.pose.distance_to(Pose(5.0, 5.0)) < 1e-6
+    # the turn-back apex is never merged away, whatever the tolerance
+    assert len(merge_straight(wp, 1.0)) == 3
+    v1 = [s for s in drive(wp, "start_stop_v1", Pose(5.0, 5.0, 0.0))[0] if s.kind == "turn"]
+    assert len(v1) == 1 and not v1[0].view
+
+
+def test_small_turns_get_no_view_of_their_own() -> None:
+    wp = np.array([[5.0, 5.0], [8.0, 5.0], [11.0, 5.5]])  # a 9.5° bend
+    steps, _ = drive(wp, "start_stop", Pose(5.0, 5.0, 0.0))
+    turns = [s for s in steps if s.kind == "turn"]
+    assert len(turns) == 1 and math.degrees(abs(turns[0].amount)) < 10.0
+    assert not turns[0].view
+
+
+def test_merge_straight_bounds_the_offset() -> None:
+    wp = np.array([[0.0, 0.0], [1.0, 0.04], [2.0, 0.0], [3.0, 0.2], [4.0, 0.0]])
+    assert merge_straight(wp, 0.0) is wp
+    kept = merge_straight(wp, 0.05)
+    assert kept.tolist() == [[0.0, 0.0], [2.0, 0.0], [3.0, 0.2], [4.0, 0.0]]
+    assert merge_straight(wp, 0.3).tolist() == [[0.0, 0.0], [4.0, 0.0]]
 
 
 def test_blocked_waypoint_is_given_up_after_max_blocked_steps() -> None:
@@ -115,7 +172,8 @@ def test_step_duration_uses_nominal_speeds() -> None:
 
 
 def test_unknown_profile_lists_valid_names() -> None:
-    with pytest.raises(InputError, match="valid: dataset1, dataset2, dataset3, start_stop"):
+    with pytest.raises(InputError,
+                       match="valid: dataset1, dataset2, dataset3, start_stop, start_stop_v1"):
         get_profile("dataset4")
     assert get_profile(PROFILES["dataset3"]) is PROFILES["dataset3"]
 
@@ -124,7 +182,7 @@ def test_unknown_profile_lists_valid_names() -> None:
     ("field", "value"),
     [("move_step_m", 0.0), ("turn_step_deg", -1.0), ("speed_m_s", math.nan),
      ("max_blocked_steps", 0), ("view_after_turn", "yes"), ("stop_pause_s", -1.0),
-     ("induced_along_motion", 1)],
+     ("induced_along_motion", 1), ("turn_view_min_deg", -1.0), ("merge_offset_m", math.inf)],
 )
 def test_profile_validated(field: str, value: object) -> None:
     with pytest.raises(InputError, match=field):

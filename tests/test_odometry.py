@@ -157,3 +157,29 @@ def test_turn_scale_error_scales_every_turn() -> None:
     assert (straight.x, straight.y, straight.theta) == (1.0, 0.0, 0.0)
     with pytest.raises(InputError, match="turn_scale_error"):
         OdometryNoise(turn_scale_error=-1.5)
+
+
+def test_pioneer3dx_preset_is_documented_and_between_low_and_typical():
+    import albot2d.sim.odometry as odometry
+
+    p3 = noise_preset("pioneer3dx")
+    low, typical = noise_preset("low"), noise_preset("typical")
+    assert p3.is_random and p3.is_biased
+    assert low.alpha1 <= p3.alpha1 <= typical.alpha1
+    assert 0.0 < p3.turn_scale_error < typical.turn_scale_error
+    # the sources are named beside the numbers
+    with open(odometry.__file__, encoding="utf-8") as f:
+        source = f.read()
+    assert "Borenstein & Feng" in source and "Pioneer 3 Operations Manual" in source
+
+
+def test_pioneer3dx_quarter_turn_error_is_about_one_percent():
+    # 1000 simulated 90° turns: mean error 1 % (turn scale), spread 1 % (alpha1)
+    rng = np.random.default_rng(0)
+    p3 = noise_preset("pioneer3dx")
+    quarter = math.pi / 2
+    reported = np.array([perturb_increment(Pose(0.0, 0.0, quarter), p3, rng).theta
+                         for _ in range(1000)])
+    err = np.degrees(reported - quarter)
+    assert np.mean(err) == pytest.approx(0.9, abs=0.15)
+    assert np.std(err) == pytest.approx(0.9, abs=0.15)

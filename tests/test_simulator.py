@@ -125,8 +125,21 @@ def test_dataset3_views_are_at_most_1m_or_10deg_apart() -> None:
     assert len(frames) == 1 + 28 + 3 * 9
 
 
-def test_start_stop_views_about_3m_apart_with_turns_merged() -> None:
+def test_start_stop_views_after_every_move_and_turn_instruction() -> None:
     frames = drive("start_stop")
+    moved = np.array([prev.true_pose.distance_to(f.true_pose)
+                      for prev, f in itertools.pairwise(frames)])
+    turned = np.degrees([abs(prev.true_pose.between(f.true_pose).theta)
+                         for prev, f in itertools.pairwise(frames)])
+    is_move = moved > 1e-9
+    assert (turned[~is_move] > 10.0).all() and (turned <= 60.0 + 1e-6).all()
+    assert (~is_move).any()  # the corners are turn-only views
+    assert moved.max() <= 3.0 + 1e-9 and moved[is_move].mean() > 2.0
+    assert (np.diff([f.timestamp for f in frames]) > 1.0).all()
+
+
+def test_start_stop_v1_views_about_3m_apart_with_turns_merged() -> None:
+    frames = drive("start_stop_v1")
     steps = [prev.true_pose.distance_to(f.true_pose)
              for prev, f in itertools.pairwise(frames)]
     assert max(steps) <= 3.0 + 1e-9 and np.mean(steps) > 2.0

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import shapely
@@ -9,8 +11,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from albot2d.errors import InputError
-from albot2d.seeding import make_rng
-from worldgen import TOUR_KINDS, generate, make_world
+from albot2d.seeding import make_rng, spawn_rngs
+from worldgen import TOUR_KINDS, generate, make_tour, make_world, plan_tour
 from worldgen.strategies import worlds
 
 
@@ -41,7 +43,7 @@ def test_every_tour_leg_is_collision_free(world, kind, length, seed):
     assert len(tour.waypoints) >= 2
     assert (np.hypot(*np.diff(tour.waypoints, axis=0).T) > 0).all()  # no zero-length legs
     assert_legs_safe(world, tour)
-    if kind in ("loop", "out_and_back"):
+    if kind in ("loop", "out_and_back", "circuit"):
         assert np.array_equal(tour.waypoints[-1], tour.waypoints[0])
     if kind == "out_and_back":
         assert tour.node_ids == tour.node_ids[::-1]  # back exactly the way it came
@@ -91,3 +93,63 @@ def test_tour_errors():
     tiny = make_world(shapely.box(0, 0, 1.0, 1.0))  # room for one node only
     with pytest.raises(InputError, match="roadmap too small for a tour: 1 nodes"):
         tiny.tour(make_rng(0))
+
+
+def dead_end_visits(tour, graph) -> int:
+    """Times the tour enters a node off the roadmap's cycles and later comes back."""
+    import networkx as nx
+
+    core = set(nx.k_core(graph, 2).nodes)
+    return sum(1 for v in tour.node_ids if v not in core)
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_circuit_follows_the_corridors_without_stubs(seed):
+    world = generate("office", seed=seed)
+    loop = plan_tour(world, kind="loop", length_m=100.0)
+    circuit = plan_tour(world, kind="circuit", length_m=100.0)
+    assert circuit.kind == "circuit" and circuit.length_m >= 100.0
+    assert np.array_equal(circuit.waypoints[-1], circuit.waypoints[0])
+    assert_legs_safe(world, circuit)
+    # Only the way from the start to the nearest cycle (and back) leaves the cycles,
+    # and no U-turn happens anywhere else.
+    graph = world.roadmap.graph
+    assert dead_end_visits(circuit, graph) < dead_end_visits(loop, graph)
+    assert reversals(circuit.waypoints) < reversals(loop.waypoints)
+    assert reversals(circuit.waypoints) <= 1
+
+
+def test_circuit_on_a_tree_roadmap_is_an_out_and_back():
+    from worldgen.world import Roadmap
+
+    world = generate("office", seed=0)
+    nodes = np.array([[world.start.x, world.start.y],
+                      [world.start.x + 1.0, world.start.y], [world.start.x + 2.0, world.start.y]])
+    tree = dataclasses.replace(world, roadmap=Roadmap(nodes, np.array([[0, 1], [1, 2]])))
+    tour = make_tour(tree, 0, kind="circuit", min_length_m=4.0)
+    assert tour.length_m >= 4.0
+    assert tour.node_ids[: 5] == (0, 1, 2, 1, 0)
+
+
+@pytest.mark.parametrize("kind", TOUR_KINDS)
+def test_zero_length_edge_at_the_start_is_refused(kind):
+    from worldgen.world import Roadmap
+
+    world = generate("office", seed=0)
+    s = [world.start.x, world.start.y]
+    far = [[world.start.x + 5.0, world.start.y + 5.0], [world.start.x + 9.0, world.start.y + 5.0]]
+    # the start's only edge has length 0; the rest of the roadmap is cut off from it
+    roadmap = Roadmap(np.array([s, s, *far]), np.array([[0, 1], [2, 3]]))
+    broken = dataclasses.replace(world, roadmap=roadmap)
+    with pytest.raises(InputError, match=r"reaches only 0\.00 m"):
+        make_tour(broken, 0, kind=kind, min_length_m=50.0)
+
+
+def test_plan_tour_is_the_cli_tour_and_int_seeds_work():
+    world = generate("rooms", seed=3, width_m=25.0, height_m=20.0)
+    cli = world.tour(spawn_rngs(3, 2)[1], kind="loop", min_length_m=60.0)
+    public = plan_tour(world, kind="loop", length_m=60.0)
+    assert np.array_equal(public.waypoints, cli.waypoints)
+    assert np.array_equal(plan_tour(world, length_m=60.0, seed=3).waypoints, cli.waypoints)
+    by_int = world.tour(1, kind="loop", min_length_m=60.0)
+    assert np.array_equal(by_int.waypoints, world.tour(make_rng(1), min_length_m=60.0).waypoints)

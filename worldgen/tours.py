@@ -7,6 +7,24 @@
   same way.
 - ``backtracking``: short trips that often turn back and revisit earlier places (like the
   Howard & Roy data set's robot), ending wherever the length is reached.
+- ``circuit``: like ``loop`` but along the corridors only, for the paper's start–stop
+  experiments: its places lie on the cycles (the 2-core) of the roadmap without its room
+  nodes (``worldgen.regions``; the whole roadmap's cycles if that leaves none, e.g. in a
+  world of rooms), so it never wanders round the furniture of a room, and no leg runs
+  into a dead end (a room behind a doorway, a corridor stub) just to come back out; each leg to
+  the next place avoids the way it arrived (no U-turn at a place) and prefers corridors
+  not yet driven. The only dead-end stretch is the way from a start off the cycles to the
+  nearest cycle and back at the end. A roadmap without cycles (a tree) has no circuit:
+  the tour is then an out-and-back. The roadmap's small jogs (its nodes follow the
+  medial axis, which shifts sideways at doorways and junctions) are straightened: a run
+  of waypoints becomes one leg when none of them is more than ``_STRAIGHTEN_OFFSET_M``
+  off it and the leg keeps ``_STRAIGHTEN_CLEARANCE_M`` more than the robot's radius from
+  every obstacle, so the robot drives along a corridor as a person would, turning only
+  at its corners.
+
+``plan_tour(world, kind=..., length_m=..., seed=...)`` is the tour the command line plans
+(``albot2d world/simulate/run``): the world's seed (or ``seed``) spawns two streams and
+the second plans the tour, so the tour never shifts the world's random numbers.
 
 Every leg is a roadmap edge, so every leg is collision-free for the robot's disc. When the
 places run out before ``min_length_m`` the tour is repeated (loops and out-and-backs both
@@ -15,21 +33,26 @@ end where they started, so repeating them is still a valid tour).
 
 from __future__ import annotations
 
+import functools
+import itertools
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import networkx as nx
 import numpy as np
+import shapely
 
 from albot2d.errors import InputError
+from albot2d.seeding import SeedLike, make_rng, spawn_rngs
 from worldgen.world import Tour
 
 if TYPE_CHECKING:
     from worldgen.world import World
 
-__all__ = ["TOUR_KINDS", "make_tour"]
+__all__ = ["TOUR_KINDS", "make_tour", "plan_tour"]
 
-TOUR_KINDS = ("loop", "out_and_back", "backtracking")
+TOUR_KINDS = ("loop", "out_and_back", "backtracking", "circuit")
 _MIN_ROADMAP_M = 2.0  # less roadmap than this cannot make a tour
 _PLACE_MIN_M = 3.0  # a new place is at least this far (along the roadmap) from the route
 _FAR_CHOICES = 5  # pick among this many farthest places, for variety
@@ -41,6 +64,12 @@ _LOOP_PLACES = 6  # far-apart places a loop passes through
 _LOOP_RADIUS_FRACTION = 0.5  # loop places lie within this fraction of the length (by road)
 _LOOP_RADIUS_MIN_M = 10.0
 _OUT_BAND = 1.3  # out-and-back turns round between half the length and this much more
+_REUSE_PENALTY = 4.0  # circuit: an edge already driven costs this many times more
+_MAX_PLAN_STEPS = 100_000  # backtracking: planning steps before giving up (never reached
+# on a roadmap that can make a tour; bounds the planning of one that cannot)
+_STRAIGHTEN_OFFSET_M = 0.5  # circuit: a skipped waypoint lies at most this far off a leg
+_STRAIGHTEN_CLEARANCE_M = 0.25  # circuit: straightened legs keep radius + this from walls
+_TOUR_STREAM = 1  # plan_tour: child of the seed that plans the tour (as the CLI does)
 
 
 def _walk_length(nodes: np.ndarray, walk: list[int]) -> float:
@@ -159,7 +188,15 @@ def _backtracking(
 ) -> list[int]:
     walk = [s]
     places = [s]
+    steps = 0
     while _walk_length(nodes, walk) < min_length_m or len(walk) == 1:
+        steps += 1
+        if steps > _MAX_PLAN_STEPS:
+            raise InputError(
+                f"backtracking tour: no {min_length_m:g} m tour after {_MAX_PLAN_STEPS} "
+                f"planning steps ({_walk_length(nodes, walk):.2f} m so far); the roadmap "
+                "around the start is too small"
+            )
         here = walk[-1]
         earlier = [v for v in places if v != here]
         if earlier and rng.random() < _BACK_P:
@@ -187,14 +224,146 @@ def _backtracking(
     return walk
 
 
+def _straightener(world: World) -> Callable[[list[int]], list[int]]:
+    """``walk -> walk`` without the waypoints a safe straight leg can skip (see above)."""
+    nodes = world.roadmap.nodes
+    safe = shapely.buffer(world.free_space, -(world.robot_radius_m + _STRAIGHTEN_CLEARANCE_M))
+    shapely.prepare(safe)
+
+    def ok(a: int, b: int, skipped: list[int]) -> bool:
+        pa, pb = nodes[a], nodes[b]
+        ab = pb - pa
+        denom = float(ab @ ab)
+        pts = nodes[skipped]
+        t = np.zeros(len(pts)) if denom == 0.0 else np.clip((pts - pa) @ ab / denom, 0.0, 1.0)
+        if np.hypot(*(pts - (pa + t[:, None] * ab)).T).max() > _STRAIGHTEN_OFFSET_M:
+            return False
+        return bool(safe.covers(shapely.LineString([pa, pb])))
+
+    def straighten(walk: list[int]) -> list[int]:
+        if len(walk) <= 2:
+            return walk
+        kept = [walk[0]]
+        anchor = 0
+        j = 1
+        while j < len(walk) - 1:
+            if ok(walk[anchor], walk[j + 1], walk[anchor + 1 : j + 1]):
+                j += 1
+                continue
+            kept.append(walk[j])
+            anchor = j
+            j += 1
+        kept.append(walk[-1])
+        return kept
+
+    return straighten
+
+
+def _circuit(
+    graph: nx.Graph, nodes: np.ndarray, s: int, rng: np.random.Generator, min_length_m: float,
+    straighten: Callable[[list[int]], list[int]] = lambda walk: walk,
+    rooms: frozenset[int] = frozenset(),
+) -> list[int]:
+    """A loop through far-apart places on the roadmap's cycles; see the module docstring."""
+    core_nodes = set(nx.k_core(graph.subgraph(set(graph) - rooms), 2).nodes)
+    if not core_nodes:
+        core_nodes = set(nx.k_core(graph, 2).nodes)
+    if not core_nodes:
+        return _out_and_back(graph, nodes, s, rng, min_length_m)
+    dist, paths = nx.single_source_dijkstra(graph, s, weight="weight")
+    reachable_core = sorted(v for v in core_nodes if v in dist)
+    if not reachable_core:
+        return _out_and_back(graph, nodes, s, rng, min_length_m)
+    entry = min(reachable_core, key=lambda v: (dist[v], v))
+    way_in = [int(v) for v in paths[entry]]
+    core = nx.Graph(graph.subgraph(nx.node_connected_component(
+        graph.subgraph(core_nodes), entry)))
+    core_dist = nx.single_source_dijkstra_path_length(core, entry, weight="weight")
+    ids = np.array(sorted(core_dist), dtype=np.int64)
+    reach = np.array([core_dist[v] for v in ids])
+    radius = max(_LOOP_RADIUS_FRACTION * min_length_m, _LOOP_RADIUS_MIN_M)
+    candidates = ids[reach <= radius]
+    places = _spread_places(nodes, candidates, entry, _LOOP_PLACES, rng)
+    lap = [entry]
+    if places:
+        centre = nodes[candidates].mean(axis=0)
+        rel = nodes[places] - centre
+        angle = np.arctan2(rel[:, 1], rel[:, 0])
+        start_angle = np.arctan2(*(nodes[entry] - centre)[::-1])
+        turn = 1.0 if rng.random() < 0.5 else -1.0
+        ahead = np.mod(turn * (angle - start_angle), 2.0 * np.pi)
+        order = [int(v) for v in np.asarray(places)[np.argsort(ahead, kind="stable")]]
+        for place in [*order, entry]:
+            if place != lap[-1]:
+                lap += _onward_path(core, lap, place)[1:]
+    if len(lap) < 2:  # no place apart from the entry: go round the nearest cycle
+        lap = _nearest_cycle(core, entry)
+    lap = straighten(lap)
+    way_in = straighten(way_in)
+    walk = _repeat_until(nodes, lap, max(min_length_m - 2.0 * _walk_length(nodes, way_in), 0))
+    return way_in[:-1] + walk + way_in[-2::-1]
+
+
+def _onward_path(core: nx.Graph, walk: list[int], target: int) -> list[int]:
+    """Shortest path from ``walk[-1]`` to ``target`` that does not leave the way it came
+    (no U-turn) and avoids edges already driven where it can."""
+    here = walk[-1]
+    used = set(itertools.pairwise(walk))
+    used |= {(b, a) for a, b in used}
+
+    def cost(a: int, b: int, data: dict) -> float | None:
+        if len(walk) > 1 and a == here and b == walk[-2]:
+            return None  # hidden edge: no turning back along the way in
+        w = float(data["weight"])
+        return w * (1.0 + _REUSE_PENALTY) if (a, b) in used else w
+
+    try:
+        return [int(v) for v in nx.shortest_path(core, here, target, weight=cost)]
+    except nx.NetworkXNoPath:
+        return _path(core, here, target)
+
+
+def _nearest_cycle(core: nx.Graph, entry: int) -> list[int]:
+    """A closed walk round the shortest cycle through ``entry`` (the core has one)."""
+    best: list[int] | None = None
+    for nb in sorted(core.neighbors(entry)):
+        g = core.copy()
+        g.remove_edge(entry, nb)
+        try:
+            back = [int(v) for v in nx.shortest_path(g, nb, entry, weight="weight")]
+        except nx.NetworkXNoPath:
+            continue
+        cycle = [entry, *back]
+        if best is None or len(cycle) < len(best):
+            best = cycle
+    return best if best is not None else [entry]
+
+
+def _room_nodes(world: World) -> frozenset[int]:
+    from worldgen.regions import region_kind_at
+
+    labels = region_kind_at(world, world.roadmap.nodes)
+    return frozenset(int(i) for i in np.flatnonzero(labels == "room"))
+
+
+def _component_length_m(graph: nx.Graph, s: int) -> float:
+    """Total length of the roadmap edges reachable from node ``s``."""
+    return float(graph.subgraph(nx.node_connected_component(graph, s)).size(weight="weight"))
+
+
 def make_tour(
     world: World,
-    rng: np.random.Generator,
+    rng: np.random.Generator | SeedLike,
     *,
     kind: str = "loop",
     min_length_m: float = 50.0,
 ) -> Tour:
-    """A tour of ``kind`` (see the module docstring) at least ``min_length_m`` long."""
+    """A tour of ``kind`` (see the module docstring) at least ``min_length_m`` long.
+
+    ``rng`` is a Generator (used as it is) or an int seed / SeedSequence (``make_rng``).
+    The CLI's tour for a world is ``plan_tour``, not ``make_tour(world, seed)``.
+    """
+    rng = make_rng(rng)
     if kind not in TOUR_KINDS:
         raise InputError(f"unknown tour kind {kind!r}; valid kinds: {', '.join(TOUR_KINDS)}")
     if not (isinstance(min_length_m, int | float) and 0.0 <= min_length_m <= _MAX_TOUR_M):
@@ -212,10 +381,47 @@ def make_tour(
     s = roadmap.nearest_node(start_xy)
     if graph.degree(s) == 0:
         raise InputError(f"start node {s} has no roadmap edges; no tour can leave it")
-    builders = {"loop": _loop, "out_and_back": _out_and_back, "backtracking": _backtracking}
+    reachable = _component_length_m(graph, s)
+    if reachable < _MIN_ROADMAP_M:
+        raise InputError(
+            f"roadmap too small for a tour: the start node {s} reaches only {reachable:.2f} m "
+            f"of roadmap edges (need at least {_MIN_ROADMAP_M} m; zero-length edges or a "
+            "roadmap cut off from the start)"
+        )
+    builders = {"loop": _loop, "out_and_back": _out_and_back, "backtracking": _backtracking,
+                "circuit": functools.partial(_circuit, straighten=_straightener(world),
+                                             rooms=_room_nodes(world))}
     walk = builders[kind](graph, nodes, s, rng, float(min_length_m))
     walk = [v for k, v in enumerate(walk) if k == 0 or v != walk[k - 1]]
     waypoints = nodes[walk]
     if not np.array_equal(waypoints[0], start_xy):
         waypoints = np.vstack([start_xy, waypoints])
-    return Tour(waypoints=waypoints, kind=kind, node_ids=tuple(walk))
+    # Zero-length legs (coincident roadmap nodes) are dropped: they would be no motion.
+    keep = np.r_[True, np.hypot(*np.diff(waypoints, axis=0).T) > 0.0]
+    if not keep.all():
+        offset = len(waypoints) - len(walk)  # 1 when the start was put in front
+        walk = [v for v, k in zip(walk, keep[offset:], strict=True) if k]
+        waypoints = waypoints[keep]
+    tour = Tour(waypoints=waypoints, kind=kind, node_ids=tuple(walk))
+    if tour.length_m <= 0.0:
+        raise InputError(f"{kind} tour from the start has length 0 m: the roadmap near "
+                         f"the start has no edge of positive length")
+    return tour
+
+
+def plan_tour(
+    world: World,
+    kind: str = "loop",
+    length_m: float = 100.0,
+    seed: SeedLike | None = None,
+) -> Tour:
+    """The tour the command line plans for ``world``: ``kind``, at least ``length_m`` long.
+
+    ``seed`` defaults to the world's seed (0 if it has none); child ``_TOUR_STREAM`` of
+    ``spawn_rngs(seed, 2)`` plans it, as ``albot2d world``, ``simulate`` and ``run`` do, so
+    ``plan_tour(world)`` is the tour those commands drive on that world.
+    """
+    if seed is None:
+        seed = world.seed or 0
+    rng = spawn_rngs(seed, _TOUR_STREAM + 1)[_TOUR_STREAM]
+    return make_tour(world, rng, kind=kind, min_length_m=length_m)

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 __all__ = ["DynamicObstacle", "Roadmap", "Tour", "TourKind", "World"]
 
 FloatArray = NDArray[np.float64]
-TourKind = Literal["loop", "out_and_back", "backtracking"]
+TourKind = Literal["loop", "out_and_back", "backtracking", "circuit"]
 
 
 def _frozen(arr: np.ndarray) -> np.ndarray:
@@ -164,12 +164,16 @@ class World:
 
     def tour(
         self,
-        rng: np.random.Generator,
+        rng: np.random.Generator | int | np.random.SeedSequence,
         *,
         kind: TourKind = "loop",
         min_length_m: float = 50.0,
     ) -> Tour:
-        """Plan waypoints along the roadmap from the start; see ``worldgen.tours``."""
+        """Plan waypoints along the roadmap from the start; see ``worldgen.tours``.
+
+        ``rng`` is a Generator or an int seed. The tour the command line drives on this
+        world is ``worldgen.plan_tour(world, ...)`` (it derives its own stream).
+        """
         from worldgen.tours import make_tour
 
         return make_tour(self, rng, kind=kind, min_length_m=min_length_m)

@@ -31,7 +31,8 @@ from albot2d.frames import Frame
 from albot2d.logs.relations import Relations, RelationsOptions, relations_from_truth
 from albot2d.mapping.protocol import Mapper
 from albot2d.mapping.registry import resolve_mappers
-from albot2d.seeding import spawn_rngs
+from worldgen.tours import TOUR_KINDS
+from worldgen.tours import plan_tour as _plan_tour
 from worldgen.world import Tour, World
 
 __all__ = [
@@ -47,7 +48,6 @@ __all__ = [
 
 DEFAULT_MAPPERS = ("albot1", "naive", "truth")
 LASER_NOISE_CHOICES = ("sick_lms200", "zero")
-TOUR_KINDS = ("loop", "out_and_back", "backtracking")
 # Child of the run seed that seeds the simulator (the same as ``albot2d simulate``).
 _SIMULATION_STREAM = 2
 
@@ -178,9 +178,8 @@ def build_world(spec: RunSpec) -> World:
 
 
 def plan_tour(world: World, kind: str, min_length_m: float) -> Tour:
-    # The same stream as ``albot2d world``/``simulate``, so all three plan the same tour.
-    rng = spawn_rngs(world.seed or 0, 2)[1]
-    return world.tour(rng, kind=kind, min_length_m=min_length_m)  # type: ignore[arg-type]
+    """``worldgen.plan_tour``: the same tour as ``albot2d world``/``simulate`` plan."""
+    return _plan_tour(world, kind=kind, length_m=min_length_m)
 
 
 def _simulator(world: World, spec: RunSpec) -> Any:

@@ -12,8 +12,18 @@ only after moves). Presets (Yeap et al.'s datasets):
   literal "+1°" reading would report every 1° right-turn step as no turn at all, so a
   right turn would vanish from the odometry; ``induced_along_motion=False`` selects it.
 - ``dataset3``: a view every 1 m or 10° (the 217-view run).
-- ``start_stop``: turn to the next waypoint, move up to ~3 m, view (Fig. 14: "each move
-  is on average about 3 m").
+- ``start_stop``: the paper's start–stop driving (Experiment 1, Fig. 14): every turn
+  instruction and every move instruction ends with a stop and a view (Fig. 14 counts
+  "move/turn instructions"). Turns above 60° are split into equal steps of at most 60°,
+  each with a view, as the original code's autonomous mode does (so a U-turn is three
+  60° steps with views, never one 180° step); turns under 10° get no view of their own
+  (the original code makes only turns > 10° separate turn-only views). Waypoints the
+  route passes nearly straight through (within 5 cm) are driven through without
+  stopping, so moves span several roadmap legs and are about 3 m ("each move is on
+  average about 3 m"); a longer straight is cut into equal moves of at most 3 m.
+- ``start_stop_v1``: the earlier reading, kept for comparison: each turn is merged with
+  the following move of up to 3 m (one view per move, none after turns), a U-turn is one
+  180° step, and every roadmap waypoint is a stop.
 """
 
 from __future__ import annotations
@@ -31,7 +41,9 @@ from albot2d.geometry import Pose
 from albot2d.sim.odometry import StepKind
 from albot2d.validation import check_finite, check_non_negative, check_positive, check_positive_int
 
-__all__ = ["PROFILES", "DrivingProfile", "Step", "TourController", "get_profile"]
+__all__ = [
+    "PROFILES", "DrivingProfile", "Step", "TourController", "get_profile", "merge_straight",
+]
 
 # Splitting tolerance: a turn of exactly k·turn_step (within float noise) takes k steps.
 _SPLIT_SLACK = 1e-9
@@ -52,6 +64,12 @@ class DrivingProfile:
       a waypoint this close counts as reached.
     - ``max_blocked_steps``: after this many blocked moves in a row (an obstacle in the
       way) the controller gives up the waypoint and heads for the next.
+    - ``turn_view_min_deg``: with ``view_after_turn``, a turn step smaller than this gets
+      no view of its own (its motion goes into the next view); 0: every turn step does.
+    - ``merge_offset_m``: drive straight through a waypoint when leaving it out moves the
+      path by at most this much (each kept leg stays within this distance of every
+      waypoint it skips), so a move can span several collinear roadmap legs; 0: stop at
+      every waypoint.
     """
 
     name: str
@@ -67,11 +85,13 @@ class DrivingProfile:
     heading_tolerance_deg: float = 1e-6
     waypoint_tolerance_m: float = 1e-6
     max_blocked_steps: int = 30
+    turn_view_min_deg: float = 0.0
+    merge_offset_m: float = 0.0
 
     def __post_init__(self) -> None:
         check_positive(self, "move_step_m", "turn_step_deg", "speed_m_s", "turn_rate_deg_s",
                        "heading_tolerance_deg", "waypoint_tolerance_m")
-        check_non_negative(self, "stop_pause_s")
+        check_non_negative(self, "stop_pause_s", "turn_view_min_deg", "merge_offset_m")
         check_finite(self, "induced_step_m")
         check_finite(self, "induced_step_deg")
         check_positive_int(self, "max_blocked_steps")
@@ -98,7 +118,11 @@ PROFILES: dict[str, DrivingProfile] = {
     ),
     "dataset3": DrivingProfile("dataset3", move_step_m=1.0, turn_step_deg=10.0),
     "start_stop": DrivingProfile(
-        "start_stop", move_step_m=3.0, turn_step_deg=180.0, view_after_turn=False,
+        "start_stop", move_step_m=3.0, turn_step_deg=60.0, view_after_turn=True,
+        stop_pause_s=1.0, turn_view_min_deg=10.0, merge_offset_m=0.05,
+    ),
+    "start_stop_v1": DrivingProfile(
+        "start_stop_v1", move_step_m=3.0, turn_step_deg=180.0, view_after_turn=False,
         stop_pause_s=1.0,
     ),
 }
@@ -114,6 +138,40 @@ def get_profile(profile: str | DrivingProfile) -> DrivingProfile:
         raise InputError(
             f"unknown driving profile {profile!r}; valid: {', '.join(PROFILES)}"
         ) from None
+
+
+def merge_straight(waypoints: np.ndarray, max_offset_m: float) -> np.ndarray:
+    """``waypoints`` without those the path passes (nearly) straight through.
+
+    Greedy from the first waypoint: a leg is extended to the next waypoint while every
+    waypoint it would skip lies within ``max_offset_m`` of the extended leg (a segment, so
+    a turn-back, whose apex lies beyond the segment's end, is always kept). The first and
+    last waypoints are kept; ``max_offset_m == 0`` returns the waypoints unchanged.
+    """
+    if max_offset_m <= 0.0 or len(waypoints) <= 2:
+        return waypoints
+    kept = [0]
+    anchor = 0
+    j = 1
+    while j < len(waypoints) - 1:
+        if _within(waypoints[anchor], waypoints[j + 1], waypoints[anchor + 1 : j + 1],
+                   max_offset_m):
+            j += 1
+            continue
+        kept.append(j)
+        anchor = j
+        j += 1
+    kept.append(len(waypoints) - 1)
+    return waypoints[kept]
+
+
+def _within(a: np.ndarray, b: np.ndarray, points: np.ndarray, tol: float) -> bool:
+    """Whether every point lies within ``tol`` of the segment a–b."""
+    ab = b - a
+    denom = float(ab @ ab)
+    t = np.zeros(len(points)) if denom == 0.0 else np.clip((points - a) @ ab / denom, 0.0, 1.0)
+    nearest = a + t[:, None] * ab
+    return bool(np.all(np.hypot(*(points - nearest).T) <= tol))
 
 
 class Step(NamedTuple):
@@ -137,11 +195,12 @@ class TourController:
         wp = np.asarray(waypoints, dtype=np.float64)
         if wp.ndim != 2 or wp.shape[1] != 2 or not np.isfinite(wp).all():
             raise InputError(f"tour waypoints must be a finite (K, 2) array, got shape {wp.shape}")
-        self.waypoints = wp
+        self.waypoints = merge_straight(wp, self.profile.merge_offset_m)
         self.index = 0
         self._blocked = 0
         self._turn_step = math.radians(self.profile.turn_step_deg)
         self._heading_tol = math.radians(self.profile.heading_tolerance_deg)
+        self._turn_view_min = math.radians(self.profile.turn_view_min_deg)
 
     @property
     def done(self) -> bool:
@@ -161,7 +220,8 @@ class TourController:
             bearing = (bearing + math.pi) % (2.0 * math.pi) - math.pi
             if abs(bearing) > self._heading_tol:
                 n = max(1, math.ceil(abs(bearing) / self._turn_step - _SPLIT_SLACK))
-                return Step("turn", bearing / n, p.view_after_turn, self.index)
+                view = p.view_after_turn and abs(bearing / n) >= self._turn_view_min
+                return Step("turn", bearing / n, view, self.index)
             n = max(1, math.ceil(dist / p.move_step_m - _SPLIT_SLACK))
             return Step("move", dist / n, True, self.index)
         return None
