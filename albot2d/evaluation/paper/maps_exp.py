@@ -86,7 +86,8 @@ class FIG7:
             {
                 "file": "fig7.png",
                 "plot": "maps",
-                "caption": "Maps at E5 after ~100 m of dataset 1, anchored at the true start; grey: "
+                "caption": "Maps at E5 after ~100 m of dataset 1, anchored at the true "
+                "start; grey: "
                 "true walls; black line: the true path so far.",
                 "data": {"panels": [p for p in panels if p is not None]},
             }
@@ -139,7 +140,8 @@ class FIG10:
             {
                 "file": "fig10.png",
                 "plot": "maps",
-                "caption": "Albot₁'s map before and after passing S again (dataset 1); red: surfaces "
+                "caption": "Albot₁'s map before and after passing S again (dataset 1); "
+                "red: surfaces "
                 "of earlier local maps deleted in between.",
                 "data": {"panels": [p for p in panels if p is not None]},
             }
@@ -198,7 +200,8 @@ class FIG11_12:  # noqa: N801
             {
                 "file": "fig11_12.png",
                 "plot": "maps",
-                "caption": "The non-corridor route (open halls, dataset 3 spacing): Albot₁ at X (half "
+                "caption": "The non-corridor route (open halls, dataset 3 spacing): "
+                "Albot₁ at X (half "
                 "way) and at E (the end), and Albot_x's single map.",
                 "data": {"panels": [p for p in panels if p is not None]},
             }
@@ -267,7 +270,8 @@ class FIG13:
             {
                 "file": "fig13.png",
                 "plot": "maps",
-                "caption": "Both maps at the end of the whole route on the sparse views of dataset 3.",
+                "caption": "Both maps at the end of the whole route on the sparse views "
+                "of dataset 3.",
                 "data": {"panels": [p for p in panels if p is not None]},
             }
         ]

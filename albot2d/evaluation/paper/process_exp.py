@@ -75,7 +75,8 @@ class FIG14:
             {
                 "file": "fig14.png",
                 "plot": "updates",
-                "caption": "Start–stop along the Fig. 6 route: every view (dot) and every global-map "
+                "caption": "Start–stop along the Fig. 6 route: every view (dot) and "
+                "every global-map "
                 "update (coloured by region kind), with the moves since the previous update.",
                 "data": {
                     "walls": f["world_walls"],
@@ -249,7 +250,8 @@ class FIG16:
             {
                 "file": "fig16.png",
                 "plot": "maps",
-                "caption": "S → E7 with datasets 1 and 2: naive integration (top) and Albot₁ (bottom), "
+                "caption": "S → E7 with datasets 1 and 2: naive integration (top) and "
+                "Albot₁ (bottom), "
                 "anchored at the true start.",
                 "data": {"panels": [p for p in panels if p is not None], "ncols": 2},
             }

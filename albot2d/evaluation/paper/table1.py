@@ -100,7 +100,8 @@ def figures(fig: dict[str, Any], result: dict[str, Any]) -> list[dict[str, Any]]
         {
             "file": "table1.png",
             "plot": "homing",
-            "caption": "Bearing and distance errors to S at every stop 17–35 m from S, both journeys, "
+            "caption": "Bearing and distance errors to S at every stop 17–35 m from "
+            "S, both journeys, "
             "all seeds; the box is the paper's ±7° / ±3 m.",
             "data": {
                 "bearing_error_deg": [s["bearing_error_deg"] for s in stops],
