@@ -18,7 +18,7 @@ from albot2d.errors import InputError
 from albot2d.evaluation.paper.registry import EXPERIMENTS, runs_needed
 from albot2d.evaluation.paper.runs import ALBOT_X, PAPER_NOISE, RUNS, albot_x_available, run_job
 
-__all__ = ["ExperimentsOutcome", "plan_jobs", "run_experiments"]
+__all__ = ["ExperimentsOutcome", "compute_experiments", "plan_jobs", "run_experiments"]
 
 FORMAT_VERSION = 1
 
@@ -30,6 +30,7 @@ class ExperimentsOutcome:
 
     data: dict[str, Any]
     figures: dict[str, list[dict[str, Any]]]
+    runs: dict[str, list[dict[str, Any]]]
 
 
 def plan_jobs(names: Sequence[str], seeds: Sequence[int]) -> list[tuple[str, int]]:
@@ -78,6 +79,22 @@ def run_experiments(
         if on_job is not None:
             on_job(*jobs[index])
     by_run = {run: [results[(run, s)] for s in seeds] for run in dict.fromkeys(r for r, _ in jobs)}
+    return compute_experiments(names, seeds, by_run, quick=quick, albot_x=albot_x, started=t0)
+
+
+def compute_experiments(
+    names: Sequence[str],
+    seeds: Sequence[int],
+    by_run: dict[str, list[dict[str, Any]]],
+    *,
+    quick: bool,
+    albot_x: bool,
+    started: float | None = None,
+) -> ExperimentsOutcome:
+    """Every experiment of ``names`` from the job summaries ``by_run`` (run → one summary
+    per seed, in seed order)."""
+    names, seeds = list(names), list(seeds)
+    t0 = time.perf_counter() if started is None else started
     figure_runs = {run: rows[0]["figures"] for run, rows in by_run.items()}
     experiments: dict[str, Any] = {}
     figures: dict[str, list[dict[str, Any]]] = {}
@@ -110,4 +127,4 @@ def run_experiments(
         "runs": runs_info,
         "wall_time_s": time.perf_counter() - t0,
     }
-    return ExperimentsOutcome(data, figures)
+    return ExperimentsOutcome(data, figures, by_run)

@@ -34,8 +34,9 @@ __all__ = [
 ALBOT_X = "slam"
 # odometry noise of every paper run: the preset derived from the P3-DX's published data
 PAPER_NOISE = "pioneer3dx"
-# In --quick mode the long continuous runs stop after this many views.
-QUICK_MAX_FRAMES = 260
+# In --quick mode every continuous run stops after this many views (start-stop runs,
+# a few dozen views each, are run whole).
+QUICK_MAX_FRAMES = 150
 
 
 @dataclass(frozen=True)
@@ -57,7 +58,7 @@ class PaperRun:
     stop_every_m: float = 20.0
     marks: tuple[str, ...] = ()
     steps: bool = False  # keep Albot1's per-view step records (Figs. 14, 15)
-    quick_cut: bool = False  # shortened in --quick mode
+    quick_cut: bool = True  # shortened in --quick mode
 
 
 RUNS: dict[str, PaperRun] = {
