@@ -75,3 +75,20 @@ def test_unknown_route_is_an_input_error(worlds):
 def test_too_small_for_the_shape_is_an_input_error():
     with pytest.raises(InputError, match=r"Fig6Params\.width_m"):
         generate("fig6", seed=0, width_m=25.0)
+
+
+def test_runspec_route_starts_at_s_and_drives_the_route():
+    from albot2d.evaluation.experiment import RunSpec, run_experiment
+
+    spec = RunSpec(kind="fig6", seed=2, route="fig8_clockwise", profile="start_stop",
+                   mappers=("truth",), max_frames=4)  # fmt: skip
+    result = run_experiment(spec)
+    world = generate("fig6", seed=2)
+    s = world.features["waypoints"]["S"]
+    assert result.trace.true_poses[0, :2] == pytest.approx(s, abs=1e-9)
+    assert result.trace.true_poses[0, 2] == pytest.approx(np.pi / 2)  # up towards E7
+    assert result.tour.kind == "route:fig8_clockwise"
+    assert result.report["params"]["tour"]["length_m"] == pytest.approx(
+        world.features["ring_length_m"]
+    )
+    assert result.report["params"]["spec"]["route"] == "fig8_clockwise"
