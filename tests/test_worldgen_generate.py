@@ -147,7 +147,9 @@ def test_determinism_across_processes():
 @pytest.mark.parametrize("kind", KINDS)
 def test_default_sizes(kind):
     world = generate(kind, seed=0)
-    expected = (60.0, 40.0) if kind in {"office", "mixed"} else (40.0, 40.0)
+    expected = {"office": (60.0, 40.0), "mixed": (60.0, 40.0), "fig6": (42.0, 30.0)}.get(
+        kind, (40.0, 40.0)
+    )
     assert (world.width_m, world.height_m) == expected
     assert world.kind == kind and world.seed == 0
     assert world.params["width_m"] == expected[0]

@@ -30,6 +30,7 @@ __all__ = [
     "PARAMS_BY_KIND",
     "CommonParams",
     "CorridorsParams",
+    "Fig6Params",
     "MixedParams",
     "OfficeParams",
     "OpenParams",
@@ -298,10 +299,50 @@ class MixedParams(_DoorParams):
         check_in_range(self, "corridor_width_m", 1.5, 3.0)
 
 
+@dataclass(frozen=True)
+class Fig6Params(_DoorParams):
+    """The paper's Fig. 6 building: a corridor ring with a cross corridor, rooms and a hall."""
+
+    width_m: float = 42.0
+    height_m: float = 30.0
+    corridor_width_min_m: float = 1.8
+    corridor_width_max_m: float = 2.4
+    room_depth_min_m: float = 4.0
+    room_depth_max_m: float = 6.0
+    room_width_min_m: float = 3.0
+    room_width_max_m: float = 5.5
+    hall_depth_min_m: float = 8.0
+    hall_depth_max_m: float = 11.0
+    cross_offset_min_m: float = 5.5
+    cross_offset_max_m: float = 7.0
+
+    min_size_m = 30.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for low, high in (("corridor_width_min_m", "corridor_width_max_m"),
+                          ("room_depth_min_m", "room_depth_max_m"),
+                          ("room_width_min_m", "room_width_max_m"),
+                          ("hall_depth_min_m", "hall_depth_max_m"),
+                          ("cross_offset_min_m", "cross_offset_max_m")):
+            check_positive(self, low, high)
+            _check_order(self, low, high)
+        _check_at_least(self, "corridor_width_min_m", self.passage_m, "to let the robot through")
+        small = self.door_width_max_m + self.wall_thickness_m + 1.0
+        _check_at_least(self, "room_width_min_m", small, "(a door must fit in a room wall)")
+        _check_at_least(self, "cross_offset_min_m", self.corridor_width_max_m + small,
+                        "(a room between the left and the cross corridor)")
+        ring_w = 2.0 * self.room_depth_max_m + self.cross_offset_max_m + 2.0 * small + 6.0
+        ring_h = self.room_depth_max_m + self.hall_depth_max_m + 2.0 * small + 4.0
+        _check_at_least(self, "width_m", ring_w, "(room bands, the ring and the cross corridor)")
+        _check_at_least(self, "height_m", ring_h, "(room band, hall, the ring and two rooms)")
+
+
 PARAMS_BY_KIND: dict[str, type[CommonParams]] = {
     "corridors": CorridorsParams,
     "rooms": RoomsParams,
     "open": OpenParams,
     "office": OfficeParams,
+    "fig6": Fig6Params,
     "mixed": MixedParams,
 }

@@ -26,7 +26,7 @@ def _command_modules() -> list:
     """The subcommand modules, in the order ``--help`` lists them."""
     import importlib
 
-    names = ["world_cmd", "simulate_cmd", "run_cmd", "replay_cmd", "fuzz_cmd"]
+    names = ["world_cmd", "simulate_cmd", "run_cmd", "replay_cmd", "fuzz_cmd", "experiments_cmd"]
     return [importlib.import_module(f"albot2d.cli.{name}") for name in names]
 
 

@@ -13,6 +13,7 @@ so ``albot2d simulate`` with the same options logs exactly the frames mapped her
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import time
@@ -71,6 +72,9 @@ class RunSpec:
     laser_noise: str = "sick_lms200"
     tour_kind: str = "loop"
     tour_length_m: float = 100.0
+    # a route named by the world (``worldgen.routes``, e.g. the fig6 kind's "fig6"): the
+    # tour drives its waypoints from its first one; tour_kind/tour_length_m are then unused
+    route: str | None = None
     mappers: tuple[str, ...] = DEFAULT_MAPPERS
     max_frames: int | None = None
 
@@ -221,7 +225,13 @@ def run_experiment(
     factories = resolve_mappers(list(spec.mappers))
     profile = get_profile(spec.profile)
     world = build_world(spec)
-    tour = plan_tour(world, spec.tour_kind, spec.tour_length_m)
+    if spec.route is not None:
+        from worldgen.routes import route_start, route_tour
+
+        tour = route_tour(world, spec.route)
+        world = dataclasses.replace(world, start=route_start(world, spec.route))
+    else:
+        tour = plan_tour(world, spec.tour_kind, spec.tour_length_m)
     sim = make_simulator(world, spec)
     frames = sim.drive(tour, profile)
     if on_start is not None:

@@ -13,6 +13,7 @@ import numpy as np
 
 from worldgen.kinds._plan import Layout
 from worldgen.kinds.corridors import layout_corridors
+from worldgen.kinds.fig6 import layout_fig6
 from worldgen.kinds.mixed import layout_mixed
 from worldgen.kinds.office import layout_office
 from worldgen.kinds.open_halls import layout_open
@@ -26,4 +27,5 @@ LAYOUTS: dict[str, Callable[[np.ndarray, Any, np.random.Generator], Layout]] = {
     "open": layout_open,
     "office": layout_office,
     "mixed": layout_mixed,
+    "fig6": layout_fig6,
 }

@@ -1,0 +1,166 @@
+"""``albot2d experiments``: the paper's experiments regenerated, side by side with its numbers.
+
+Runs the named experiments (default: all) over ``--seeds`` on the fig6 world (the paper's
+Fig. 6 building, a different one per seed) and the open halls, on a local process pool
+(``--workers``) or a dask cluster (``--backend dask``); results are the same whatever the
+worker count. Writes ``DIR/experiments.json`` (the paper's numbers beside ours, mean ± sd
+over seeds and per seed, a verdict per experiment), the figures as PNG files and
+``DIR/index.html``. ``--quick`` is a smoke run (seeds 0-1, long runs cut short) whose
+numbers are not comparable to the paper's. Bad input: one line, exit 2, nothing written.
+
+Experiments: counts, table1, fig7, fig10, fig11_12, fig13, fig14, fig15, fig16.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from albot2d.errors import InputError
+
+__all__ = ["parse_seeds", "register", "run"]
+
+FULL_SEEDS = "0-19"
+QUICK_SEEDS = "0-1"
+_MAX_SEEDS = 10_000
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser(
+        "experiments", help="the paper's experiments regenerated beside its numbers",
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
+    )  # fmt: skip
+    p.add_argument(
+        "--only",
+        nargs="+",
+        action="extend",
+        metavar="NAME",
+        help="run only these experiments (default: all)",
+    )
+    p.add_argument(
+        "--seeds",
+        metavar="RANGE",
+        help=f"seeds: A-B, A,B,C or N (default {FULL_SEEDS}; --quick {QUICK_SEEDS})",
+    )
+    p.add_argument("--workers", metavar="K", help="worker processes (default: every core)")
+    p.add_argument("--backend", default="local", help="local (default) or dask")
+    p.add_argument("--address", metavar="tcp://HOST:PORT", help="dask scheduler (dask only)")
+    p.add_argument(
+        "--quick", action="store_true", help="smoke run for CI: few seeds, the long runs cut short"
+    )
+    p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    p.add_argument("--out", metavar="DIR", help="output directory (required)")
+    p.set_defaults(handler=run)
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``A-B`` (inclusive), ``A,B,C`` or ``N`` → sorted distinct seeds."""
+    seeds: set[int] = set()
+    for part in text.split(","):
+        lo, dash, hi = part.strip().partition("-")
+        try:
+            a = int(lo)
+            b = int(hi) if dash else a
+        except ValueError:
+            raise InputError(f"--seeds: expected A-B, A,B,C or N, got {text!r}") from None
+        if a < 0 or b < a:
+            raise InputError(f"--seeds: {part.strip()!r} is not a range of seeds >= 0")
+        if b - a >= _MAX_SEEDS:
+            raise InputError(f"--seeds: at most {_MAX_SEEDS} seeds, got {part.strip()!r}")
+        seeds.update(range(a, b + 1))
+    return sorted(seeds)
+
+
+def _workers(text: str | None) -> int:
+    from albot2d.cli.options import positive_int
+
+    value = positive_int(text, "--workers")
+    return value if value is not None else max(1, len(os.sched_getaffinity(0)))
+
+
+def _check_out(text: str | None) -> Path:
+    if not text:
+        raise InputError("--out DIR is required")
+    out = Path(text)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {text}: exists and is not a directory")
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from albot2d.evaluation.backends import make_backend
+    from albot2d.evaluation.paper import EXPERIMENTS, plan_jobs, run_experiments
+
+    out = _check_out(args.out)
+    names = list(dict.fromkeys(args.only or EXPERIMENTS))
+    seeds = parse_seeds(args.seeds or (QUICK_SEEDS if args.quick else FULL_SEEDS))
+    jobs = plan_jobs(names, seeds)  # checks the names before anything runs
+    workers = min(_workers(args.workers), len(jobs))
+    if args.address is not None and args.backend != "dask":
+        raise InputError("--address is for --backend dask")
+    if not args.no_figures:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise InputError(
+                "figures need matplotlib: pip install 'albot2d[viz]' (or pass --no-figures)"
+            ) from None
+    backend = make_backend(args.backend, workers=workers, address=args.address)
+    bar = _progress(len(jobs))
+    try:
+        outcome = run_experiments(names, seeds, quick=args.quick, backend=backend,
+                                  on_job=lambda r, s: _tick(bar, r, s))  # fmt: skip
+    finally:
+        backend.close()
+        if bar is not None:
+            bar.close()
+    _write(out, outcome, figures=not args.no_figures)
+    _print_summary(outcome.data, out)
+    return 0
+
+
+def _progress(total: int) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="run", desc="experiments", file=sys.stderr,
+                disable=None, dynamic_ncols=True)  # fmt: skip
+
+
+def _tick(bar: Any, run_name: str, seed: int) -> None:
+    if bar is not None:
+        bar.set_postfix_str(f"{run_name} seed {seed}", refresh=False)
+        bar.update(1)
+
+
+def _write(out: Path, outcome: Any, *, figures: bool) -> None:
+    """Figures first, then the page, experiments.json last (atomically)."""
+    from albot2d.atomic import atomic_write_text
+    from albot2d.paper_page import PAGE_NAME, render_page
+
+    out.mkdir(parents=True, exist_ok=True)
+    written: dict[str, list[dict[str, Any]]] = {}
+    if figures:
+        from albot2d.plots_paper import save_figure
+
+        for name, specs in outcome.figures.items():
+            for spec in specs:
+                save_figure(spec, out / spec["file"])
+            written[name] = [{"file": s["file"], "caption": s["caption"]} for s in specs]
+    else:
+        for result in outcome.data["experiments"].values():
+            result["figures"] = []
+    atomic_write_text(out / PAGE_NAME, render_page(outcome.data, written))
+    atomic_write_text(
+        out / "experiments.json", json.dumps(outcome.data, indent=1, allow_nan=False) + "\n"
+    )
+
+
+def _print_summary(data: dict[str, Any], out: Path) -> None:
+    width = max(len(n) for n in data["verdicts"])
+    for name, verdict in data["verdicts"].items():
+        print(f"{name:<{width}}  {verdict}")
+    print(f"{len(data['seeds'])} seeds, {data['wall_time_s']:.0f} s -> {out}/index.html")

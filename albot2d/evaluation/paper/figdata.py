@@ -1,0 +1,57 @@
+"""Plain data for the paper's figures, built from a run's snapshots (no plotting here).
+
+A *panel* is ``{"title", "walls", "segments", "deleted", "path", "marks"}`` in world
+coordinates: every map is anchored at the true start pose (as map accuracy is), so
+drift and distortion show against the faint true walls.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from albot2d.geometry import transform_segments
+
+__all__ = ["LABELS", "deleted_surfaces", "map_panel"]
+
+LABELS = {
+    "albot1": "Albot₁",
+    "naive": "naive integration",
+    "slam": "Albot_x (slam)",
+    "truth": "ground truth",
+}
+
+
+def map_panel(
+    fig: dict[str, Any], mark: str, mapper: str, title: str, deleted: np.ndarray | None = None
+) -> dict[str, Any] | None:
+    """The map of ``mapper`` at ``mark`` of a run kept for figures (None if not taken)."""
+    snap = fig["snaps"].get(mark)
+    if snap is None or mapper not in snap["maps"]:
+        return None
+    start = fig["true_poses"][0]
+    row = min(int(snap["frame"]), len(fig["true_poses"]) - 1)  # simulated: frame = row
+    segs = transform_segments(start, snap["maps"][mapper]["segments"])
+    gone = None if deleted is None else transform_segments(start, deleted)
+    return {
+        "title": title,
+        "walls": fig["world_walls"],
+        "segments": segs,
+        "deleted": gone,
+        "path": fig["true_poses"][: row + 1, :2],
+        "marks": fig["waypoints"],
+    }
+
+
+def deleted_surfaces(before: dict[str, Any], after: dict[str, Any]) -> np.ndarray:
+    """Surfaces of Albot1's map in snapshot ``before`` that are gone in ``after`` (matched
+    by local-map id and coordinates)."""
+    b, a = before["maps"]["albot1"], after["maps"]["albot1"]
+    keep = {(int(i), *np.round(s, 6)) for s, i in zip(a["segments"], a["map_ids"], strict=True)}
+    rows = [
+        k
+        for k, (s, i) in enumerate(zip(b["segments"], b["map_ids"], strict=True))
+        if (int(i), *np.round(s, 6)) not in keep
+    ]
+    return np.asarray(b["segments"])[rows].reshape(-1, 4)

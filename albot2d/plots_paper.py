@@ -1,0 +1,196 @@
+"""Figures of ``albot2d experiments`` (the paper's Figs. 7, 10–16, Table 1 and the counts).
+
+Each ``plot_x(data, *, ax=None)`` draws the plain data an experiment produced
+(``albot2d.evaluation.paper``) on ``ax`` (a new figure when None; multi-panel plots take a
+sequence of axes) and returns the figure. ``save_figure(spec, path)`` draws one figure
+spec (``{"plot", "data", ...}``) to a PNG. matplotlib is imported lazily (``viz`` extra).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "PLOTS",
+    "plot_bars",
+    "plot_homing",
+    "plot_maps",
+    "plot_sequence",
+    "plot_updates",
+    "save_figure",
+]
+
+_REGION_COLOURS = {"corridor": "tab:blue", "hall": "tab:orange", "room": "tab:green",
+                   "outside": "tab:grey"}  # fmt: skip
+_METHOD_COLOURS = {"triangulation": "tab:blue", "path_integration": "tab:red", "": "0.5"}
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _axes(ax: Any, n: int, ncols: int | None = None, size: float = 4.5) -> tuple[Any, list]:
+    if ax is not None:
+        axes = list(ax) if isinstance(ax, Sequence | np.ndarray) else [ax]
+        return axes[0].figure, axes
+    plt = _plt()
+    ncols = ncols or n
+    nrows = int(np.ceil(n / ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(size * ncols, size * 0.75 * nrows),
+                             squeeze=False)  # fmt: skip
+    return fig, list(axes.ravel())
+
+
+def _segments(ax: Any, segs: Any, **kw: Any) -> None:
+    from matplotlib.collections import LineCollection
+
+    s = np.asarray(segs, dtype=float).reshape(-1, 4)
+    if len(s):
+        ax.add_collection(LineCollection(s.reshape(-1, 2, 2), **kw))
+
+
+def plot_maps(data: dict[str, Any], *, ax: Any = None) -> Any:
+    """Map panels: faint true walls, the map (black), deleted surfaces (red), the true path
+    so far (blue) and the named waypoints."""
+    panels = data["panels"]
+    fig, axes = _axes(ax, max(1, len(panels)), data.get("ncols"))
+    for a, p in zip(axes, panels, strict=False):
+        _segments(a, p["walls"], colors="0.8", linewidths=0.6)
+        if p.get("deleted") is not None:
+            _segments(a, p["deleted"], colors="tab:red", linewidths=1.2)
+        _segments(a, p["segments"], colors="k", linewidths=0.8)
+        path = np.asarray(p["path"], float).reshape(-1, 2)
+        if len(path):
+            a.plot(path[:, 0], path[:, 1], color="tab:blue", lw=0.8, alpha=0.6)
+            a.plot(*path[-1], "o", color="tab:blue", ms=5)
+        for name, (x, y) in (p.get("marks") or {}).items():
+            if name != "X":
+                a.annotate(name, (x, y), fontsize=7, color="tab:purple")
+        walls = np.asarray(p["walls"], float).reshape(-1, 2)
+        a.set_xlim(walls[:, 0].min() - 1, walls[:, 0].max() + 1)
+        a.set_ylim(walls[:, 1].min() - 1, walls[:, 1].max() + 1)
+        a.set_aspect("equal")
+        a.set_title(p["title"], fontsize=9)
+        a.tick_params(labelsize=7)
+    for a in axes[len(panels) :]:
+        a.axis("off")
+    fig.tight_layout()
+    return fig
+
+
+def plot_bars(data: dict[str, Any], *, ax: Any = None) -> Any:
+    """Ours (mean ± sd) beside the paper's value, one pair of bars per label."""
+    fig, (a,) = _axes(ax, 1, size=6.0)
+    bars = data["bars"]
+    x = np.arange(len(bars))
+    ours = [b["ours"] if b["ours"] is not None else np.nan for b in bars]
+    sd = [b["sd"] or 0.0 for b in bars]
+    paper = [b["paper"] if b["paper"] is not None else np.nan for b in bars]
+    a.bar(x - 0.2, ours, 0.4, yerr=sd, label="albot2d", color="tab:blue", capsize=3)
+    a.bar(x + 0.2, paper, 0.4, label="paper", color="white", edgecolor="k", hatch="//")
+    a.set_xticks(x, [b["label"] for b in bars], fontsize=8)
+    a.set_ylabel(data.get("ylabel", ""))
+    a.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_homing(data: dict[str, Any], *, ax: Any = None) -> Any:
+    """Bearing error against distance error per stop, the bound as a box."""
+    from matplotlib.patches import Rectangle
+
+    fig, (a,) = _axes(ax, 1, size=5.5)
+    b_max, d_max = data["bound"]
+    a.add_patch(Rectangle((-d_max, -b_max), 2 * d_max, 2 * b_max, fill=False, ls="--",
+                          color="tab:green", label=f"±{b_max:g}° / ±{d_max:g} m"))  # fmt: skip
+    d = np.asarray(data["distance_error_m"], float)
+    b = np.asarray(data["bearing_error_deg"], float)
+    direction = np.asarray(data["direction"])
+    for name, marker in (("clockwise", "o"), ("anticlockwise", "^")):
+        sel = direction == name
+        if sel.any():
+            a.plot(d[sel], b[sel], marker, ms=4, alpha=0.7, label=name)
+    lim_d = max(d_max * 1.5, float(np.abs(d).max(initial=0.0)) * 1.1)
+    lim_b = max(b_max * 1.5, float(np.abs(b).max(initial=0.0)) * 1.1)
+    a.set_xlim(-lim_d, lim_d)
+    a.set_ylim(-lim_b, lim_b)
+    a.set_xlabel("distance error (m)")
+    a.set_ylabel("bearing error (deg)")
+    a.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_updates(data: dict[str, Any], *, ax: Any = None) -> Any:
+    """The route with every view, updates coloured by region kind, and moves per update."""
+    fig, axes = _axes(ax, 2, size=6.0)
+    a, h = axes[0], axes[1]
+    _segments(a, data["walls"], colors="0.8", linewidths=0.6)
+    xy = np.asarray(data["xy"], float)
+    flags = np.asarray(data["flags"], bool)
+    regions = np.asarray(data["regions"])
+    a.plot(xy[:, 0], xy[:, 1], ".", color="0.5", ms=3)
+    for kind, colour in _REGION_COLOURS.items():
+        sel = flags & (regions == kind)
+        if sel.any():
+            a.plot(xy[sel, 0], xy[sel, 1], "o", color=colour, ms=5, label=f"update in {kind}")
+    a.set_aspect("equal")
+    a.legend(fontsize=7)
+    a.set_title("views (dots) and map updates", fontsize=9)
+    moved = np.r_[False, np.hypot(*np.diff(xy, axis=0).T) > 1e-6]
+    last = 0
+    per_kind: dict[str, list[int]] = {}
+    for row in np.flatnonzero(flags):
+        if row == 0:
+            continue
+        per_kind.setdefault(str(regions[row]), []).append(int(moved[last + 1 : row + 1].sum()))
+        last = int(row)
+    kinds = sorted(per_kind)
+    bins = np.arange(0, max((max(v) for v in per_kind.values()), default=1) + 2) - 0.5
+    h.hist([per_kind[k] for k in kinds], bins=bins, label=kinds,
+           color=[_REGION_COLOURS.get(k, "k") for k in kinds])  # fmt: skip
+    h.set_xlabel("moves since the previous update")
+    h.set_ylabel("updates")
+    h.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_sequence(data: dict[str, Any], *, ax: Any = None) -> Any:
+    """One panel per view of a sequence: the walls around the robot and the update method."""
+    poses = np.asarray(data["poses"], float)
+    fig, axes = _axes(ax, len(poses), size=3.2)
+    for a, pose, row, method, tracked in zip(axes, poses, data["rows"], data["methods"],
+                                             data["tracked"], strict=False):  # fmt: skip
+        _segments(a, data["walls"], colors="0.6", linewidths=0.7)
+        a.arrow(pose[0], pose[1], 0.8 * np.cos(pose[2]), 0.8 * np.sin(pose[2]), width=0.08,
+                color=_METHOD_COLOURS.get(method, "k"))  # fmt: skip
+        a.set_xlim(pose[0] - 6, pose[0] + 6)
+        a.set_ylim(pose[1] - 6, pose[1] + 6)
+        a.set_aspect("equal")
+        label = method.replace("_", " ") if method else "no update"
+        a.set_title(f"view {row}: {label}\n{tracked} tracked", fontsize=8)
+        a.tick_params(labelsize=6)
+    fig.tight_layout()
+    return fig
+
+
+PLOTS = {"maps": plot_maps, "bars": plot_bars, "homing": plot_homing,
+         "updates": plot_updates, "sequence": plot_sequence}  # fmt: skip
+
+
+def save_figure(spec: dict[str, Any], path: Path) -> None:
+    """Draw the figure ``spec`` (``{"plot", "data"}``) to the PNG ``path``."""
+    plt = _plt()
+    fig = PLOTS[spec["plot"]](spec["data"])
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -1,0 +1,119 @@
+"""The paper's experiments: each computation on hand-built job summaries with known answers."""
+
+from __future__ import annotations
+
+import pytest
+
+from albot2d.cli.experiments_cmd import parse_seeds
+from albot2d.errors import InputError
+from albot2d.evaluation.paper import counts, plan_jobs, table1
+from albot2d.evaluation.paper.process_exp import FIG16, method_sequences
+from albot2d.evaluation.paper.stats import over_seeds, verdict_of
+
+
+def _counts_job(views: int, maps: int, pi: int, marks: tuple[str, ...]) -> dict:
+    c = {"views": views, "local_maps": maps, "path_integrations": pi}
+    return {
+        "mapper_results": {"albot1": {"counts": dict(c)}},
+        "marks": {m: {"counts": {"albot1": dict(c)}} for m in marks},
+    }
+
+
+def test_counts_ratio_and_path_integration_checks():
+    # dataset 1 at E5: 800 -> 300 (0.375 vs the paper's 0.386: within 25 %)
+    jobs = {
+        "fig6_dataset1": [_counts_job(800, 300, 4, ("E5", "E7")),
+                          _counts_job(800, 320, 6, ("E5", "E7"))],
+        "fig6_dataset2": [_counts_job(800, 330, 9, ("E7",)), _counts_job(800, 330, 5, ("E7",))],
+        "fig6_dataset3": [_counts_job(200, 120, 3, ()), _counts_job(200, 130, 3, ())],
+        "fig6_start_stop": [_counts_job(70, 60, 9, ()), _counts_job(70, 60, 9, ())],
+        "fig11_open": [_counts_job(150, 140, 3, ()), _counts_job(150, 140, 3, ())],
+    }  # fmt: skip
+    r = counts.compute(jobs, [0, 1])
+    d1 = r["ours"]["dataset1"]
+    assert d1["views"]["mean"] == 800 and d1["local_maps"]["per_seed"] == {"0": 300, "1": 320}
+    assert d1["local_maps_per_view"]["mean"] == pytest.approx(310 / 800)
+    assert d1["ratio_within_25pct"] and r["ours"]["dataset3"]["ratio_within_25pct"]
+    # 140/150 = 0.93 against 103/153 = 0.67: outside ±25 %
+    assert not r["ours"]["non_corridor"]["ratio_within_25pct"]
+    # dataset 2 needs more path integrations on seed 0 only: half the seeds, not most
+    assert r["ours"]["path_integrations_more_with_dataset2_share"] == 0.5
+    assert r["paper"]["dataset1"] == {"views": 795, "local_maps": 307,
+                                      "local_maps_per_view": 307 / 795,
+                                      "path_integrations": 5}  # fmt: skip
+    assert r["verdict"] == "partly"
+
+
+def _stop(dist: float, bearing_err: float, dist_err: float) -> dict:
+    return {"view": 1, "travelled_m": 1.0, "bearing_est_deg": 0.0, "bearing_true_deg": 0.0,
+            "distance_est_m": dist + dist_err, "distance_true_m": dist,
+            "bearing_error_deg": bearing_err, "distance_error_m": dist_err}  # fmt: skip
+
+
+def test_table1_counts_only_stops_17_to_35_m_from_s():
+    acw = {"seed": 0, "mapper_results": {"albot1": {"homing": [
+        _stop(10.0, 30.0, 9.0),  # too near: not a Table 1 stop
+        _stop(20.0, 6.9, -2.9),  # within
+        _stop(34.0, -7.5, 0.0),  # bearing out of bound
+    ]}}}  # fmt: skip
+    cw = {"seed": 0, "mapper_results": {"albot1": {"homing": [
+        _stop(17.0, 0.0, 3.1), _stop(30.0, 1.0, 1.0), _stop(40.0, 50.0, 50.0)]}}}  # fmt: skip
+    r = table1.compute({"fig8_anticlockwise": [acw], "fig8_clockwise": [cw]}, [0])
+    ours = r["ours"]
+    assert ours["n_stops"] == 4
+    assert [s["within_bound"] for s in ours["stops"]] == [True, False, False, True]
+    assert ours["fraction_within_bound"] == 0.5
+    assert ours["bearing_error_abs_max_deg"] == 7.5
+    assert r["paper"]["fraction_within_bound"] == 1.0 and len(r["paper"]["rows"]) == 4
+    assert r["verdict"] == "partly"
+
+
+def _fig16_job(p95_albot1: float, p95_naive: float, pi: int) -> dict:
+    return {
+        "map_quality_at_marks": {"E7": {"albot1": {"accuracy_m_p95": p95_albot1},
+                                        "naive": {"accuracy_m_p95": p95_naive}}},
+        "marks": {"E7": {"counts": {"albot1": {"path_integrations": pi}}}},
+    }  # fmt: skip
+
+
+def test_fig16_ratio_of_naive_to_albot1_and_path_integrations():
+    jobs = {"fig6_dataset1": [_fig16_job(0.2, 0.5, 5), _fig16_job(0.2, 0.6, 5)],
+            "fig6_dataset2": [_fig16_job(0.3, 1.2, 7), _fig16_job(0.5, 1.0, 8)]}  # fmt: skip
+    r = FIG16.compute(jobs, [3, 4])
+    acc = r["ours"]["map_accuracy_p95_m"]
+    assert acc["albot1"]["per_seed"] == {"3": 0.3, "4": 0.5}
+    assert acc["naive"]["mean"] == pytest.approx(1.1)
+    assert r["ours"]["naive_over_albot1_p95_dataset2"]["mean"] == pytest.approx(3.0)
+    assert r["verdict"] == "reproduced"
+    jobs["fig6_dataset2"][0] = _fig16_job(0.6, 1.2, 4)  # ratios 2 and 2; fewer PIs on seed 3
+    assert FIG16.compute(jobs, [3, 4])["verdict"] == "not reproduced"
+
+
+def test_method_sequences_finds_triangulation_then_path_integration():
+    m = ["", "triangulation", "", "path_integration", "path_integration", "triangulation",
+         "triangulation", "path_integration", ""]  # fmt: skip
+    assert method_sequences(m) == [(1, 2), (6, 1)]
+    assert method_sequences(["triangulation", "triangulation"]) == []
+
+
+def test_over_seeds_and_verdicts():
+    s = over_seeds([1.0, None, 3.0], [5, 6, 7])
+    assert (s["mean"], s["n"], s["per_seed"]["6"]) == (2.0, 2, None)
+    assert s["sd"] == pytest.approx(2**0.5)
+    assert verdict_of([True, True]) == "reproduced"
+    assert verdict_of([True, False]) == "partly"
+    assert verdict_of([False]) == verdict_of([]) == "not reproduced"
+
+
+def test_seed_ranges_and_bad_input():
+    assert parse_seeds("0-3") == [0, 1, 2, 3]
+    assert parse_seeds("5,1,1-2") == [1, 2, 5]
+    for bad in ("x", "3-1", "-2", "1-"):
+        with pytest.raises(InputError, match="--seeds"):
+            parse_seeds(bad)
+    with pytest.raises(InputError, match="unknown experiment 'fig99'"):
+        plan_jobs(["fig99"], [0])
+    assert plan_jobs(["table1"], [0, 1]) == [
+        ("fig8_anticlockwise", 0), ("fig8_anticlockwise", 1),
+        ("fig8_clockwise", 0), ("fig8_clockwise", 1),
+    ]  # fmt: skip
