@@ -280,7 +280,7 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     record = outcome.record
     if result is not None:
         run_cmd.print_tables(result, out)
-        ignore = ("figures", "albot2d_version", "reproducer")
+        ignore = ("figures", "exports", "albot2d_version", "reproducer")
         diff = run_cmd._differences(
             {k: v for k, v in without_timings(doc).items() if k not in ignore},
             {k: v for k, v in without_timings(result.report).items() if k not in ignore},
