@@ -49,6 +49,12 @@ def test_fuzz_writes_the_stream_summary_and_histograms(tmp_path: Path,
     lines = (out / "episodes.jsonl").read_text().splitlines()
     assert sorted(json.loads(line)["episode"] for line in lines) == [0, 1, 2, 3, 4]
 
+    # --json prints summary.json itself instead of the table.
+    assert main(["fuzz", "--episodes", "5", "--workers", "1", *SMALL, "--resume",
+                 "--no-figures", "--json", "--out", str(out)]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed == json.loads((out / "summary.json").read_text())
+
 
 def test_failures_exit_1_with_reproducers(tmp_path: Path) -> None:
     (tmp_path / "bad_plugin.py").write_text(

@@ -63,6 +63,8 @@ def shortened(words: list[str], drawn: set[str]) -> list[str] | None:
     if command in drawn and command in ("run", "replay", "fuzz"):
         words = [*words, "--no-figures"]
     drawn.add(command)
+    if command == "experiments":
+        return None  # minutes even when quick: tests/test_experiments_cli.py runs --quick
     if command == "fuzz":
         if "--backend" in words:
             return None  # needs a dask cluster

@@ -25,6 +25,10 @@ def test_compact_reprs() -> None:
         extract_surfaces(frames[-1].scan),
         mapper.route,
         mapper.route[-1],
+        world,
+        world.roadmap,
+        plan_tour(world, "loop", 20.0),
+        mapper.global_map(),
     ]
     for value in values:
         text = repr(value)
@@ -33,3 +37,5 @@ def test_compact_reprs() -> None:
     assert repr(mapper.route).startswith(f"RouteMap({len(mapper.route)} local maps: 1 start")
     assert "view=Surfaces(segments=<(" in repr(mapper.route[-1])
     assert repr(Pose(1.0, 2.5, -0.25)) == "Pose(x=1.0, y=2.5, theta=-0.25)"
+    assert repr(world).startswith("World(kind='rooms', seed=3, size_m=(15, 15), walls=")
+    assert repr(mapper.global_map()).startswith("MapSnapshot(segments=<(")

@@ -46,6 +46,9 @@ class Roadmap:
     nodes: FloatArray
     edges: NDArray[np.int64]
 
+    def __repr__(self) -> str:
+        return f"Roadmap(nodes={len(self.nodes)}, edges={len(self.edges)})"
+
     def __post_init__(self) -> None:
         nodes = np.asarray(self.nodes, dtype=np.float64).reshape(-1, 2)
         edges = np.asarray(self.edges, dtype=np.int64).reshape(-1, 2)
@@ -76,6 +79,10 @@ class Tour:
     waypoints: FloatArray
     kind: str
     node_ids: tuple[int, ...] = ()
+
+    def __repr__(self) -> str:
+        return (f"Tour(kind={self.kind!r}, waypoints={len(self.waypoints)}, "
+                f"length_m={self.length_m:.6g})")
 
     def __post_init__(self) -> None:
         wp = np.asarray(self.waypoints, dtype=np.float64).reshape(-1, 2)
@@ -136,6 +143,14 @@ class World:
     dynamic_obstacles: tuple[DynamicObstacle, ...] = ()
     features: Mapping[str, Any] = field(default_factory=dict)
     robot_radius_m: float = 0.25
+
+    def __repr__(self) -> str:
+        return (
+            f"World(kind={self.kind!r}, seed={self.seed!r}, size_m=({self.width_m:.6g}, "
+            f"{self.height_m:.6g}), walls={len(self.walls)}, clutter={len(self.clutter)}, "
+            f"dynamic_obstacles={len(self.dynamic_obstacles)}, roadmap={self.roadmap!r}, "
+            f"start={self.start!r})"
+        )
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "walls", _frozen(as_segments(self.walls)))

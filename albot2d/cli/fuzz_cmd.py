@@ -34,6 +34,7 @@ from typing import Any
 
 from albot2d.atomic import atomic_write_bytes
 from albot2d.cli.options import positive_int, positive_number, seed_value
+from albot2d.cli.run_cmd import add_json_option
 from albot2d.errors import InputError
 
 __all__ = ["register", "reproduce_failure", "reproducer_document", "run"]
@@ -71,6 +72,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue the campaign in --out (skip the episodes already done)")
     p.add_argument("--no-figures", action="store_true", help="no histograms.png")
+    add_json_option(p, "print summary.json on stdout instead of the summary table")
     p.add_argument("--out", metavar="DIR", required=True,
                    help="output directory (created if missing)")
     p.set_defaults(handler=run)
@@ -184,6 +186,9 @@ def run(args: argparse.Namespace) -> int:
                 out.rmdir()  # only when nothing was written
         raise
     figure = _write_histograms(out, args.no_figures)
+    if args.json:
+        print(json.dumps(summary, indent=2, allow_nan=False))
+        return 1 if summary["violations"] + summary["crashes"] else 0
     print(format_summary(summary))
     failing = summary["violations"] + summary["crashes"]
     files = ["episodes.jsonl", "summary.json"] + ([figure] if figure else [])

@@ -104,9 +104,10 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
 
 
-def add_json_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--json", action="store_true",
-                   help="print report.json on stdout instead of the tables")
+def add_json_option(
+    p: argparse.ArgumentParser, help: str = "print report.json on stdout instead of the tables"
+) -> None:
+    p.add_argument("--json", action="store_true", help=help)
 
 
 def add_scoring_options(p: argparse.ArgumentParser) -> None:

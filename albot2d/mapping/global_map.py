@@ -37,6 +37,7 @@ from albot2d.mapping.deletion import (
     view_polygon,
 )
 from albot2d.mapping.spatial_index import SegmentGridIndex
+from albot2d.reprs import compact_fields
 
 __all__ = ["GlobalMap", "GlobalMapParams", "MapSnapshot", "UpdateReport", "view_polygon"]
 
@@ -48,6 +49,9 @@ class MapSnapshot(NamedTuple):
 
     segments: NDArray[np.float64]
     map_ids: NDArray[np.int64]
+
+    def __repr__(self) -> str:
+        return compact_fields("MapSnapshot", segments=self.segments, map_ids=self.map_ids)
 
 
 class UpdateReport(NamedTuple):
