@@ -102,6 +102,8 @@ class PhysicsParams:
         check_in_range(self, "contact_slop_m", 0.0, 0.01)
 
 
+# Bisection steps when a box's move runs into something (the stop point to ~1/256 of a step).
+_BOX_BISECTION_STEPS = 8
 # Contacts this much deeper than before still count as no deeper (float noise).
 _DEPTH_SLACK_M = 1e-9
 # Depths of ``Space.shape_query`` contacts are read as ``abs(distance)``: a query reports only
@@ -277,9 +279,46 @@ class Dynamics:
         self.space.reindex_shapes_for_body(robot.body)
         self.space.step(h)
         for body in self._boxes:
-            pymunk.Body.update_position(body, h)
-            self.space.reindex_shapes_for_body(body)
+            self._move_box(body, h, robot)
         robot.sync_body()
+
+    def _move_box(self, body: pymunk.Body, h: float, robot: KinematicRobot) -> None:
+        """Move a box by its solved velocity, but not deeper into a wall, clutter, a person
+        or another box than ``push_overlap_limit_m`` (or than it was): contacts are found
+        before this move, so one it runs into is cut short (bisected) and stops it."""
+        (x0, y0), a0 = body.position, body.angle
+        limit = max(self.params.push_overlap_limit_m, self._box_depth(body, robot))
+        pymunk.Body.update_position(body, h)
+        self.space.reindex_shapes_for_body(body)
+        if self._box_depth(body, robot) <= limit:
+            return
+        (x1, y1), a1 = body.position, body.angle
+        lo, hi = 0.0, 1.0
+        for _ in range(_BOX_BISECTION_STEPS):
+            mid = 0.5 * (lo + hi)
+            body.position = (x0 + mid * (x1 - x0), y0 + mid * (y1 - y0))
+            body.angle = a0 + mid * (a1 - a0)
+            self.space.reindex_shapes_for_body(body)
+            if self._box_depth(body, robot) <= limit:
+                lo = mid
+            else:
+                hi = mid
+        body.position = (x0 + lo * (x1 - x0), y0 + lo * (y1 - y0))
+        body.angle = a0 + lo * (a1 - a0)
+        body.velocity = (0.0, 0.0)
+        body.angular_velocity = 0.0
+        self.space.reindex_shapes_for_body(body)
+
+    def _box_depth(self, box: pymunk.Body, robot: KinematicRobot) -> float:
+        """How deep ``box`` reaches into anything but itself and the robot (0: nothing)."""
+        deepest = 0.0
+        for shape in box.shapes:
+            for hit in self.space.shape_query(shape):
+                if hit.shape.body is robot.body or hit.shape.body is box:
+                    continue
+                points = hit.contact_point_set.points
+                deepest = max(deepest, max((abs(p.distance) for p in points), default=0.0))
+        return deepest
 
     def _push_depth(self, robot: KinematicRobot, at: Pose) -> float:
         """How deep the deepest box reaches into the robot's disc placed at ``at``, or into
@@ -291,12 +330,7 @@ class Dynamics:
             if body is not None and body.body_type == pymunk.Body.DYNAMIC:
                 deepest = max(deepest, radius - hit.distance)
         for box in self._boxes:
-            for shape in box.shapes:
-                for hit in self.space.shape_query(shape):
-                    if hit.shape.body is robot.body or hit.shape.body is box:
-                        continue
-                    points = hit.contact_point_set.points
-                    deepest = max(deepest, max((abs(p.distance) for p in points), default=0.0))
+            deepest = max(deepest, self._box_depth(box, robot))
         return deepest
 
     def _walk(self, walker: _Walker, h: float, robot: KinematicRobot) -> None:
