@@ -57,8 +57,14 @@ class DriveStats:
 
 
 def drive_with_moving_obstacles(
-    steps: int, *, seed: int = 0, obstacles: int = 12, size_m: float = 20.0,
-    profile: str = "dataset1", tour_m: float = 40.0, tolerance_m: float = 0.01,
+    steps: int,
+    *,
+    seed: int = 0,
+    obstacles: int = 12,
+    size_m: float = 20.0,
+    profile: str = "dataset1",
+    tour_m: float = 40.0,
+    tolerance_m: float = 0.01,
     route_boxes: int = 4,
 ) -> DriveStats:
     """Drive generated worlds (``obstacles`` moving obstacles each) for ``steps`` steps."""
@@ -69,12 +75,14 @@ def drive_with_moving_obstacles(
         size = max(size_m, _MIN_SIZE_M.get(kind, 0.0))
         world_seed = seed * 100_003 + k
         k += 1
-        world = generate(kind, seed=world_seed, width_m=size, height_m=size,
-                         dynamic_obstacles=obstacles)
+        world = generate(
+            kind, seed=world_seed, width_m=size, height_m=size, dynamic_obstacles=obstacles
+        )
         tour = world.tour(np.random.default_rng(world_seed), kind="loop", min_length_m=tour_m)
         world = with_route_boxes(world, tour, route_boxes, np.random.default_rng(world_seed))
-        checker = ClearanceChecker.for_world(world, moving_tolerance_m=tolerance_m,
-                                             raise_at_once=False)
+        checker = ClearanceChecker.for_world(
+            world, moving_tolerance_m=tolerance_m, raise_at_once=False
+        )
         substeps = 0
 
         def observe(pose: Pose, poses: np.ndarray, checker: ClearanceChecker = checker) -> None:
@@ -82,8 +90,9 @@ def drive_with_moving_obstacles(
             substeps += 1
             checker.add(pose, poses)
 
-        sim = Simulator(world, seed=world_seed, laser_noise=LaserNoise.zero(),
-                        physics_observer=observe)
+        sim = Simulator(
+            world, seed=world_seed, laser_noise=LaserNoise.zero(), physics_observer=observe
+        )
         for frame in sim.drive(tour, profile):
             checker.add(frame.true_pose, frame.obstacle_poses)
             stats.frames += 1
@@ -123,7 +132,12 @@ def with_route_boxes(world: World, tour: Tour, count: int, rng: np.random.Genera
         if np.hypot(*(p - start)) < 1.0 or any(np.hypot(*(p - q)) < 1.0 for q in placed):
             continue
         placed.append(p)
-        boxes.append(DynamicObstacle("box", square, Pose(float(p[0]), float(p[1]),
-                                                         float(rng.uniform(-np.pi, np.pi))),
-                                     mass_kg=float(rng.uniform(5.0, 20.0))))
+        boxes.append(
+            DynamicObstacle(
+                "box",
+                square,
+                Pose(float(p[0]), float(p[1]), float(rng.uniform(-np.pi, np.pi))),
+                mass_kg=float(rng.uniform(5.0, 20.0)),
+            )
+        )
     return dataclasses.replace(world, dynamic_obstacles=world.dynamic_obstacles + tuple(boxes))

@@ -27,13 +27,13 @@ from worldgen.world import DynamicObstacle, Tour, World
 class Scene:
     """A room world, its space, the robot and the dynamics, every sub-step checked."""
 
-    def __init__(self, world: World, robot_pose: Pose, params: PhysicsParams | None = None
-                 ) -> None:
+    def __init__(self, world: World, robot_pose: Pose, params: PhysicsParams | None = None) -> None:
         self.world = world
         self.space = build_space(world)
         self.robot = KinematicRobot(self.space, pose=robot_pose)
-        self.checker = ClearanceChecker.for_world(world, 0.25, moving_tolerance_m=0.0,
-                                                  raise_at_once=False)
+        self.checker = ClearanceChecker.for_world(
+            world, 0.25, moving_tolerance_m=0.0, raise_at_once=False
+        )
         self.poses: list[np.ndarray] = []
         self.dyn = Dynamics(world, self.space, make_rng(0), params, observer=self.observe)
 
@@ -43,8 +43,9 @@ class Scene:
 
     def move(self, distance_m: float, duration_s: float) -> MoveResult:
         n, h = self.dyn.substeps(duration_s)
-        return self.robot.move(distance_m, substeps=n,
-                               on_substep=lambda a, b: self.dyn.step(h, self.robot, a, b))
+        return self.robot.move(
+            distance_m, substeps=n, on_substep=lambda a, b: self.dyn.step(h, self.robot, a, b)
+        )
 
     def finish(self) -> np.ndarray:
         assert self.checker.finish() == []
@@ -69,7 +70,7 @@ def test_person_who_cannot_step_aside_stops_and_turns_back() -> None:
     xs = scene.finish()[:, 0, 0]
     stop = 6.0 - 0.25 - 0.05 - 0.15  # the robot's edge, the clearance, half the person
     assert xs.max() == pytest.approx(stop, abs=0.06)  # stood just short of the robot
-    assert xs[int(np.argmax(xs)):].min() < stop - 3.0  # then turned back (after its patience)
+    assert xs[int(np.argmax(xs)) :].min() < stop - 3.0  # then turned back (after its patience)
     assert scene.checker.max_moving_overlap_m <= -0.05 + 1e-9
 
 
@@ -128,8 +129,9 @@ def test_frames_carry_obstacle_poses_and_runs_repeat_bit_for_bit() -> None:
     a, b = run(), run()
     assert all(f.obstacle_poses is not None and f.obstacle_poses.shape == (2, 3) for f in a)
     assert not a[-1].obstacle_poses.flags.writeable
-    assert all(np.array_equal(f.obstacle_poses, g.obstacle_poses)
-               for f, g in zip(a, b, strict=True))
+    assert all(
+        np.array_equal(f.obstacle_poses, g.obstacle_poses) for f, g in zip(a, b, strict=True)
+    )
     checker = ClearanceChecker.for_world(world, 0.25, moving_tolerance_m=0.0)
     for f in a:
         checker(f)
@@ -202,8 +204,14 @@ def test_too_many_moving_obstacles_are_refused_by_name() -> None:
 
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("step_s", 1e-6), ("step_s", 1.0), ("person_clearance_m", -0.1),
-     ("push_overlap_limit_m", 0.0), ("contact_slop_m", 0.5), ("person_patience_s", math.inf)],
+    [
+        ("step_s", 1e-6),
+        ("step_s", 1.0),
+        ("person_clearance_m", -0.1),
+        ("push_overlap_limit_m", 0.0),
+        ("contact_slop_m", 0.5),
+        ("person_patience_s", math.inf),
+    ],
 )
 def test_physics_limits_are_named(field: str, value: float) -> None:
     with pytest.raises(InputError, match=f"PhysicsParams.{field}"):
@@ -215,8 +223,11 @@ def test_fastest_person_on_shortest_path_stays_bounded_and_clear() -> None:
 
     walk = np.array([[3.0, 1.5], [3.0 + MIN_WALK_PATH_M, 1.5]])
     runner = person(walk, speed=MAX_OBSTACLE_SPEED_M_S)
-    scene = Scene(room_world((runner,)), Pose(3.5, 1.5, 0.0),
-                  PhysicsParams(step_s=0.1, person_speed_jitter=0.9))
+    scene = Scene(
+        room_world((runner,)),
+        Pose(3.5, 1.5, 0.0),
+        PhysicsParams(step_s=0.1, person_speed_jitter=0.9),
+    )
     scene.dyn.advance(30.0, scene.robot)  # 300 steps, each at most a few turns
     scene.finish()
     assert scene.checker.max_moving_overlap_m < 0.0
