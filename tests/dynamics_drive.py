@@ -41,6 +41,8 @@ class DriveStats:
     frames: int = 0
     collided_frames: int = 0
     moving_obstacles: int = 0
+    pushed_boxes: int = 0  # boxes that ended more than 5 cm from where they started
+    people_walked: int = 0  # people who moved more than 1 m from where they started
     max_static_overlap_m: float = -np.inf
     max_moving_overlap_m: float = -np.inf
     static_overlaps: int = 0
@@ -66,12 +68,13 @@ def drive_with_moving_obstacles(
     tour_m: float = 40.0,
     tolerance_m: float = 0.01,
     route_boxes: int = 4,
+    kinds: tuple[str, ...] = KINDS,
 ) -> DriveStats:
     """Drive generated worlds (``obstacles`` moving obstacles each) for ``steps`` steps."""
     stats = DriveStats()
     k = 0
     while stats.steps < steps:
-        kind = KINDS[k % len(KINDS)]
+        kind = kinds[k % len(kinds)]
         size = max(size_m, _MIN_SIZE_M.get(kind, 0.0))
         world_seed = seed * 100_003 + k
         k += 1
@@ -84,11 +87,22 @@ def drive_with_moving_obstacles(
             world, moving_tolerance_m=tolerance_m, raise_at_once=False
         )
         substeps = 0
+        first: list[np.ndarray] = []
+        last: list[np.ndarray] = []
 
-        def observe(pose: Pose, poses: np.ndarray, checker: ClearanceChecker = checker) -> None:
+        def observe(
+            pose: Pose,
+            poses: np.ndarray,
+            checker: ClearanceChecker = checker,
+            first: list[np.ndarray] = first,
+            last: list[np.ndarray] = last,
+        ) -> None:
             nonlocal substeps
             substeps += 1
             checker.add(pose, poses)
+            if not first:
+                first.append(poses.copy())
+            last[:] = [poses]
 
         sim = Simulator(
             world, seed=world_seed, laser_noise=LaserNoise.zero(), physics_observer=observe
@@ -105,6 +119,11 @@ def drive_with_moving_obstacles(
         stats.worlds += 1
         stats.substeps += substeps
         stats.moving_obstacles += len(world.dynamic_obstacles)
+        if first:
+            moved = np.hypot(*(last[0][:, :2] - first[0][:, :2]).T)
+            kinds = np.array([o.kind for o in world.dynamic_obstacles])
+            stats.pushed_boxes += int(((kinds == "box") & (moved > 0.05)).sum())
+            stats.people_walked += int(((kinds == "person") & (moved > 1.0)).sum())
         stats.world_specs.append((kind, world_seed))
     return stats
 
