@@ -1,24 +1,29 @@
 """Moving obstacles during a simulation: ``PhysicsParams`` and ``Dynamics``.
 
 People walk back and forth along their ``DynamicObstacle.path`` as KINEMATIC bodies placed
-by this module, never by the solver. Before each step a person checks where it would be:
-it keeps ``person_clearance_m`` (at least half its step, so it cannot pass through the
-robot between two checks) from the robot's disc and never walks into a box; otherwise it
-stands, and after ``person_patience_s`` of standing it turns back. The robot stops at
-people (``KinematicRobot``), so neither walks into the other.
+by this module, never by the solver. Their pymunk shapes are rounded by
+``person_clearance_m``, so the robot (``KinematicRobot``, which stops at kinematic bodies)
+stops that far from a person's true outline. Each sub-step a person tries its candidate
+moves in turn and takes the first that keeps a gap ≥ 0 to the robot on the rounded shape
+(more when its step is longer than twice that margin, so it cannot pass through the disc
+between two checks) and gets no deeper into a box, nor, off its path, into a wall or
+clutter: with the robot close ahead it steps aside (away from it, then the other way, up
+to ``person_max_sidestep_m``) or backs away; otherwise it walks on, drifting back onto
+its path. With no move possible it stands, and after ``person_patience_s`` it turns back.
 
 Movable boxes are DYNAMIC bodies pushed through pymunk contact when the robot runs into
 them, slowed down by the space's damping as if by floor friction. Chipmunk moves a body
 by the velocity of the *previous* solve, which would leave a box pushed by the robot
 inside the disc for one step, so boxes are moved right after each solve instead
-(``pymunk.Body.update_position``, the solver's own integration, just earlier). A robot
-sub-step that would push a box deeper than ``push_overlap_limit_m`` into the disc or
-into anything else (the box is pinned against a wall, a person or another box) is undone
-and the robot stops there (``KinematicRobot.refuse_substep``).
+(``pymunk.Body.update_position``, the solver's own integration, just earlier); a move
+that would take a box deeper than ``push_overlap_limit_m`` into a wall, clutter, a person
+or another box is cut short (bisected) and stops the box. A robot sub-step that still
+leaves a box deeper than that in the disc or anywhere (the box is pinned) is undone and
+the robot stops there (``KinematicRobot.refuse_substep``).
 
 ``Dynamics`` steps all this in fixed sub-steps, gives the laser the obstacles' current
-outlines and, for checks, their true poses (``poses``) and an ``observer`` hook called
-after every sub-step.
+(true) outlines and, for checks, their true poses (``poses``) and an ``observer`` hook
+called after every sub-step.
 """
 
 from __future__ import annotations
@@ -248,9 +253,10 @@ class Dynamics:
         """One physics sub-step of ``h`` s while the robot goes from ``previous`` to ``new``
         (the robot's own pose is already ``new``; its body sweeps so it pushes boxes).
 
-        A move that would press a box into the disc (beyond ``push_overlap_limit_m``) is
-        undone with ``robot.refuse_substep()`` (only valid inside ``KinematicRobot.move``'s
-        callback) and the sub-step is simulated with the robot standing at ``previous``.
+        A move that leaves a box deeper than ``push_overlap_limit_m`` in the disc or in
+        anything else (and deeper than with the robot at ``previous``) is undone with
+        ``robot.refuse_substep()`` (only valid inside ``KinematicRobot.move``'s callback)
+        and the sub-step is simulated with the robot standing at ``previous``.
         """
         if self._boxes and previous != new:
             saved = [(b.position, b.angle, b.velocity, b.angular_velocity) for b in self._boxes]
