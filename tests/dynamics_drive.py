@@ -121,9 +121,9 @@ def drive_with_moving_obstacles(
         stats.moving_obstacles += len(world.dynamic_obstacles)
         if first:
             moved = np.hypot(*(last[0][:, :2] - first[0][:, :2]).T)
-            kinds = np.array([o.kind for o in world.dynamic_obstacles])
-            stats.pushed_boxes += int(((kinds == "box") & (moved > 0.05)).sum())
-            stats.people_walked += int(((kinds == "person") & (moved > 1.0)).sum())
+            kind_of = np.array([o.kind for o in world.dynamic_obstacles])
+            stats.pushed_boxes += int(((kind_of == "box") & (moved > 0.05)).sum())
+            stats.people_walked += int(((kind_of == "person") & (moved > 1.0)).sum())
         stats.world_specs.append((kind, world_seed))
     return stats
 
