@@ -103,6 +103,8 @@ class Frame:
       previous frame in the previous robot frame (identity for the first frame).
     - ``true_pose``: ground truth in the world frame; ``None`` for real logs.
     - ``collided``: the motion into this frame was blocked by an obstacle.
+    - ``obstacle_poses``: in simulation, the true poses ``(M, 3)`` of the world's moving
+      obstacles (``World.dynamic_obstacles`` order) at this frame; ``None`` otherwise.
     """
 
     index: int
@@ -112,6 +114,12 @@ class Frame:
     odom_increment: Pose
     true_pose: Pose | None = None
     collided: bool = False
+    obstacle_poses: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        if self.obstacle_poses is not None:
+            poses = _readonly(self.obstacle_poses, np.float64).reshape(-1, 3)
+            object.__setattr__(self, "obstacle_poses", poses)
 
     def __repr__(self) -> str:
         return (f"Frame(index={self.index}, timestamp={self.timestamp:.6g}, "

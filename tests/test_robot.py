@@ -261,3 +261,21 @@ def test_move_in_substeps_calls_back_and_stays_an_exact_composition() -> None:
     assert blocked.collided and len(calls) < 7 + 10
     with pytest.raises(InputError, match="substeps"):
         robot.move(1.0, substeps=0)
+
+
+def test_refused_substep_goes_back_exactly_and_ends_the_move() -> None:
+    start = Pose(1.0, 2.0, 0.2)
+    robot = KinematicRobot(Room(10.0, 4.0, [], []).space(), pose=start)
+    seen: list[Pose] = []
+
+    def physics(previous: Pose, new: Pose) -> None:
+        seen.append(new)
+        if len(seen) == 3:
+            robot.refuse_substep()  # e.g. a box pinned ahead: this part is undone
+
+    result = robot.move(2.0, substeps=10, on_substep=physics)
+    assert result.collided and len(seen) == 3
+    assert result.pose == seen[1] == start.compose(result.increment)
+    assert result.distance_m == pytest.approx(0.4)
+    with pytest.raises(RuntimeError, match="only valid inside"):
+        robot.refuse_substep()

@@ -9,6 +9,7 @@ and JSON loading all produce this one type.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
@@ -17,12 +18,23 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from albot2d.errors import InputError
 from albot2d.geometry import Pose, as_segments, polygon_ring_segments
 
 if TYPE_CHECKING:
     import networkx as nx
 
-__all__ = ["DynamicObstacle", "Roadmap", "Tour", "TourKind", "World"]
+__all__ = [
+    "MAX_OBSTACLE_MASS_KG",
+    "MAX_OBSTACLE_POINTS",
+    "MAX_OBSTACLE_SPEED_M_S",
+    "MIN_WALK_PATH_M",
+    "DynamicObstacle",
+    "Roadmap",
+    "Tour",
+    "TourKind",
+    "World",
+]
 
 FloatArray = NDArray[np.float64]
 TourKind = Literal["loop", "out_and_back", "backtracking", "circuit"]
@@ -100,12 +112,28 @@ class Tour:
         return np.hstack([self.waypoints[:-1], self.waypoints[1:]])
 
 
+# Limits of a moving obstacle (each bounds the simulator's work; see DynamicObstacle).
+MAX_OBSTACLE_SPEED_M_S = 5.0
+MIN_WALK_PATH_M = 0.1
+MAX_OBSTACLE_POINTS = 10_000
+MAX_OBSTACLE_MASS_KG = 1e6
+_OBSTACLE_KINDS = ("box", "person")
+
+
 @dataclass(frozen=True, eq=False)
 class DynamicObstacle:
     """An obstacle that moves: a movable ``box`` (a dynamic body the robot can push) or a
     ``person`` walking back and forth along ``path`` at ``speed_m_s``.
 
     ``shape`` is the outline ``(K, 2)`` in the obstacle's own frame; ``pose`` is its start pose.
+
+    Values are checked here (``InputError`` naming the field, the value and the limit): every
+    number finite, a shape of positive area, at most ``MAX_OBSTACLE_POINTS`` shape or path
+    points, ``0 <= speed_m_s <= MAX_OBSTACLE_SPEED_M_S`` and ``0 < mass_kg <=
+    MAX_OBSTACLE_MASS_KG``. The simulator (``albot2d.sim.dynamics``) also refuses a walking
+    person whose path is shorter than ``MIN_WALK_PATH_M``: with the speed limit this bounds
+    the work of every simulated second (a person turns back at most a few times per physics
+    step).
     """
 
     kind: Literal["box", "person"]
@@ -116,8 +144,55 @@ class DynamicObstacle:
     mass_kg: float = 10.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "shape", _frozen(np.asarray(self.shape, float).reshape(-1, 2)))
-        object.__setattr__(self, "path", _frozen(np.asarray(self.path, float).reshape(-1, 2)))
+        if self.kind not in _OBSTACLE_KINDS:
+            raise InputError(f"DynamicObstacle.kind must be one of {_OBSTACLE_KINDS}, "
+                             f"got {self.kind!r}")
+        shape = _obstacle_points(self.shape, "shape")
+        path = _obstacle_points(self.path, "path")
+        _obstacle_points([self.pose.x, self.pose.y], "pose")
+        _obstacle_number(self.pose.theta, "pose theta")
+        if len(shape) < 3 or shapely.Polygon(shape).convex_hull.area <= 0.0:
+            raise InputError(f"DynamicObstacle.shape must be an outline of positive area "
+                             f"(3 or more points, not all on one line), got {_head(shape)}")
+        speed = _obstacle_number(self.speed_m_s, "speed_m_s")
+        if not 0.0 <= speed <= MAX_OBSTACLE_SPEED_M_S:
+            raise InputError(f"DynamicObstacle.speed_m_s must be in [0, {MAX_OBSTACLE_SPEED_M_S}] "
+                             f"m/s (MAX_OBSTACLE_SPEED_M_S), got {speed!r}")
+        mass = _obstacle_number(self.mass_kg, "mass_kg")
+        if not 0.0 < mass <= MAX_OBSTACLE_MASS_KG:
+            raise InputError(f"DynamicObstacle.mass_kg must be in (0, {MAX_OBSTACLE_MASS_KG:g}] "
+                             f"kg (MAX_OBSTACLE_MASS_KG), got {mass!r}")
+        object.__setattr__(self, "shape", _frozen(shape))
+        object.__setattr__(self, "path", _frozen(path))
+
+
+def _head(points: FloatArray, count: int = 4) -> str:
+    text = str(points[:count].tolist())
+    return text if len(points) <= count else f"{text[:-1]}, ... ({len(points)} points)]"
+
+
+def _obstacle_number(value: Any, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise InputError(f"DynamicObstacle.{name} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise InputError(f"DynamicObstacle.{name} must be finite, got {value!r}")
+    return float(value)
+
+
+def _obstacle_points(value: Any, name: str) -> FloatArray:
+    """``value`` as an ``(K, 2)`` float array of finite coordinates."""
+    try:
+        pts = np.asarray(value, dtype=np.float64).reshape(-1, 2)
+    except (TypeError, ValueError):
+        raise InputError(f"DynamicObstacle.{name} must be [x, y] points, got {value!r}") from None
+    if len(pts) > MAX_OBSTACLE_POINTS:
+        raise InputError(f"DynamicObstacle.{name} has {len(pts)} points; at most "
+                         f"{MAX_OBSTACLE_POINTS} (MAX_OBSTACLE_POINTS)")
+    bad = ~np.isfinite(pts)
+    if bad.any():
+        k = int(np.flatnonzero(bad.any(axis=1))[0])
+        raise InputError(f"DynamicObstacle.{name} point {k} must be finite, got {pts[k].tolist()}")
+    return pts
 
 
 @dataclass(frozen=True, eq=False)

@@ -179,6 +179,7 @@ class _Checks:
         self.spec = spec
         self.laser = LaserNoise.zero() if spec.laser_noise == "zero" else LaserNoise.sick_lms200()
         self.frames: sim_inv.FrameChecker | None = None
+        self.clearance: sim_inv.ClearanceChecker | None = None
         self.updates: inv.UpdateRecorder | None = None
         self.world: Any = None
         self.checked: list[str] = []
@@ -186,11 +187,15 @@ class _Checks:
 
     def on_start(self, world: Any, tour: Any) -> None:
         self.world = world
+        self.clearance = sim_inv.ClearanceChecker.for_world(world, RobotParams().radius_m,
+                                                            raise_at_once=False)
         if not world.dynamic_obstacles:  # hits on moving obstacles are not on the walls
             self.frames = sim_inv.FrameChecker(world.obstacle_segments, self.laser,
                                            raise_at_once=False)
 
     def on_frame(self, frame: Any, travelled_m: float) -> None:
+        if self.clearance is not None:  # walls, clutter and moving obstacles at every frame
+            self.clearance(frame)
         if self.frames is not None:
             self.frames(frame)
 
@@ -226,8 +231,9 @@ class _Checks:
         trace = result.trace
         truth = trace.true_poses
         assert truth is not None and self.world is not None  # a simulated run
-        self.run("robot_clear_of_obstacles", sim_inv.check_robot_clear,
-                 self.world.obstacle_segments, truth, RobotParams().radius_m)
+        assert self.clearance is not None
+        self.checked.append("robot_clear_of_obstacles")
+        self.add("robot_clear_of_obstacles", self.clearance.finish())
         if self.frames is not None:
             self.checked.append("laser_hits_on_obstacles")
             self.add("laser_hits_on_obstacles", self.frames.finish())

@@ -3,8 +3,10 @@
 A Pioneer-3DX-like robot: a disc with unicycle kinematics, moved as a KINEMATIC pymunk
 body among a space's shapes. Static shapes (walls, clutter) and other kinematic bodies
 (walking people) block it; DYNAMIC bodies (movable boxes) do not block — the simulator
-lets pymunk push them. A blocked move stops just short of contact (``contact_skin_m``)
-and is reported as a collision; turning in place never collides (the robot is a disc).
+lets pymunk push them, and undoes a sub-step (``refuse_substep``) that would push a box
+into something that does not give way. A blocked move stops just short of contact
+(``contact_skin_m``) and is reported as a collision; turning in place never collides (the
+robot is a disc).
 
 The true pose is always ``previous pose ⊕ increment`` (``Pose.compose``), the same
 composition odometry uses, so zero-noise odometry equals the truth bit for bit.
@@ -110,6 +112,9 @@ class KinematicRobot:
         self.shape.filter = pymunk.ShapeFilter(group=_ROBOT_GROUP)
         self._query_filter = pymunk.ShapeFilter(group=_ROBOT_GROUP)
         self._pose = Pose()
+        # The pose a move's current sub-step started from, while its callback runs.
+        self._substep_start: Pose | None = None
+        self._refused = False
         space.add(self.body, self.shape)
         self.set_pose(pose if pose is not None else Pose())
 
@@ -210,8 +215,10 @@ class KinematicRobot:
 
         With ``substeps`` > 1 the move is made in that many equal parts and
         ``on_substep(previous_pose, new_pose)`` runs after each (the simulator steps the
-        physics there, so moving obstacles move and pushed boxes get pushed). The pose
-        stays ``start ⊕ Pose(moved, 0, 0)`` exactly, whatever the number of parts.
+        physics there, so moving obstacles move and pushed boxes get pushed). The callback
+        may call ``refuse_substep``: the robot then goes back to where that part began and
+        the move ends there, blocked. The pose stays ``start ⊕ Pose(moved, 0, 0)`` exactly,
+        whatever the number of parts.
         """
         distance = _check_finite("move distance_m", distance_m)
         if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
@@ -221,15 +228,36 @@ class KinematicRobot:
         before: Pose | None = None
         blocked = False
         for _ in range(substeps):
-            previous = self._pose
+            previous, before_previous = self._pose, before
             _, fraction, before = self._slide(start, before, part)
             if on_substep is not None:
-                on_substep(previous, self._pose)
+                self._substep_start = previous
+                try:
+                    on_substep(previous, self._pose)
+                finally:
+                    self._substep_start = None
+                if self._refused:
+                    self._refused = False
+                    before, blocked = before_previous, True
+                    break
             if fraction < 1.0:
                 blocked = True
                 break
         done = before if before is not None else Pose()
         return MoveResult(self._pose, abs(done.x), 0.0, blocked, done)
+
+    def refuse_substep(self) -> None:
+        """Undo the sub-step just made, from inside ``move``'s ``on_substep`` callback.
+
+        The physics calls this when the part would push a box into something that does not
+        give way (a wall, a person, another box): the robot is put back exactly where the
+        part began (a pose the move already reached) and ``move`` ends there, blocked.
+        """
+        if self._substep_start is None:
+            raise RuntimeError("refuse_substep is only valid inside a move's on_substep callback")
+        self._pose = self._substep_start
+        self._refused = True
+        self.sync_body()
 
     def turn_then_move(self, angle_rad: float, distance_m: float) -> MoveResult:
         """The paper's linear motion: turn ``angle_rad`` then move ``distance_m``."""

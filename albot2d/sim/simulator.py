@@ -26,7 +26,7 @@ from albot2d.frames import Frame
 from albot2d.geometry import Pose
 from albot2d.seeding import SeedLike, make_rng, spawn_seeds
 from albot2d.sim.driving import DrivingProfile, Step, TourController, get_profile
-from albot2d.sim.dynamics import Dynamics, PhysicsParams
+from albot2d.sim.dynamics import Dynamics, PhysicsParams, SubstepObserver
 from albot2d.sim.laser import Laser, LaserNoise, LaserParams
 from albot2d.sim.odometry import Odometry, OdometryNoise
 from albot2d.sim.robot import KinematicRobot, MoveResult, RobotParams
@@ -55,6 +55,7 @@ class Simulator:
         laser_noise: LaserNoise | None = None,
         odometry: OdometryNoise | None = None,
         physics: PhysicsParams | None = None,
+        physics_observer: SubstepObserver | None = None,
     ) -> None:
         self.world = world
         self.robot_params = robot if robot is not None else RobotParams()
@@ -62,6 +63,7 @@ class Simulator:
         self.laser_noise = laser_noise if laser_noise is not None else LaserNoise()
         self.odometry_noise = odometry if odometry is not None else OdometryNoise()
         self.physics = physics if physics is not None else PhysicsParams()
+        self.physics_observer = physics_observer  # called after every physics sub-step
         self._seeds = dict(zip(_STREAMS, spawn_seeds(seed, len(_STREAMS)), strict=True))
         self._laser = Laser(world.obstacle_segments, self.laser_params, self.laser_noise)
 
@@ -100,7 +102,8 @@ class Simulator:
         obstacle_rng = make_rng(self._seeds["dynamic_obstacles"])
         space = build_space(self.world)
         robot = KinematicRobot(space, self.robot_params, start)
-        dynamics = Dynamics(self.world, space, obstacle_rng, self.physics)
+        dynamics = Dynamics(self.world, space, obstacle_rng, self.physics,
+                            observer=self.physics_observer)
         noise = dataclasses.replace(
             self.odometry_noise,
             induced_step_m=self.odometry_noise.induced_step_m + profile.induced_step_m,
@@ -115,7 +118,8 @@ class Simulator:
             extra = dynamics.outlines() if dynamics.active else None
             scan = self._laser.scan(robot.pose, laser_rng, timestamp=t, extra_segments=extra)
             return Frame(index=index, timestamp=t, scan=scan, odom_pose=odometry.pose,
-                         odom_increment=increment, true_pose=robot.pose, collided=collided)
+                         odom_increment=increment, true_pose=robot.pose, collided=collided,
+                         obstacle_poses=dynamics.poses() if dynamics.active else None)
 
         t = 0.0
         index = 0

@@ -2,6 +2,8 @@
 
 People walk back and forth along a shortest roadmap path between two nodes at least
 ``_MIN_WALK_M`` apart; boxes sit where they block no roadmap edge, with room around them.
+Both start at least ``_START_CLEARANCE_M`` from the robot's start point (a person whose
+path begins there starts from the path's other end).
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ _PERSON_SHAPE = np.array(
     [[0.12, 0.25], [-0.12, 0.25], [-0.15, 0.0], [-0.12, -0.25], [0.12, -0.25], [0.15, 0.0]]
 )
 _BOX_TRIES = 64
+# Moving obstacles start at least this far from the robot's start point.
+_START_CLEARANCE_M = 1.0
 
 
 def _person(world: World, rng: np.random.Generator) -> DynamicObstacle | None:
@@ -31,6 +35,8 @@ def _person(world: World, rng: np.random.Generator) -> DynamicObstacle | None:
             continue
         path = nx.shortest_path(graph, a, b, weight="weight")
         pts = nodes[path]
+        if np.hypot(*(pts[0] - world.start.position)) < _START_CLEARANCE_M:
+            pts = pts[::-1]  # start at the far end, not on the robot
         heading = float(np.arctan2(*(pts[1] - pts[0])[::-1]))
         return DynamicObstacle(
             kind="person",
@@ -57,7 +63,9 @@ def _box(
     network = shapely.multilinestrings(shapely.linestrings(legs)) if len(legs) else None
     path_gap = shapely.distance(spots, network) if network is not None else np.inf
     need = half_diag + world.robot_radius_m + 0.05
+    start_gap = shapely.distance(spots, shapely.Point(world.start.x, world.start.y))
     ok = inside & (wall_gap > half_diag + 0.05) & (path_gap > need)
+    ok &= start_gap > half_diag + _START_CLEARANCE_M
     for g in taken:
         ok &= shapely.distance(spots, g) > 2 * half_diag
     good = np.flatnonzero(ok)
