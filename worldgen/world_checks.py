@@ -30,7 +30,7 @@ import shapely
 
 from albot2d.errors import InputError
 from worldgen.params import MAX_DYNAMIC_OBSTACLES, MAX_ROBOT_RADIUS_M
-from worldgen.world import World
+from worldgen.world import MAX_OBSTACLE_SPEED_M_S, World
 
 __all__ = [
     "MAX_CLUTTER_ITEMS",
@@ -52,7 +52,6 @@ MAX_CLUTTER_ITEMS = 100_000
 MAX_ROADMAP_NODES = 200_000
 MAX_PATH_POINTS = 10_000
 MIN_OBSTACLE_AREA_M2 = 1e-4  # a 1 cm square
-MAX_OBSTACLE_SPEED_M_S = 10.0  # a sprinter
 MAX_OBSTACLE_MASS_KG = 10_000.0
 MIN_PERSON_PATH_M = 0.1
 _TOLERANCE_M = 1e-9

@@ -266,14 +266,18 @@ class WorldReader:
             raise self.fail(f"{field}.speed_m_s must be >= 0, got {_short(speed)}")
         if mass <= 0.0:
             raise self.fail(f"{field}.mass_kg must be > 0, got {_short(mass)}")
-        return DynamicObstacle(
-            kind=doc["kind"],
-            shape=self.ring(doc["shape"], f"{field}.shape"),
-            pose=Pose(*self.numbers(doc["pose"], f"{field}.pose", 3, "[x, y, theta]")),
-            path=self.rows(doc["path"], f"{field}.path", 2, "[x, y]"),
-            speed_m_s=speed,
-            mass_kg=mass,
-        )
+        shape = self.ring(doc["shape"], f"{field}.shape")
+        pose = Pose(*self.numbers(doc["pose"], f"{field}.pose", 3, "[x, y, theta]"))
+        path = self.rows(doc["path"], f"{field}.path", 2, "[x, y]")
+        try:
+            return DynamicObstacle(
+                kind=doc["kind"], shape=shape, pose=pose, path=path, speed_m_s=speed,
+                mass_kg=mass,
+            )  # fmt: skip
+        except InputError as exc:  # the obstacle's own checks, placed in the file
+            text = str(exc)
+            named = text.replace("DynamicObstacle.", f"{field}.")
+            raise self.fail(named if named != text else f"{field}: {text}") from None
 
     def mapping(self, value: Any, field: str) -> dict[str, Any]:
         if not isinstance(value, dict) or TYPE_TAG in value:
