@@ -1,6 +1,6 @@
 """Valid inputs to break: a small world document, a CARMEN log and its relations, as text.
 
-The bad-input corpus (``tests/test_bad_inputs.py``) and the reader fuzzing
+The bad-input corpus (``tests/test_bad_*.py``) and the reader fuzzing
 (``tests/test_reader_fuzz.py``) start from these and change one thing. Each builder returns
 a fresh copy, so a case may mutate what it gets.
 """
