@@ -69,3 +69,22 @@ def test_grid_keeps_one_point_per_cell_and_params_are_checked() -> None:
     assert len(unique_on_grid(pts, 0.05)) == 2
     with pytest.raises(Exception, match="window_m"):
         EgocentricParams(window_m=0.0)
+
+
+def test_a_run_reports_egocentric_quality_revisits_and_updates_by_region() -> None:
+    """report.json carries the new sections for a view-based mapper (and None otherwise)."""
+    from albot2d.evaluation.experiment import RunSpec, run_experiment
+
+    spec = RunSpec(kind="office", seed=1, profile="start_stop", tour_kind="circuit",
+                   noise="pioneer3dx", mappers=("albot1", "naive"), max_frames=40)  # fmt: skip
+    mappers = run_experiment(spec).report["mappers"]
+    albot1, naive = mappers["albot1"], mappers["naive"]
+    ego = albot1["map"]["egocentric"]
+    assert ego["window_m"] == 30.0 and 0.0 <= ego["completeness"] <= 1.0
+    assert ego["surfaces"] == albot1["counts"]["global_map_surfaces"]
+    assert all(0.0 <= e["egocentric_completeness"] <= 1.0 for e in albot1["homing"])
+    assert albot1["revisits"]["min_gap_maps"] == 20 and naive["revisits"] is None
+    by_region = albot1["updates_by_region"]
+    # An update is a frame that remembered a view (one frame may remember V(c-1) and V(c)).
+    assert 0 < by_region["all"]["updates"] <= albot1["counts"]["local_maps"] - 1
+    assert naive["updates_by_region"] is None

@@ -24,10 +24,9 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-import shapely
 from numpy.typing import NDArray
 
-from albot2d.evaluation.map_quality import sample_segments
+from albot2d.evaluation.map_quality import nearest_segment_distance, sample_segments
 from albot2d.geometry import Pose, as_segments, transform_points, transform_segments
 from albot2d.validation import check_positive
 
@@ -36,7 +35,6 @@ __all__ = [
     "EgocentricQuality",
     "egocentric_quality",
     "in_robot_frame",
-    "nearest_segment_distance",
     "seen_window_local",
     "unique_on_grid",
 ]
@@ -88,18 +86,6 @@ def in_robot_frame(pose: FloatArray, segments: FloatArray, reach_m: float) -> Fl
     )
     return local[near]
 
-
-def nearest_segment_distance(points: FloatArray, segments: FloatArray) -> FloatArray:
-    """Distance of each ``(P, 2)`` point to the nearest of ``(S, 4)`` segments (inf if none)."""
-    pts = np.asarray(points, np.float64).reshape(-1, 2)
-    segs = as_segments(segments)
-    if len(pts) == 0:
-        return np.zeros(0)
-    if len(segs) == 0:
-        return np.full(len(pts), np.inf)
-    tree = shapely.STRtree(shapely.linestrings(segs.reshape(-1, 2, 2)))
-    _, dist = tree.query_nearest(shapely.points(pts), return_distance=True, all_matches=False)
-    return np.asarray(dist, dtype=np.float64)
 
 
 def egocentric_quality(

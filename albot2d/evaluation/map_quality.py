@@ -31,7 +31,14 @@ from numpy.typing import ArrayLike, NDArray
 from albot2d.geometry import Pose, as_segments, segment_lengths, transform_segments
 from albot2d.validation import check_positive, check_positive_int
 
-__all__ = ["MAX_LAST_K_VIEWS", "MapQuality", "MapQualityParams", "map_quality", "sample_segments"]
+__all__ = [
+    "MAX_LAST_K_VIEWS",
+    "MapQuality",
+    "MapQualityParams",
+    "map_quality",
+    "nearest_segment_distance",
+    "sample_segments",
+]
 
 
 #: Most recent views map completeness may be asked over (more than any run has).
@@ -107,7 +114,7 @@ def _sample_distances(
     Blocks of surfaces with about ``_BLOCK_SAMPLES`` samples each are sampled and measured
     in turn, so memory stays bounded however large the map."""
     if len(segs) == 0 or len(truth) == 0:
-        return _nearest_distance(sample_segments(segs, spacing_m), truth)
+        return nearest_segment_distance(sample_segments(segs, spacing_m), truth)
     counts = np.maximum(np.ceil(segment_lengths(segs) / spacing_m).astype(np.int64), 1) + 1
     cuts = np.searchsorted(np.cumsum(counts), np.arange(_BLOCK_SAMPLES, counts.sum(),
                                                         _BLOCK_SAMPLES))  # fmt: skip
@@ -134,7 +141,7 @@ def _block_distances(
         pending = pending[~(dist[pending] <= radius)]
         if not len(pending):
             return dist
-    dist[pending] = _nearest_distance(samples[pending], truth)
+    dist[pending] = nearest_segment_distance(samples[pending], truth)
     return dist
 
 
@@ -176,7 +183,11 @@ def _bounded_distances(
     return out
 
 
-def _nearest_distance(points: NDArray[np.float64], segments: NDArray[np.float64]) -> NDArray:
+def nearest_segment_distance(
+    points: NDArray[np.float64], segments: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Distance of each ``(P, 2)`` point to the nearest of ``(S, 4)`` segments (inf if none),
+    by an STRtree nearest query."""
     if len(points) == 0:
         return np.zeros(0)
     if len(segments) == 0:
@@ -209,7 +220,7 @@ def map_quality(
     if seen_points is not None:
         seen = np.asarray(seen_points, np.float64).reshape(-1, 2)
         if len(seen):
-            cover = _nearest_distance(seen, segs_world)
+            cover = nearest_segment_distance(seen, segs_world)
             completeness = float(np.mean(cover <= p.coverage_tolerance_m))
     if len(d) == 0:
         return MapQuality(None, None, None, completeness, 0)
