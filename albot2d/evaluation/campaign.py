@@ -17,7 +17,7 @@
 - ``reproducers/episode-<k>.json`` for every failing episode (an invariant violated or a
   crash), written before its line: ``albot2d run --reproduce FILE`` replays it;
 - ``summary.json`` (``albot2d.evaluation.campaign_summary.summarise``); ``albot2d fuzz``
-  adds ``histograms.png`` (``albot2d.plots_fuzz``).
+  adds ``histograms.png`` (``albot2d.viz.campaign``).
 
 Ctrl-C: the first stops handing out episodes and lets the running ones finish and be
 written down, the second stops at once (the backend's workers are terminated); either way

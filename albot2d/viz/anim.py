@@ -19,18 +19,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from albot2d.plots_maps import (
+from albot2d.viz._figure import new_figure
+from albot2d.viz.maps import (
     EST_PATH_COLOR,
     MAP_CMAP,
     START_COLOR,
     TRUE_PATH_COLOR,
     WORLD_COLOR,
-    _anchor,
-    _anchor_path,
-    _figure,
-    _mapper_extent,
-    _set_extent,
+    anchor_path,
+    anchor_segments,
+    set_extent,
 )
+from albot2d.viz.run_figures import mapper_extent
 
 if TYPE_CHECKING:
     from albot2d.evaluation.experiment import ExperimentResult
@@ -105,20 +105,20 @@ def render_map_animation(
     mapper = trace.mappers[name]
     truth = trace.true_poses
     start = None if truth is None else truth[0]
-    est = _anchor_path(start, np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3))
+    est = anchor_path(start, np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3))
     plan = _moments(result, name, moments)
-    extent = _mapper_extent(result, name)
+    extent = mapper_extent(result, name)
     span = 1.0 if extent is None else max(extent[2] - extent[0], extent[3] - extent[1])
     arrow = span / 40.0
 
-    fig = _figure(11.0, 5.6)
+    fig = new_figure(11.0, 5.6)
     ax_true, ax_map = fig.subplots(1, 2)
     for ax in (ax_true, ax_map):
         if result.world is not None and len(result.world.obstacle_segments):
             segs = result.world.obstacle_segments.reshape(-1, 2, 2)
             color = "#1a1a1a" if ax is ax_true else WORLD_COLOR
             ax.add_collection(LineCollection(segs, colors=color, linewidths=0.8, zorder=1))
-        _set_extent(ax, extent)
+        set_extent(ax, extent)
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
     (true_line,) = ax_true.plot([], [], "-", color=TRUE_PATH_COLOR, lw=1.2, zorder=3)
@@ -150,7 +150,7 @@ def render_map_animation(
     def draw(k: int) -> list[Any]:
         row, update = plan[k]
         snap = mapper.global_map(at_update=update)  # type: ignore[call-arg]
-        segs = _anchor(start, np.asarray(snap.segments, np.float64).reshape(-1, 4))
+        segs = anchor_segments(start, np.asarray(snap.segments, np.float64).reshape(-1, 4))
         surfaces.set_segments(segs.reshape(-1, 2, 2))
         surfaces.set_array(np.asarray(snap.map_ids, dtype=np.float64))
         est_line.set_data(est[: row + 1, 0], est[: row + 1, 1])

@@ -9,13 +9,14 @@ the columns of its ``steps.csv`` (e.g. ``read_steps_csv``). matplotlib is import
 
 from __future__ import annotations
 
-import io
 import itertools
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from albot2d.viz._figure import new_figure, png_bytes
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -63,9 +64,7 @@ def plot_step_times(
     mark the views where a mapper remembered a local map (mappers that remember only some
     views: Albot1, not the integrators that keep every view)."""
     if ax is None:
-        from matplotlib.figure import Figure
-
-        ax = Figure(figsize=(10.0, 4.0), layout="constrained").subplots()
+        ax = new_figure(10.0, 4.0).add_subplot()
     cols = _columns(data)
     lines = [name for name in ("simulation_ms", "extraction_ms") if name in cols]
     lines += [name for name in cols if name.endswith(".total_ms")]
@@ -95,12 +94,6 @@ def render_step_times_png(
     data: StepTimes | Mapping[str, ArrayLike], *, dpi: int = DEFAULT_DPI
 ) -> bytes:
     """``plot_step_times`` as PNG bytes."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig: Any = Figure(figsize=(10.0, 4.0), layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = new_figure(10.0, 4.0)
     plot_step_times(data, ax=fig.subplots())
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    return buf.getvalue()
+    return png_bytes(fig, dpi)

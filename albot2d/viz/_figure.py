@@ -1,0 +1,32 @@
+"""The Agg figure and PNG helpers every figure module of ``albot2d.viz`` shares.
+
+Figures are built on the Agg canvas directly (no pyplot, no global backend switch), which
+works headless and in threads; matplotlib is imported inside the functions.
+"""
+
+from __future__ import annotations
+
+import io
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["new_figure", "png_bytes"]
+
+
+def new_figure(width_in: float, height_in: float, *, layout: str | None = "constrained") -> Figure:
+    """A matplotlib ``Figure`` of that size attached to an Agg canvas."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width_in, height_in), layout=layout)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def png_bytes(fig: Figure, dpi: float) -> bytes:
+    """``fig`` saved as PNG, in memory."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return buf.getvalue()
