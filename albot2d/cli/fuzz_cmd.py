@@ -291,8 +291,8 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
             {k: v for k, v in without_timings(result.report).items() if k not in ignore},
         )
         if recorded["status"] != "crash":
-            same = "identical to" if not diff else f"differs at {', '.join(diff[:5])} from"
-            print(f"reproduce: run {same} {where} (apart from wall-clock timings)")
+            verdict = "identical to" if not diff else f"differs at {', '.join(diff[:5])} from"
+            print(f"reproduce: run {verdict} {where} (apart from wall-clock timings)")
     else:
         print((record["error"] or {}).get("traceback", ""), file=sys.stderr, end="")
     checked = len(record["checked"])

@@ -54,7 +54,7 @@ def register(subparsers: Any) -> None:
     p.set_defaults(handler=run)
 
 
-def _build_world(args: argparse.Namespace, seed: int, params: dict[str, Any]) -> Any:
+def _build_world(args: argparse.Namespace, seed: int | None, params: dict[str, Any]) -> Any:
     import worldgen
 
     if args.from_houseexpo is not None:

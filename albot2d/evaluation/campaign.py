@@ -203,14 +203,14 @@ def _scan_episodes(path: Path) -> tuple[list[tuple[int, dict[str, Any]]], int, i
             record = None
         index = record.get("episode") if isinstance(record, dict) else None
         if (not isinstance(index, int) or isinstance(index, bool) or index < 0
-                or record.get("status") not in STATUSES):  # type: ignore[union-attr]
+                or record.get("status") not in STATUSES):
             raise InputError(f"{path}:{number}: not an episode record; the file is damaged "
                              "(move it away to start afresh)")
         if index in lines_of:
             raise InputError(f"{path}:{number}: episode {index} again (first on line "
                              f"{lines_of[index]}); the file is damaged (two writers?)")
         lines_of[index] = number
-        records.append((number, record))  # type: ignore[arg-type]
+        records.append((number, record))
     return records, keep, len(data) - keep
 
 

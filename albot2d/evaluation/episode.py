@@ -334,7 +334,7 @@ def read_reproducer(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise InputError(f"{path}: not a fuzzing reproducer ({exc})") from None
     if not isinstance(record, dict):
         raise InputError(f"{path}: not a fuzzing reproducer (no episode record)")
-    return doc  # type: ignore[no-any-return]
+    return doc
 
 
 def replay_reproducer(path: str | os.PathLike[str]) -> EpisodeOutcome:

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -186,7 +186,7 @@ class RayCaster:
 
     def cast(
         self,
-        origin: ArrayLike,
+        origin: Sequence[float] | NDArray[np.floating],
         angles: ArrayLike | BeamFan,
         max_range: float,
         *,
@@ -202,7 +202,7 @@ class RayCaster:
         """
         fan = angles if isinstance(angles, BeamFan) else BeamFan.from_angles(angles)
         try:
-            x, y = origin  # type: ignore[misc]
+            x, y = origin
             ox, oy = float(x), float(y)
         except (TypeError, ValueError):
             raise InputError(f"ray origin must be two numbers (x, y), got {origin!r}") from None

@@ -7,15 +7,21 @@ works headless and in threads; matplotlib is imported inside the functions.
 from __future__ import annotations
 
 import io
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["new_figure", "png_bytes"]
+__all__ = ["line_segments", "new_figure", "png_bytes"]
 
 
-def new_figure(width_in: float, height_in: float, *, layout: str | None = "constrained") -> Figure:
+Layout = Literal["constrained", "compressed", "tight"] | None
+
+
+def new_figure(width_in: float, height_in: float, *, layout: Layout = "constrained") -> Figure:
     """A matplotlib ``Figure`` of that size attached to an Agg canvas."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -23,6 +29,12 @@ def new_figure(width_in: float, height_in: float, *, layout: str | None = "const
     fig = Figure(figsize=(width_in, height_in), layout=layout)
     FigureCanvasAgg(fig)
     return fig
+
+
+def line_segments(segments: ArrayLike) -> list[NDArray[np.float64]]:
+    """``(N, 4)`` or ``(N, 2, 2)`` segments as the list of ``(2, 2)`` arrays that
+    ``LineCollection`` is typed to take (a sequence of lines, not one 3-D array)."""
+    return list(np.asarray(segments, dtype=np.float64).reshape(-1, 2, 2))
 
 
 def png_bytes(fig: Figure, dpi: float) -> bytes:

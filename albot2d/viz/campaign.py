@@ -72,9 +72,9 @@ def plot_campaign_histograms(
                     label=f"{label} (median {np.median(values):.3g})")
         ax.set_ylabel("episodes")
         cmp = comparison.get(mine) if odometry is not None else None
-        title = (f"{mapper}: better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']},"
+        summary = (f"{mapper}: better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']},"
                  f"\ntied in {cmp['ties']} of {cmp['episodes']} episodes" if cmp else None)
-        ax.legend(fontsize=8, title=title, title_fontsize=8)
+        ax.legend(fontsize=8, title=summary, title_fontsize=8)
     fig.suptitle(f"fuzzing campaign: {len(records)} episodes, {mapper}")
     return fig
 

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.geometry import compose_arrays, transform_segments
-from albot2d.viz._figure import new_figure
+from albot2d.viz._figure import line_segments, new_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -92,7 +92,7 @@ def _draw_world(ax: Axes, world: World | None) -> None:
     from matplotlib.collections import LineCollection
 
     if world is not None and len(world.obstacle_segments):
-        ax.add_collection(LineCollection(world.obstacle_segments.reshape(-1, 2, 2),
+        ax.add_collection(LineCollection(line_segments(world.obstacle_segments),
                                          colors=WORLD_COLOR, linewidths=0.8, zorder=1))
 
 
@@ -122,7 +122,7 @@ def plot_map(
         ax = new_figure(PANEL_IN * 1.6, PANEL_IN * 1.6).add_subplot()
     _draw_world(ax, world)
     segs = anchor_segments(start_pose, np.asarray(segments, np.float64).reshape(-1, 4))
-    lines = LineCollection(segs.reshape(-1, 2, 2), linewidths=1.6, cmap=MAP_CMAP, zorder=3,
+    lines = LineCollection(line_segments(segs), linewidths=1.6, cmap=MAP_CMAP, zorder=3,
                            label=MAP_SURFACES_LABEL)
     if map_ids is not None and len(segs):
         lines.set_array(np.asarray(map_ids, dtype=np.float64))
@@ -189,7 +189,7 @@ def plot_route(
     poses = anchor_path(start_pose, route.compose_chain()) if len(route) else np.zeros((0, 3))
     views = [transform_segments(p, m.view.segments) for p, m in zip(poses, route, strict=True)]
     segs = np.vstack(views) if views else np.zeros((0, 4))
-    ax.add_collection(LineCollection(segs.reshape(-1, 2, 2), colors=VIEW_COLOR, linewidths=0.5,
+    ax.add_collection(LineCollection(line_segments(segs), colors=VIEW_COLOR, linewidths=0.5,
                                      alpha=0.5, zorder=2))
     if true_path is not None and len(true_path):
         ax.plot(*true_path[:, :2].T, "-", color=TRUE_PATH_COLOR, lw=0.8, alpha=0.4, zorder=2)

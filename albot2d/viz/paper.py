@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from albot2d.viz._figure import new_figure
+from albot2d.viz._figure import line_segments, new_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -63,7 +63,7 @@ def _segments(ax: Axes, segs: Any, **kw: Any) -> None:
 
     s = np.asarray(segs, dtype=float).reshape(-1, 4)
     if len(s):
-        ax.add_collection(LineCollection(s.reshape(-1, 2, 2), **kw))
+        ax.add_collection(LineCollection(line_segments(s), **kw))
 
 
 def plot_maps(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
@@ -163,7 +163,7 @@ def plot_updates(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
         per_kind.setdefault(str(regions[row]), []).append(int(moved[last + 1 : row + 1].sum()))
         last = int(row)
     kinds = sorted(per_kind)
-    bins = np.arange(0, max((max(v) for v in per_kind.values()), default=1) + 2) - 0.5
+    bins = (np.arange(0, max((max(v) for v in per_kind.values()), default=1) + 2) - 0.5).tolist()
     h.hist([per_kind[k] for k in kinds], bins=bins, label=kinds,
            color=[_REGION_COLOURS.get(k, "k") for k in kinds])  # fmt: skip
     h.set_xlabel("moves since the previous update")

@@ -17,6 +17,7 @@ from albot2d.viz.world import DEFAULT_DPI, PLOT_MARGIN_FRACTION, _figure_of, plo
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+    from matplotlib.typing import ColorType
 
     from worldgen.world import World
 
@@ -33,7 +34,7 @@ def _xy(points: Any) -> np.ndarray:
 
 
 def draw_direction_arrows(
-    ax: Axes, points: Any, *, color: str, count: int = 10, size: float = 11.0, zorder: int = 8
+    ax: Axes, points: Any, *, color: ColorType, count: int = 10, size: float = 11.0, zorder: int = 8
 ) -> None:
     """Arrow heads at ``count`` evenly spaced places along a path (``(N, 2+)`` points),
     pointing the way it was driven."""

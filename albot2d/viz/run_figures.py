@@ -122,12 +122,12 @@ def plot_estimated_paths(result: ExperimentResult, *, ax: Axes | None = None) ->
     ax.plot(*odom[:, :2].T, "-", color=ODOM_COLOR, lw=4.0, alpha=0.6, zorder=2,
             label="raw odometry")
     parts = [odom[:, :2]]
-    colors = colormaps["tab10"].colors
+    tab10 = colormaps["tab10"]  # 10 listed colours: tab10(k) is the k-th
     styles = ["-", "--", "-.", ":"]
     for k, (name, mapper) in enumerate(trace.mappers.items()):
         est = np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3)
         same = est.shape == odom.shape and np.allclose(est[:, :2], odom[:, :2], atol=1e-6)
-        color = colors[k % len(colors)]
+        color = tab10(k % tab10.N)
         ax.plot(*est[:, :2].T, styles[k % len(styles)], color=color, lw=1.2, zorder=3 + k,
                 label=f"{name} (= odometry)" if same else name)
         draw_direction_arrows(ax, est, color=color, count=8, size=9.0, zorder=3 + k)
@@ -161,6 +161,8 @@ def _map_panel(ax: Axes, result: ExperimentResult, name: str, row: int | None = 
                title: str | None = None) -> LineCollection:
     trace = result.trace
     mapper = trace.mappers[name]
+    # at_update (the map's history) is not in the Mapper protocol: asked only of mappers with
+    # a route map (the history panels).
     snap = mapper.global_map() if update is None else mapper.global_map(at_update=update)  # type: ignore[call-arg]
     end = trace.n_frames if row is None else row + 1
     est = np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3)[:end]
@@ -181,9 +183,10 @@ def _paths_panel(ax: Axes, result: ExperimentResult, extent: Extent | None) -> N
         plot_paths(result.world, true_xy=trace.true_poses, odom_xy=trace.odom_poses,
                    collided=trace.collided, ax=ax)
         legend = ax.get_legend()
+        assert legend is not None  # plot_paths always draws one
         keep = [h for h in legend.legend_handles
-                if h.get_label() in ("walls", "true path (→ direction, ● end)", "odometry",
-                                     "collision", "start")]
+                if h is not None and str(h.get_label()) in (
+                    "walls", "true path (→ direction, ● end)", "odometry", "collision", "start")]
         legend.remove()
         ax.legend(handles=keep, loc="upper right", fontsize=7, framealpha=0.8)
         ax.set_title("world, true path and odometry", fontsize=10)

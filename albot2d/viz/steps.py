@@ -37,10 +37,11 @@ def read_steps_csv(path: str) -> dict[str, NDArray[np.float64]]:
 
 
 def _columns(data: StepTimes | Mapping[str, ArrayLike]) -> dict[str, NDArray[np.float64]]:
-    names = getattr(data, "columns", data)
-    if hasattr(data, "column"):
-        return {name: data.column(name) for name in names}  # type: ignore[union-attr]
-    return {name: np.asarray(v, np.float64) for name, v in data.items()}  # type: ignore[union-attr]
+    from albot2d.evaluation.trace import StepTimes
+
+    if isinstance(data, StepTimes):
+        return {name: data.column(name) for name in data.columns}
+    return {name: np.asarray(v, np.float64) for name, v in data.items()}
 
 
 def _binned(values: NDArray[np.float64], bins: int) -> tuple[NDArray, NDArray, NDArray]:
@@ -66,7 +67,7 @@ def plot_step_times(
     if ax is None:
         ax = new_figure(10.0, 4.0).add_subplot()
     cols = _columns(data)
-    lines = [name for name in ("simulation_ms", "extraction_ms") if name in cols]
+    lines: list[str] = [name for name in ("simulation_ms", "extraction_ms") if name in cols]
     lines += [name for name in cols if name.endswith(".total_ms")]
     for name in lines:
         v = np.maximum(cols[name], 1e-4)  # a log axis cannot show 0

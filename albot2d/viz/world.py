@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from albot2d.atomic import atomic_write_bytes
-from albot2d.viz._figure import new_figure, png_bytes
+from albot2d.viz._figure import line_segments, new_figure, png_bytes
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -126,13 +126,13 @@ def plot_world(
         )  # fmt: skip
     # Thinner lines and smaller dots in big worlds, so detail does not drown in ink.
     thin = min(1.0, DETAIL_SIZE_M / max(world.width_m, world.height_m))
-    walls = world.walls.reshape(-1, 2, 2)
+    walls = line_segments(world.walls)
     ax.add_collection(
         LineCollection(walls, colors=WALL_COLOR, linewidths=max(0.4, 1.2 * thin), zorder=3)
     )
     if show_roadmap and len(world.roadmap.nodes):
         nodes = world.roadmap.nodes
-        edges = nodes[world.roadmap.edges]
+        edges = line_segments(nodes[world.roadmap.edges])
         ax.add_collection(
             LineCollection(edges, colors=ROADMAP_COLOR, linewidths=0.6 * thin, alpha=0.7, zorder=1)
         )
