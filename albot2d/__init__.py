@@ -1,7 +1,7 @@
 """albot2d: a fast 2D kinematic robot simulator for studying view-based cognitive mapping.
 
 Layers, bottom up: ``albot2d.geometry`` → ``worldgen`` → simulation → perception →
-mapping → evaluation → interfaces (CLI, plots). Import what you need from the
+mapping → evaluation → interfaces (CLI, ``albot2d.viz``). Import what you need from the
 subpackages; this top level only re-exports the core value types.
 """
 

@@ -34,7 +34,7 @@ def beam_angles(n_beams: int, fov_rad: float = math.pi, *, inclusive: bool = Tru
 
 
 def _readonly(arr: np.ndarray, dtype: type) -> np.ndarray:
-    out = np.array(arr, dtype=dtype, copy=True)
+    out: np.ndarray = np.array(arr, dtype=dtype, copy=True)
     out.flags.writeable = False
     return out
 

@@ -39,7 +39,7 @@ def test_scoring_small(benchmark: Any, result: Any) -> None:
 
 @pytest.mark.benchmark(group="experiment")
 def test_figures_small(benchmark: Any, result: Any) -> None:
-    from albot2d.plots_maps import render_experiment_figures
+    from albot2d.viz.run_figures import render_experiment_figures
 
     figures = benchmark.pedantic(render_experiment_figures, args=(result,), rounds=2,
                                  iterations=1)

@@ -42,7 +42,7 @@ def test_build_space(benchmark, big_office) -> None:
 @pytest.mark.benchmark(group="worldgen-io")
 def test_render_world_png(benchmark, big_office) -> None:
     pytest.importorskip("matplotlib")
-    from albot2d.plots import render_world_png
+    from albot2d.viz.world import render_world_png
 
     png = benchmark.pedantic(render_world_png, args=(big_office,), rounds=2, iterations=1)
     benchmark.extra_info["png_bytes"] = len(png)

@@ -9,10 +9,13 @@ import math
 import numpy as np
 import pytest
 
+from albot2d.evaluation.invariants import ViewRecorder
 from albot2d.geometry import Pose, point_segment_distance, transform_segments, wrap_angle
-from albot2d.mapping import Albot1, Albot1Params, Mapper
+from albot2d.mapping import Albot1, Albot1Params
 from albot2d.perception.surfaces import Surfaces
 from tests.albot1_checks import check_local_map_rule
+from tests.runs import check_mapper_contract, map_frames, simulate
+from worldgen.generate import generate
 
 # A corridor lined with 1 m wall panels and 0.5 m gaps, so panel ends are real corners.
 PANELS = np.array(
@@ -33,11 +36,17 @@ def view_from(pose: Pose, walls: np.ndarray = PANELS, max_range_m: float = 6.0) 
     return Surfaces.from_segments(segs)
 
 
-def drive(mapper: Albot1, poses: list[Pose], odometry: list[Pose] | None = None) -> None:
+def drive(
+    mapper: Albot1, poses: list[Pose], odometry: list[Pose] | None = None
+) -> list[tuple[int, Surfaces, Pose]]:
+    """Feed ``mapper`` the views seen from ``poses`` (odometry from ``odometry``); returns
+    the views as given (for ``check_local_map_rule``)."""
+    recorder = ViewRecorder().attach(mapper)
     odometry = odometry or poses
     for k, pose in enumerate(poses):
         inc = Pose() if k == 0 else odometry[k - 1].between(odometry[k])
         mapper.observe_view(k, float(k), view_from(pose), inc)
+    return recorder.views
 
 
 def corridor_poses(n: int = 200, step_m: float = 0.1) -> list[Pose]:
@@ -48,7 +57,9 @@ def corridor_poses(n: int = 200, step_m: float = 0.1) -> list[Pose]:
 
 
 def test_albot1_satisfies_the_mapper_protocol() -> None:
-    assert isinstance(Albot1(), Mapper)
+    """The protocol's signatures, and its promises on a real simulated run."""
+    world = generate("rooms", seed=2, width_m=12.0, height_m=10.0)
+    check_mapper_contract(Albot1(), simulate(world, 2, length_m=10.0))
 
 
 def test_exact_views_give_exact_poses_and_a_map_on_the_walls() -> None:
@@ -94,8 +105,8 @@ def test_triangulation_corrects_odometry_errors() -> None:
 def test_local_map_rule_and_use_vc_on_hand_built_views() -> None:
     poses = corridor_poses(120)
     m = Albot1()
-    drive(m, poses)
-    check_local_map_rule(m, min_tracked=4)
+    views = drive(m, poses)
+    check_local_map_rule(m, views, min_tracked=4)
 
 
 def test_featureless_stretch_uses_path_integration_then_recovers() -> None:
@@ -103,6 +114,7 @@ def test_featureless_stretch_uses_path_integration_then_recovers() -> None:
     walls = PANELS[(PANELS[:, 0] < 6.0) | (PANELS[:, 0] > 18.0)]
     poses = [Pose(0.5 + 0.2 * k, 0.0, 0.0) for k in range(110)]
     m = Albot1()
+    recorder = ViewRecorder().attach(m)
     for k, pose in enumerate(poses):
         inc = Pose() if k == 0 else poses[k - 1].between(pose)
         m.observe_view(k, float(k), view_from(pose, walls), inc)
@@ -115,7 +127,7 @@ def test_featureless_stretch_uses_path_integration_then_recovers() -> None:
     np.testing.assert_allclose(
         m.trajectory()[-1], origin.between(poses[-1]).as_array(), atol=1e-9
     )
-    check_local_map_rule(m, min_tracked=4)
+    check_local_map_rule(m, recorder.views, min_tracked=4)
 
 
 def test_params_are_validated() -> None:
@@ -132,12 +144,12 @@ def test_mit_csail_log_runs_through(shared_data) -> None:  # type: ignore[no-unt
     frames = list(read_frames(shared_data / "raw" / "mit-csail.clf.gz"))
     rel = read_relations(shared_data / "relations" / "mit-csail.relations")
     m = Albot1()
-    for f in frames:
-        m.observe(f)
+    recorder = ViewRecorder().attach(m)
+    map_frames(m, frames)
     counts = m.counts()
     assert counts.views == len(frames) == 1988
     assert counts.local_maps == counts.triangulations + counts.path_integrations + 1
-    check_local_map_rule(m, 4)
+    check_local_map_rule(m, recorder.views, 4)
     ts = np.array([f.timestamp for f in frames])
     odo = np.array([f.odom_pose.as_array() for f in frames])
     ours = relative_pose_error(ts, m.trajectory(), rel.t1, rel.t2, rel.motion)

@@ -20,7 +20,8 @@ from albot2d.seeding import make_rng
 from albot2d.sim.laser import LaserNoise
 from albot2d.sim.odometry import NOISE_PRESETS
 from albot2d.sim.simulator import Simulator
-from tests.albot1_checks import UpdateRecorder, check_local_map_rule
+from tests.albot1_checks import check_local_map_rule
+from tests.runs import run_albot1, simulate
 from tests.strategies import examples
 from worldgen.strategies import worlds
 
@@ -28,34 +29,27 @@ SMALL_WORLDS = worlds(kinds=("rooms", "corridors", "office", "open"), max_size_m
 
 
 def run(world, seed: int, *, laser_noise: LaserNoise, odometry: str, length_m: float = 15.0):  # type: ignore[no-untyped-def]
-    tour = world.tour(make_rng(seed), kind="loop", min_length_m=length_m)
-    frames = list(
-        Simulator(world, seed=seed, laser_noise=laser_noise, odometry=NOISE_PRESETS[odometry])
-        .drive(tour, profile="dataset1")
-    )
-    recorder = UpdateRecorder()
-    m = Albot1(on_update=recorder)
-    recorder.mapper = m
-    for f in frames:
-        m.observe(f)
-    return m, frames, recorder
+    frames = simulate(world, seed, noise=odometry, laser=laser_noise, profile="dataset1",
+                      length_m=length_m)
+    albot = run_albot1(frames)
+    return albot.mapper, frames, albot.updates, albot.views.views
 
 
 @settings(max_examples=examples(5))
 @given(SMALL_WORLDS, st.integers(0, 2**16))
 def test_invariants_hold_under_noise(world, seed: int) -> None:  # type: ignore[no-untyped-def]
-    m, frames, recorder = run(world, seed, laser_noise=LaserNoise(), odometry="typical")
-    assert m.counts().views == len(frames)
+    m, frames, recorder, views = run(world, seed, laser_noise=LaserNoise(), odometry="typical")
+    assert m.counts().views == len(frames) == len(views)
     assert recorder.updates == m.counts().local_maps
-    check_local_map_rule(m)
+    check_local_map_rule(m, views)
     assert m.trajectory().shape == (len(frames), 3)
 
 
 @settings(max_examples=examples(5))
 @given(SMALL_WORLDS, st.integers(0, 2**16))
 def test_zero_noise_localises_each_local_map_exactly(world, seed: int) -> None:  # type: ignore[no-untyped-def]
-    m, frames, _ = run(world, seed, laser_noise=LaserNoise.zero(), odometry="none")
-    check_local_map_rule(m)
+    m, frames, _, views = run(world, seed, laser_noise=LaserNoise.zero(), odometry="none")
+    check_local_map_rule(m, views)
     truth = np.array([f.true_pose.as_array() for f in frames])
     idx = np.array([lm.frame_index for lm in m.route])
     rel_true = between_arrays(truth[idx[:-1]], truth[idx[1:]])
@@ -86,8 +80,8 @@ def test_zero_noise_localises_each_local_map_exactly(world, seed: int) -> None: 
 @settings(max_examples=examples(2))
 @given(SMALL_WORLDS, st.integers(0, 2**16))
 def test_same_seed_same_run(world, seed: int) -> None:  # type: ignore[no-untyped-def]
-    a, _, _ = run(world, seed, laser_noise=LaserNoise(), odometry="typical", length_m=12.0)
-    b, _, _ = run(world, seed, laser_noise=LaserNoise(), odometry="typical", length_m=12.0)
+    a, *_ = run(world, seed, laser_noise=LaserNoise(), odometry="typical", length_m=12.0)
+    b, *_ = run(world, seed, laser_noise=LaserNoise(), odometry="typical", length_m=12.0)
     assert np.array_equal(a.trajectory(), b.trajectory())
     assert np.array_equal(a.global_map().segments, b.global_map().segments)
     assert a.steps == b.steps

@@ -176,7 +176,7 @@ def test_run_profiles_every_view(tmp_path: Path) -> None:
     """steps.csv has a row per view, report.json per-view p50/p95/max, --cprofile a pstats."""
     import pstats
 
-    from albot2d.plots_steps import read_steps_csv
+    from albot2d.viz.steps import read_steps_csv
 
     out, prof = tmp_path / "out", tmp_path / "run.prof"
     assert main(["run", *TINY, "--max-frames", "40", "--no-figures", "--cprofile", str(prof),

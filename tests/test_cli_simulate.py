@@ -122,15 +122,16 @@ def test_out_is_required_and_must_be_a_directory(
 
 
 def test_render_paths_png_handles_drift_and_empty_paths() -> None:
-    from albot2d.plots import render_paths_png
+    from albot2d.viz.paths import render_paths_png
     from tests.test_simulator import room_world
 
     world = room_world()
     true_xy = np.array([[1.0, 1.0], [5.0, 1.0]])
     odom_xy = np.array([[1.0, 1.0], [20.0, -9.0]])  # far outside the world
-    png = render_paths_png(world, true_xy, odom_xy, collided=[False, True], title="t")
+    png = render_paths_png(world, true_xy=true_xy, odom_xy=odom_xy, collided=[False, True],
+                           title="t")
     assert png.startswith(PNG_MAGIC)
-    assert render_paths_png(world, np.zeros((0, 3)), []).startswith(PNG_MAGIC)
+    assert render_paths_png(world, true_xy=np.zeros((0, 3)), odom_xy=[]).startswith(PNG_MAGIC)
 
 
 def test_simulate_logs_exactly_the_frames_run_maps(tmp_path: Path) -> None:

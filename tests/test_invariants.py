@@ -21,12 +21,11 @@ from albot2d.frames import Frame, Scan
 from albot2d.geometry import Pose
 from albot2d.mapping import Albot1, StepRecord, UpdateReport
 from albot2d.mapping.route_map import RouteMap
-from albot2d.seeding import make_rng
 from albot2d.sim.driving import get_profile
 from albot2d.sim.laser import Laser, LaserNoise
 from albot2d.sim.odometry import NOISE_PRESETS
 from albot2d.sim.robot import RobotParams
-from albot2d.sim.simulator import Simulator
+from tests.runs import run_albot1, simulate
 from worldgen.generate import generate
 from worldgen.strategies import worlds
 
@@ -35,37 +34,21 @@ EXAMPLES = max(2, settings().max_examples // 5)
 SMALL_WORLDS = worlds(kinds=("rooms", "corridors", "office", "open"), max_size_m=20.0)
 
 
-def simulate(world, seed: int, *, noise: str = "typical", laser: LaserNoise | None = None,  # type: ignore[no-untyped-def]
-             profile: str = "dataset3", length_m: float = 20.0):
-    tour = world.tour(make_rng(seed), kind="loop", min_length_m=length_m)
-    sim = Simulator(world, seed=seed, odometry=NOISE_PRESETS[noise],
-                    laser_noise=laser if laser is not None else LaserNoise())
-    return list(sim.drive(tour, profile=profile))
-
-
-def mapped(frames: list[Frame]) -> tuple[Albot1, inv.UpdateRecorder]:
-    m = Albot1()
-    recorder = inv.UpdateRecorder().attach(m)
-    for f in frames:
-        m.observe(f)
-    return m, recorder
-
-
 @pytest.fixture(scope="module")
 def run():  # type: ignore[no-untyped-def]
     world = generate("rooms", seed=4, width_m=14.0, height_m=12.0)
     frames = simulate(world, 4)
-    m, recorder = mapped(frames)
+    albot = run_albot1(frames)
     truth = np.array([f.true_pose.as_array() for f in frames])
     index = np.array([f.index for f in frames])
-    return world, frames, m, recorder, truth, index
+    return world, frames, albot.mapper, albot.updates, truth, index, albot.views.views
 
 
 # -- each check passes on a real run and fails on a broken one ------------------------------
 def test_a_real_run_passes_every_check(run) -> None:  # type: ignore[no-untyped-def]
-    world, frames, m, recorder, truth, index = run
+    world, frames, m, recorder, truth, index, views = run
     assert recorder.updates == m.counts().local_maps > 3
-    inv.check_local_map_rule(m)
+    inv.check_local_map_rule(m, views)
     inv.check_route_connected(m.route)
     sim_inv.check_robot_clear(world.obstacle_segments, truth, RobotParams().radius_m)
     checker = sim_inv.FrameChecker(world.obstacle_segments, LaserNoise())
@@ -90,7 +73,7 @@ def test_a_broken_chain_is_caught(run) -> None:  # type: ignore[no-untyped-def]
 
 
 def test_a_broken_local_map_rule_is_caught(run) -> None:  # type: ignore[no-untyped-def]
-    m = run[2]
+    m, views = run[2], run[6]
     k = next(i for i, s in enumerate(m.steps) if i > 0 and s.tracked >= 4)
     broken = Albot1()
     broken.route = m.route
@@ -99,7 +82,28 @@ def test_a_broken_local_map_rule_is_caught(run) -> None:  # type: ignore[no-unty
     broken.steps[k] = StepRecord(s.frame_index, s.tracked, s.use_vc, (s.frame_index,),
                                  ("triangulation",))
     with pytest.raises(inv.InvariantError, match="local_map_rule"):
-        inv.check_local_map_rule(broken)
+        inv.check_local_map_rule(broken, views)
+
+
+def test_the_tracked_counts_are_recounted_not_read_from_the_mapper(run) -> None:  # type: ignore[no-untyped-def]
+    """The rule is checked on tracking recounted from the views and the route map: the
+    recount agrees with Albot1's records on a real run, and a record that lies about its
+    tracked count (the remembering decision left as it was) is caught."""
+    m, views = run[2], run[6]
+    recount = inv.recount_tracking(views, m.params.tracking, m.params.min_tracked)
+    assert [(r.frame_index, r.tracked, r.remembered) for r in recount] == [
+        (s.frame_index, s.tracked, s.remembered) for s in m.steps
+    ]
+    assert any(r.remembered for r in recount[1:]) and any(not r.remembered for r in recount)
+    k = next(i for i, s in enumerate(m.steps) if i > 0 and s.tracked < 4)
+    lying = Albot1()
+    lying.route, lying.steps = m.route, list(m.steps)
+    lying.steps[k] = m.steps[k]._replace(tracked=m.params.min_tracked + 3)
+    with pytest.raises(inv.InvariantError, match=f"frame {m.steps[k].frame_index}: recorded"):
+        inv.check_local_map_rule(lying, views)
+    # Fewer views than steps (a view the recount never saw) is caught too.
+    with pytest.raises(inv.InvariantError, match="views given"):
+        inv.check_local_map_rule(m, views[:-1])
 
 
 def test_an_update_that_keeps_older_facing_surfaces_is_caught(run) -> None:  # type: ignore[no-untyped-def]
@@ -200,7 +204,7 @@ def test_the_robot_stays_clear_and_every_hit_lies_on_an_obstacle(world, seed, la
 @given(SMALL_WORLDS, st.integers(0, 2**16), st.sampled_from(["low", "typical", "high"]))
 def test_albot1_heading_error_stays_within_the_noise_bound(world, seed, noise) -> None:  # type: ignore[no-untyped-def]
     frames = simulate(world, seed, noise=noise)
-    m, _ = mapped(frames)
+    m = run_albot1(frames).mapper
     truth = np.array([f.true_pose.as_array() for f in frames])
     maps = inv.local_maps_per_row(m.route, np.array([f.index for f in frames]))
     bound = inv.heading_error_bound(truth, NOISE_PRESETS[noise], get_profile("dataset3"), maps)

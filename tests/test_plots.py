@@ -1,4 +1,4 @@
-"""World plots: real matplotlib rendering to PNG; the module imports without matplotlib."""
+"""World plots: real matplotlib rendering to PNG; ``albot2d.viz`` imports without matplotlib."""
 
 from __future__ import annotations
 
@@ -16,17 +16,35 @@ REPO = Path(__file__).resolve().parents[1]
 pytest.importorskip("matplotlib")
 
 
-def test_plots_module_imports_without_matplotlib() -> None:
-    code = "import sys; sys.modules['matplotlib'] = None; import albot2d.plots; print('ok')"
-    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True)
+# Every module of the package, imported in a fresh interpreter: none may load matplotlib
+# (it is the optional ``viz`` extra, and slow to import), and all import where it is absent.
+_IMPORT_ALL_VIZ = """
+import importlib, pkgutil, sys
+{block}
+import albot2d.viz
+names = [m.name for m in pkgutil.iter_modules(albot2d.viz.__path__, "albot2d.viz.")]
+for name in names:
+    importlib.import_module(name)
+print(len(names), sorted(m for m, mod in sys.modules.items()
+             if m.split(".")[0] == "matplotlib" and mod is not None))
+"""
+
+
+@pytest.mark.parametrize("block", ["", "sys.modules['matplotlib'] = None"])
+def test_viz_package_imports_without_matplotlib(block: str) -> None:
+    code = _IMPORT_ALL_VIZ.format(block=block)
+    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
+                         timeout=120)  # fmt: skip
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "ok"
+    count, loaded = out.stdout.strip().split(" ", 1)
+    assert int(count) >= 10  # world, paths, maps, run_figures, anim, steps, campaign, paper, …
+    assert loaded == "[]"
 
 
 def test_plot_world_draws_everything_on_given_axes() -> None:
     from matplotlib.figure import Figure
 
-    from albot2d.plots import plot_world
+    from albot2d.viz.world import plot_world
 
     world = sample_world()
     tour = Tour(world.roadmap.nodes[:4], kind="loop")
@@ -47,7 +65,7 @@ def test_plot_world_draws_everything_on_given_axes() -> None:
 
 
 def test_plot_without_roadmap_has_fewer_segments() -> None:
-    from albot2d.plots import plot_world
+    from albot2d.viz.world import plot_world
 
     world = sample_world()
 
@@ -59,7 +77,7 @@ def test_plot_without_roadmap_has_fewer_segments() -> None:
 
 
 def test_save_world_png_writes_a_png(tmp_path: Path) -> None:
-    from albot2d.plots import render_world_png, save_world_png
+    from albot2d.viz.world import render_world_png, save_world_png
 
     world = sample_world()
     path = tmp_path / "world.png"
@@ -73,7 +91,7 @@ def test_save_world_png_writes_a_png(tmp_path: Path) -> None:
 
 
 def test_save_world_png_into_missing_dir_leaves_nothing(tmp_path: Path) -> None:
-    from albot2d.plots import save_world_png
+    from albot2d.viz.world import save_world_png
 
     with pytest.raises(FileNotFoundError):
         save_world_png(sample_world(), tmp_path / "nope" / "world.png", dpi=30)
@@ -86,15 +104,15 @@ def test_free_space_holes_are_not_filled() -> None:
     import shapely
     from matplotlib.colors import to_rgb
 
-    from albot2d.plots import FREE_SPACE_COLOR, plot_world
+    from albot2d.viz.world import FREE_SPACE_COLOR, plot_world
 
     world = sample_world()
     # A hole that is not clutter, so only the free-space fill decides its colour.
     holed = shapely.box(0, 0, 20, 10).difference(shapely.box(14, 6, 18, 9))
     world = dataclasses.replace(world, clutter=(), free_space=holed, dynamic_obstacles=())
     ax = plot_world(world, show_roadmap=False)
-    ax.figure.canvas.draw()
-    rgba = np.asarray(ax.figure.canvas.buffer_rgba())
+    ax.get_figure(root=True).canvas.draw()
+    rgba = np.asarray(ax.get_figure(root=True).canvas.buffer_rgba())
 
     def colour_at(x: float, y: float) -> np.ndarray:
         px, py = ax.transData.transform((x, y))

@@ -5,6 +5,7 @@ figure of a run drawn without a warning: tests/test_cli_run.py."""
 from __future__ import annotations
 
 import io
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,13 +14,7 @@ pytest.importorskip("matplotlib")
 
 from albot2d.evaluation import RunSpec, run_experiment
 from albot2d.evaluation.experiment import ExperimentResult
-from albot2d.plots_maps import (
-    _figure,
-    error_curves,
-    plot_errors_vs_distance,
-    plot_estimated_paths,
-    plot_homing,
-)
+from albot2d.viz import error_curves, plot_errors_vs_distance, plot_estimated_paths, plot_homing
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -47,8 +42,7 @@ def test_error_curves_against_the_truth(result: ExperimentResult) -> None:
 
 
 def test_error_figure_labels_every_curve(result: ExperimentResult) -> None:
-    fig = _figure(8.0, 6.0)
-    plot_errors_vs_distance(fig, result)
+    fig = plot_errors_vs_distance(result)
     heading_ax, position_ax = fig.axes[:2]
     labels = [t.get_text() for t in position_ax.get_legend().get_texts()]
     assert labels == ["raw odometry", "albot1", "naive (= odometry)", "truth"]
@@ -58,25 +52,22 @@ def test_error_figure_labels_every_curve(result: ExperimentResult) -> None:
 def test_replay_paths_show_odometry_under_naive_and_no_truth_title(
     result: ExperimentResult,
 ) -> None:
-    fig = _figure(6.0, 6.0)
-    ax = fig.subplots()
-    plot_estimated_paths(ax, result)
+    ax = plot_estimated_paths(result)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert labels[:4] == ["raw odometry", "albot1", "naive (= odometry)", "truth"]
     assert len(ax.texts) >= 8  # direction arrows along the paths (annotations)
-    fig = _figure(8.0, 4.0)
     no_truth = {
         name: {"homing": [dict(e, bearing_error_deg=None) for e in m["homing"]]}
         for name, m in result.report["mappers"].items()
     }
-    plot_homing(fig, no_truth)
+    fig = plot_homing(no_truth)
     assert "Table 1" not in fig.get_suptitle() and "no ground truth" in fig.get_suptitle()
 
 
 def test_animation_gif(result: ExperimentResult) -> None:
     from PIL import Image
 
-    from albot2d.plots_anim import animated_mapper, render_map_animation
+    from albot2d.viz.anim import animated_mapper, render_map_animation
 
     assert animated_mapper(result) == "albot1"
     files = render_map_animation(result, moments=4, dpi=40, mp4=False)
@@ -91,10 +82,58 @@ def test_animation_gif(result: ExperimentResult) -> None:
 
 
 def test_animation_mp4_when_ffmpeg_is_installed(request: pytest.FixtureRequest) -> None:
-    from albot2d.plots_anim import ffmpeg_available, render_map_animation
+    from albot2d.viz.anim import ffmpeg_available, render_map_animation
 
     if not ffmpeg_available():
         pytest.skip("no ffmpeg executable: --animate writes the GIF only")
     files = render_map_animation(request.getfixturevalue("result"), moments=3, dpi=40)
     assert set(files) == {"albot1_map.gif", "albot1_map.mp4"}
     assert files["albot1_map.mp4"][4:8] == b"ftyp"  # an MP4 container
+
+
+def test_map_and_route_follow_the_plot_convention(result: ExperimentResult) -> None:
+    """``plot_map``/``plot_route`` take the data first and return the axes they drew on
+    (a new figure when no ``ax``); the surfaces' LineCollection is reachable for a colour
+    bar and carries one colour value per surface."""
+    from matplotlib.axes import Axes
+
+    from albot2d.viz import map_surfaces, plot_map, plot_route
+
+    albot1 = result.trace.mappers["albot1"]
+    snap = albot1.global_map()
+    ax = plot_map(snap.segments, map_ids=snap.map_ids, world=result.world)
+    assert isinstance(ax, Axes) and ax.get_figure(root=True) is not None
+    lines = map_surfaces(ax)
+    assert len(lines.get_segments()) == len(snap.segments)
+    assert np.array_equal(lines.get_array(), snap.map_ids)
+    given = plot_map(snap.segments, ax=ax)
+    assert given is ax and map_surfaces(ax) is not lines  # the last map drawn
+    with pytest.raises(ValueError, match="plot_map"):
+        map_surfaces(plot_route(albot1.route))
+    route_ax = plot_route(albot1.route, world=result.world)
+    viewpoints = sum(len(ln.get_xdata()) for ln in route_ax.lines if ln.get_marker() == "o")
+    assert viewpoints == len(albot1.route)  # every remembered view, coloured by method
+
+
+def test_paper_figures_follow_the_plot_convention(tmp_path: Path) -> None:
+    """Single-panel paper figures return Axes, multi-panel ones a Figure; ``save_figure``
+    writes either as a PNG."""
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from albot2d.viz.paper import plot_bars, plot_sequence, save_figure
+
+    bars = {"bars": [{"label": "a", "ours": 1.0, "sd": 0.1, "paper": 1.2},
+                     {"label": "b", "ours": None, "sd": None, "paper": 3.0}],
+            "ylabel": "m"}  # fmt: skip
+    ax = plot_bars(bars)
+    assert isinstance(ax, Axes) and [t.get_text() for t in ax.get_xticklabels()] == ["a", "b"]
+    seq = {"poses": [[0.0, 0.0, 0.0], [1.0, 0.0, 0.5]], "rows": [3, 4],
+           "methods": ["triangulation", ""], "tracked": [5, 2],
+           "walls": [[-2.0, -2.0, 2.0, -2.0]]}  # fmt: skip
+    fig = plot_sequence(seq)
+    assert isinstance(fig, Figure) and len(fig.axes) == 2
+    for name, spec in (("bars.png", {"plot": "bars", "data": bars}),
+                       ("seq.png", {"plot": "sequence", "data": seq})):  # fmt: skip
+        save_figure(spec, tmp_path / name)
+        assert (tmp_path / name).read_bytes().startswith(PNG_MAGIC)

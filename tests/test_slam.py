@@ -17,7 +17,6 @@ import pytest
 
 from albot2d.cli import main
 from albot2d.errors import InputError
-from albot2d.evaluation.experiment import plan_tour
 from albot2d.evaluation.map_quality import map_quality
 from albot2d.evaluation.rpe import relative_pose_error
 from albot2d.frames import Frame, Scan, beam_angles
@@ -26,9 +25,7 @@ from albot2d.logs.relations import relations_from_truth
 from albot2d.mapping import Mapper, NaiveIntegration
 from albot2d.mapping.registry import BUILTIN_MAPPERS
 from albot2d.mapping.slam import ScanMatchingParams, ScanMatchingSLAM
-from albot2d.sim.odometry import noise_preset
-from albot2d.sim.simulator import Simulator
-from worldgen.generate import generate
+from tests.runs import map_frames, office_loop
 from worldgen.world import World
 
 MISSING = "kiss-icp is not installed (pip install -e '.[slam]')"
@@ -42,24 +39,15 @@ def kiss() -> ModuleType:
 @pytest.fixture(scope="module")
 def office_run() -> tuple[World, list[Frame]]:
     """A ~30 m loop through a small office, dataset3 profile, typical odometry noise."""
-    world = generate("office", seed=0, width_m=30, height_m=24)
-    tour = plan_tour(world, "loop", 30.0)
-    sim = Simulator(world, seed=0, odometry=noise_preset("typical"))
-    return world, list(sim.drive(tour, "dataset3"))
-
-
-def run_mapper(mapper: Mapper, frames: list[Frame]) -> Mapper:
-    for f in frames:
-        mapper.observe(f)
-    return mapper
+    return office_loop()
 
 
 def test_slam_beats_odometry_and_naive_integration(
     kiss: ModuleType, office_run: tuple[World, list[Frame]]
 ) -> None:
     world, frames = office_run
-    slam = run_mapper(ScanMatchingSLAM(), frames)
-    naive = run_mapper(NaiveIntegration(), frames)
+    slam = map_frames(ScanMatchingSLAM(), frames)
+    naive = map_frames(NaiveIntegration(), frames)
     times = np.array([f.timestamp for f in frames])
     truth = np.array([f.true_pose.as_array() for f in frames])  # type: ignore[union-attr]
     rel = relations_from_truth(times, truth)
@@ -89,8 +77,8 @@ def test_slam_is_a_deterministic_protocol_mapper(
     frames = frames[:120]
     first = BUILTIN_MAPPERS["scan_odometry"]()
     assert isinstance(first, Mapper) and first.name == "scan_odometry"
-    run_mapper(first, frames)
-    again = run_mapper(ScanMatchingSLAM(), frames)
+    map_frames(first, frames)
+    again = map_frames(ScanMatchingSLAM(), frames)
     traj = first.trajectory()
     assert traj.shape == (len(frames), 3) and np.all(np.isfinite(traj))
     np.testing.assert_array_equal(traj, again.trajectory())
@@ -118,7 +106,7 @@ def test_scans_without_enough_hits_follow_odometry(kiss: ModuleType) -> None:
         inc = Pose() if prev is None else prev.between(odom)
         frames.append(Frame(k, float(k), blind_scan(), odom, inc))
         prev = odom
-    slam = run_mapper(ScanMatchingSLAM(), frames)
+    slam = map_frames(ScanMatchingSLAM(), frames)
     odo = np.array([f.odom_pose.as_array() for f in frames])
     np.testing.assert_allclose(slam.trajectory(), between_arrays(odo[:1], odo), atol=1e-9)
     assert slam.counts().path_integrations == len(frames) - 1

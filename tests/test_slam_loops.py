@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from albot2d.errors import InputError
-from albot2d.evaluation.experiment import plan_tour
 from albot2d.frames import Frame
 from albot2d.geometry import between_arrays, compose_arrays
 from albot2d.mapping import Mapper
@@ -21,9 +20,7 @@ from albot2d.mapping.registry import BUILTIN_MAPPERS
 from albot2d.mapping.slam import LoopClosingSLAM, ScanMatchingSLAM
 from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams
 from albot2d.mapping.slam_loops import LoopClosureParams
-from albot2d.sim.odometry import noise_preset
-from albot2d.sim.simulator import Simulator
-from worldgen.generate import generate
+from tests.runs import map_frames, office_loop
 
 MISSING = "the [slam] extra is not installed (pip install -e '.[slam]')"
 
@@ -37,18 +34,12 @@ def extra() -> None:
 @pytest.fixture(scope="module")
 def frames() -> list[Frame]:
     """A ~30 m loop through a small office, dataset3 profile, typical odometry noise."""
-    world = generate("office", seed=0, width_m=30, height_m=24)
-    tour = plan_tour(world, "loop", 30.0)
-    sim = Simulator(world, seed=0, odometry=noise_preset("typical"))
-    return list(sim.drive(tour, "dataset3"))
+    return office_loop()[1]
 
 
 @pytest.fixture(scope="module")
 def slam(extra: None, frames: list[Frame]) -> LoopClosingSLAM:
-    mapper = LoopClosingSLAM()
-    for f in frames:
-        mapper.observe(f)
-    return mapper
+    return map_frames(LoopClosingSLAM(), frames)
 
 
 def truth_of(frames: list[Frame]) -> np.ndarray:
@@ -66,9 +57,7 @@ def end_pose_error(frames: list[Frame], trajectory: np.ndarray) -> tuple[float, 
 def test_a_true_loop_closes_and_the_end_pose_error_drops(
     slam: LoopClosingSLAM, frames: list[Frame]
 ) -> None:
-    front_end = ScanMatchingSLAM()
-    for f in frames:
-        front_end.observe(f)
+    front_end = map_frames(ScanMatchingSLAM(), frames)
     stats = slam.slam_stats()
     assert stats["loop_closures_accepted"] >= 1 and stats["optimisations"] >= 1
     # every accepted closure agrees with the truth: a true loop, not a look-alike place

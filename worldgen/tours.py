@@ -84,6 +84,7 @@ def _far_place(
     """A node far (along the roadmap) from all ``sources``: (node, path from the nearest
     source to it), picked at random among the few farthest; None if all are near."""
     dist, paths = nx.multi_source_dijkstra(graph, sources, weight="weight")
+    assert isinstance(dist, dict) and isinstance(paths, dict)  # no target: per-node results
     ids = np.fromiter(dist.keys(), dtype=np.int64, count=len(dist))
     far = np.fromiter(dist.values(), dtype=np.float64, count=len(dist))
     order = np.lexsort((ids, -far))
@@ -125,6 +126,10 @@ def _spread_places(
         chosen.append(int(candidates[pick]))
         d = np.minimum(d, np.hypot(*(nodes[candidates] - nodes[candidates[pick]]).T))
     return chosen
+
+
+# (graph, node positions, start node, rng, minimum length in metres) -> walk of nodes
+_TourBuilder = Callable[[nx.Graph, np.ndarray, int, np.random.Generator, float], list[int]]
 
 
 def _loop(
@@ -271,12 +276,13 @@ def _circuit(
     if not core_nodes:
         return _out_and_back(graph, nodes, s, rng, min_length_m)
     dist, paths = nx.single_source_dijkstra(graph, s, weight="weight")
+    assert isinstance(dist, dict) and isinstance(paths, dict)  # no target: per-node results
     reachable_core = sorted(v for v in core_nodes if v in dist)
     if not reachable_core:
         return _out_and_back(graph, nodes, s, rng, min_length_m)
     entry = min(reachable_core, key=lambda v: (dist[v], v))
     way_in = [int(v) for v in paths[entry]]
-    core = nx.Graph(graph.subgraph(nx.node_connected_component(
+    core: nx.Graph[int] = nx.Graph(graph.subgraph(nx.node_connected_component(
         graph.subgraph(core_nodes), entry)))
     core_dist = nx.single_source_dijkstra_path_length(core, entry, weight="weight")
     ids = np.array(sorted(core_dist), dtype=np.int64)
@@ -388,9 +394,11 @@ def make_tour(
             f"of roadmap edges (need at least {_MIN_ROADMAP_M} m; zero-length edges or a "
             "roadmap cut off from the start)"
         )
-    builders = {"loop": _loop, "out_and_back": _out_and_back, "backtracking": _backtracking,
-                "circuit": functools.partial(_circuit, straighten=_straightener(world),
-                                             rooms=_room_nodes(world))}
+    builders: dict[str, _TourBuilder] = {
+        "loop": _loop, "out_and_back": _out_and_back, "backtracking": _backtracking,
+        "circuit": functools.partial(_circuit, straighten=_straightener(world),
+                                     rooms=_room_nodes(world)),
+    }  # fmt: skip
     walk = builders[kind](graph, nodes, s, rng, float(min_length_m))
     walk = [v for k, v in enumerate(walk) if k == 0 or v != walk[k - 1]]
     waypoints = nodes[walk]

@@ -72,7 +72,7 @@ class Roadmap:
         """The roadmap as a networkx Graph with Euclidean ``weight`` on each edge."""
         import networkx as nx
 
-        g = nx.Graph()
+        g: nx.Graph[int] = nx.Graph()
         g.add_nodes_from(range(len(self.nodes)))
         for i, j in self.edges:
             w = float(np.hypot(*(self.nodes[i] - self.nodes[j])))

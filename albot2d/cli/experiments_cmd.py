@@ -139,12 +139,12 @@ def _tick(bar: Any, run_name: str, seed: int) -> None:
 def _write(out: Path, outcome: Any, *, figures: bool) -> None:
     """Figures first, then the page, experiments.json last (atomically)."""
     from albot2d.atomic import atomic_write_text
-    from albot2d.paper_page import PAGE_NAME, render_page
+    from albot2d.viz.paper_page import PAGE_NAME, render_page
 
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, list[dict[str, Any]]] = {}
     if figures:
-        from albot2d.plots_paper import save_figure
+        from albot2d.viz.paper import save_figure
 
         for name, specs in outcome.figures.items():
             for spec in specs:

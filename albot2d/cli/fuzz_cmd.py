@@ -143,10 +143,10 @@ def _write_histograms(out: Path, no_figures: bool) -> str | None:
     if no_figures:
         return None
     try:
-        from albot2d.plots_fuzz import campaign_histograms
+        from albot2d.viz.campaign import render_campaign_histograms_png
 
         records, _ = read_episodes(out / EPISODES_NAME)
-        png = campaign_histograms([records[k] for k in sorted(records)])
+        png = render_campaign_histograms_png([records[k] for k in sorted(records)])
     except ImportError as exc:
         print(f"albot2d fuzz: note: no histograms ({exc}); pip install 'albot2d[viz]'",
               file=sys.stderr)
@@ -291,8 +291,8 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
             {k: v for k, v in without_timings(result.report).items() if k not in ignore},
         )
         if recorded["status"] != "crash":
-            same = "identical to" if not diff else f"differs at {', '.join(diff[:5])} from"
-            print(f"reproduce: run {same} {where} (apart from wall-clock timings)")
+            verdict = "identical to" if not diff else f"differs at {', '.join(diff[:5])} from"
+            print(f"reproduce: run {verdict} {where} (apart from wall-clock timings)")
     else:
         print((record["error"] or {}).get("traceback", ""), file=sys.stderr, end="")
     checked = len(record["checked"])

@@ -213,11 +213,11 @@ def _render(result: Any, no_figures: bool, command: str, animate: bool = False) 
     if no_figures:
         return {}
     try:
-        from albot2d.plots_maps import render_experiment_figures
+        from albot2d.viz.run_figures import render_experiment_figures
 
         figures = render_experiment_figures(result)
         if animate:
-            from albot2d.plots_anim import render_map_animation
+            from albot2d.viz.anim import render_map_animation
 
             animation = render_map_animation(result)
             if not animation:
@@ -235,7 +235,7 @@ def _step_figure(result: Any, no_figures: bool) -> dict[str, bytes]:
     if no_figures:
         return {}
     try:
-        from albot2d.plots_steps import render_step_times_png
+        from albot2d.viz.steps import render_step_times_png
 
         return {"steps.png": render_step_times_png(result.trace.step_times)}
     except ImportError:

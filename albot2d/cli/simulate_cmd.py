@@ -60,12 +60,13 @@ def _frames(frames: Any, total: int | None, show_progress: bool) -> list[Any]:
 
 def _render_png(world: Any, frames: list[Any], title: str) -> bytes | None:
     try:
-        from albot2d.plots import render_paths_png
+        from albot2d.viz.paths import render_paths_png
 
         true_xy = np.array([[f.true_pose.x, f.true_pose.y] for f in frames])
         odom_xy = np.array([[f.odom_pose.x, f.odom_pose.y] for f in frames])
         collided = np.array([f.collided for f in frames], dtype=bool)
-        return render_paths_png(world, true_xy, odom_xy, collided=collided, title=title)
+        return render_paths_png(world, true_xy=true_xy, odom_xy=odom_xy, collided=collided,
+                                title=title)
     except ImportError as exc:
         print(f"albot2d simulate: note: no {PNG_NAME} ({exc}); pip install 'albot2d[viz]'",
               file=sys.stderr)

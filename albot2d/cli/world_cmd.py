@@ -54,7 +54,7 @@ def register(subparsers: Any) -> None:
     p.set_defaults(handler=run)
 
 
-def _build_world(args: argparse.Namespace, seed: int, params: dict[str, Any]) -> Any:
+def _build_world(args: argparse.Namespace, seed: int | None, params: dict[str, Any]) -> Any:
     import worldgen
 
     if args.from_houseexpo is not None:
@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     outputs = {out: world_to_json(world).encode("utf-8")}
     if png is not None:
         try:
-            from albot2d.plots import render_world_png
+            from albot2d.viz.world import render_world_png
 
             outputs[png] = render_world_png(world, tour=tour)
         except ImportError as exc:

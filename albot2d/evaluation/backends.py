@@ -145,8 +145,8 @@ class LocalBackend:
                     isolating = True
                 elif not suspects:
                     isolating = False
-                    while len(pending) < window and (item := next(queue, None)) is not None:
-                        pending[self._executor().submit(fn, *args, item)] = item
+                    while len(pending) < window and (queued := next(queue, None)) is not None:
+                        pending[self._executor().submit(fn, *args, queued)] = queued
                 if not pending:
                     return
                 done, _ = wait(set(pending), return_when=FIRST_COMPLETED)

@@ -17,7 +17,7 @@
 - ``reproducers/episode-<k>.json`` for every failing episode (an invariant violated or a
   crash), written before its line: ``albot2d run --reproduce FILE`` replays it;
 - ``summary.json`` (``albot2d.evaluation.campaign_summary.summarise``); ``albot2d fuzz``
-  adds ``histograms.png`` (``albot2d.plots_fuzz``).
+  adds ``histograms.png`` (``albot2d.viz.campaign``).
 
 Ctrl-C: the first stops handing out episodes and lets the running ones finish and be
 written down, the second stops at once (the backend's workers are terminated); either way
@@ -203,14 +203,14 @@ def _scan_episodes(path: Path) -> tuple[list[tuple[int, dict[str, Any]]], int, i
             record = None
         index = record.get("episode") if isinstance(record, dict) else None
         if (not isinstance(index, int) or isinstance(index, bool) or index < 0
-                or record.get("status") not in STATUSES):  # type: ignore[union-attr]
+                or record.get("status") not in STATUSES):
             raise InputError(f"{path}:{number}: not an episode record; the file is damaged "
                              "(move it away to start afresh)")
         if index in lines_of:
             raise InputError(f"{path}:{number}: episode {index} again (first on line "
                              f"{lines_of[index]}); the file is damaged (two writers?)")
         lines_of[index] = number
-        records.append((number, record))  # type: ignore[arg-type]
+        records.append((number, record))
     return records, keep, len(data) - keep
 
 

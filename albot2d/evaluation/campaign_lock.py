@@ -20,6 +20,7 @@ from albot2d.errors import InputError
 try:
     import fcntl
 except ImportError:  # pragma: no cover - not POSIX
+    # No fcntl here: None marks the lock as unavailable (checked before every use).
     fcntl = None  # type: ignore[assignment]
 
 __all__ = ["LOCK_NAME", "CampaignLock"]

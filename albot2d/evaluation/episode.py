@@ -181,6 +181,7 @@ class _Checks:
         self.frames: sim_inv.FrameChecker | None = None
         self.clearance: sim_inv.ClearanceChecker | None = None
         self.updates: inv.UpdateRecorder | None = None
+        self.views: inv.ViewRecorder | None = None
         self.world: Any = None
         self.checked: list[str] = []
         self.violations: dict[str, list[str]] = {}
@@ -214,6 +215,7 @@ class _Checks:
         for mapper in mappers.values():
             if isinstance(mapper, Albot1):
                 self.updates = inv.UpdateRecorder(raise_at_once=False).attach(mapper)
+                self.views = inv.ViewRecorder().attach(mapper)
 
     def add(self, name: str, messages: list[str]) -> None:
         if messages:
@@ -240,7 +242,8 @@ class _Checks:
         metrics: dict[str, Any] = {}
         (mapper,) = trace.mappers.values()
         if isinstance(mapper, Albot1):
-            self.run("local_map_rule", inv.check_local_map_rule, mapper)
+            assert self.views is not None  # attached in on_mappers
+            self.run("local_map_rule", inv.check_local_map_rule, mapper, self.views.views)
             self.checked.append("update_deletes_facing_overlap")
             assert self.updates is not None
             self.add("update_deletes_facing_overlap", self.updates.violations)
@@ -334,7 +337,7 @@ def read_reproducer(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise InputError(f"{path}: not a fuzzing reproducer ({exc})") from None
     if not isinstance(record, dict):
         raise InputError(f"{path}: not a fuzzing reproducer (no episode record)")
-    return doc  # type: ignore[no-any-return]
+    return doc
 
 
 def replay_reproducer(path: str | os.PathLike[str]) -> EpisodeOutcome:

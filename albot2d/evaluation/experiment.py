@@ -183,7 +183,8 @@ def build_world(spec: RunSpec) -> World:
         return load(spec.world_file)
     from worldgen.generate import generate
 
-    return generate(spec.kind, seed=spec.seed, **spec.world_params)  # type: ignore[arg-type]
+    assert spec.kind is not None  # RunSpec's own check: a kind when there is no world_file
+    return generate(spec.kind, seed=spec.seed, **spec.world_params)
 
 
 def plan_tour(world: World, kind: str, min_length_m: float) -> Tour:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +30,8 @@ from albot2d.geometry import Pose, between_arrays, wrap_angle
 from albot2d.mapping.albot1 import Albot1
 from albot2d.mapping.global_map import UpdateReport
 from albot2d.mapping.route_map import LocalMap, RouteMap
+from albot2d.perception.surfaces import Surfaces
+from albot2d.perception.tracking import TrackingParams, rtsv, start_tracking
 from albot2d.sim.driving import DrivingProfile
 from albot2d.sim.odometry import OdometryNoise
 from albot2d.validation import check_non_negative, check_positive
@@ -37,7 +40,9 @@ __all__ = [
     "INVARIANTS",
     "InvariantError",
     "InvariantParams",
+    "RecountedStep",
     "UpdateRecorder",
+    "ViewRecorder",
     "check_heading_error_bound",
     "check_local_map_rule",
     "check_route_connected",
@@ -48,6 +53,7 @@ __all__ = [
     "heading_errors",
     "local_map_errors",
     "local_maps_per_row",
+    "recount_tracking",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -136,34 +142,97 @@ def check_route_connected(route: RouteMap, atol_m: float = 1e-9) -> None:
                     f"{diff[bad].max():.3g}")
 
 
-def check_local_map_rule(m: Albot1, min_tracked: int | None = None) -> None:
+class ViewRecorder:
+    """An Albot1 ``on_view`` hook keeping every view it is given (frame index, surfaces,
+    odometry increment): ``check_local_map_rule`` recounts tracking from them."""
+
+    def __init__(self) -> None:
+        self.views: list[tuple[int, Surfaces, Pose]] = []
+
+    def attach(self, mapper: Albot1) -> ViewRecorder:
+        """Hook into ``mapper`` (its ``on_view``); returns self."""
+        mapper.on_view = self
+        return self
+
+    def __call__(self, frame_index: int, view: Surfaces, increment: Pose) -> None:
+        self.views.append((frame_index, view, increment))
+
+
+@dataclass(frozen=True, slots=True)
+class RecountedStep:
+    """One view as recounted from the views alone (not the mapper's records): the
+    ``tracked`` surfaces RTSV (algorithm #1) leaves against the tracked set in force, and
+    the frames algorithm #2 must ``remember`` at this view given those counts."""
+
+    frame_index: int
+    tracked: int
+    remembered: tuple[int, ...]
+
+
+def recount_tracking(
+    views: Sequence[tuple[int, Surfaces, Pose]], params: TrackingParams, min_tracked: int
+) -> list[RecountedStep]:
+    """Replay algorithm #2's tracking and remembering decisions from the views as given.
+
+    The first view is remembered. At view c, |RTSV(V(c), S_t)| (line 4) is counted; when it
+    is below ``min_tracked`` and V(c-1) is not the current local map (Use-V(c) false),
+    V(c-1) is remembered and V(c) re-tracked from it (line 12, goto 4); when (still) below,
+    V(c) is remembered. A remembered view restarts the tracked set (``start_tracking``).
+    Only the views, the tracking parameters and the rule go in: nothing of the mapper.
+    """
+    out: list[RecountedStep] = []
+    if not views:
+        return out
+    first, view, _ = views[0]
+    out.append(RecountedStep(first, 0, (first,)))
+    tracked = start_tracking(view, params)
+    use_vc = True  # V(c-1) (the first view) is the current local map
+    for (prev_frame, prev_view, _), (frame, view, increment) in itertools.pairwise(views):
+        counted, _ = rtsv(tracked, view, increment, params)
+        tracked = counted
+        remembered: tuple[int, ...] = ()
+        if len(counted) < min_tracked:
+            if not use_vc:
+                remembered = (prev_frame,)
+                tracked, _ = rtsv(start_tracking(prev_view, params), view, increment, params)
+            if len(tracked) < min_tracked:
+                remembered += (frame,)
+                tracked = start_tracking(view, params)
+        out.append(RecountedStep(frame, len(counted), remembered))
+        use_vc = bool(remembered) and remembered[-1] == frame
+    return out
+
+
+def check_local_map_rule(
+    m: Albot1, views: Sequence[tuple[int, Surfaces, Pose]], min_tracked: int | None = None
+) -> None:
     """A view is remembered exactly when fewer than ``min_tracked`` tracked surfaces remain;
     V(c-1) is remembered unless it already is the current local map (Use-Vc), which holds
-    exactly when the previous step remembered V(c-1); the route map is connected."""
+    exactly when the previous step remembered V(c-1); the route map is connected.
+
+    The tracked counts and the views to remember are recounted from ``views`` (every view
+    the mapper was given, e.g. kept by a ``ViewRecorder``; ``recount_tracking``): the route
+    map must hold exactly those views, and the mapper's ``StepRecord``s must agree."""
     name = "local_map_rule"
     need = m.params.min_tracked if min_tracked is None else min_tracked
-    steps = m.steps
-    if steps and steps[0].remembered != (steps[0].frame_index,):
-        fail(name, f"the first view (frame {steps[0].frame_index}) was not remembered")
-    for prev, step in itertools.pairwise(steps):
-        at = f"frame {step.frame_index}"
-        if step.use_vc != (bool(prev.remembered) and prev.remembered[-1] == prev.frame_index):
-            fail(name, f"{at}: Use-Vc is {step.use_vc} but V(c-1) "
-                        f"{'is' if not step.use_vc else 'is not'} the current local map")
-        if step.tracked >= need:
-            if step.remembered != ():
-                fail(name, f"{at}: {step.tracked} tracked but {step.remembered} remembered")
-            continue
-        if not step.remembered:
-            fail(name, f"{at}: {step.tracked} tracked (< {need}) and nothing remembered")
-        if step.use_vc:
-            if step.remembered != (step.frame_index,):
-                fail(name, f"{at}: Use-Vc should remember V(c) only, got {step.remembered}")
-        elif step.remembered[0] != prev.frame_index or step.remembered[-1] not in (
-            prev.frame_index, step.frame_index
-        ):
-            fail(name, f"{at}: should remember V(c-1) (frame {prev.frame_index}) and maybe "
-                        f"V(c), got {step.remembered}")
+    steps = recount_tracking(views, m.params.tracking, need)
+    if len(steps) != len(m.steps):
+        fail(name, f"{len(steps)} views given but {len(m.steps)} steps recorded")
+    expected = [f for step in steps for f in step.remembered]
+    held = [lm.frame_index for lm in m.route]
+    if held != expected:
+        k = next((i for i, (a, b) in enumerate(zip(held, expected, strict=False)) if a != b),
+                 min(len(held), len(expected)))  # fmt: skip
+        fail(name, f"the route map remembers frames {held[k:k + 3]}… from its local map {k} "
+                    f"on, the recounted rule gives {expected[k:k + 3]}…")
+    use_vc = False
+    for step, record in zip(steps, m.steps, strict=True):
+        recounted = (step.frame_index, step.tracked, step.remembered, use_vc)
+        if (record.frame_index, record.tracked, record.remembered, record.use_vc) != recounted:
+            fail(name, f"frame {step.frame_index}: recorded {record.tracked} tracked, "
+                        f"{record.remembered} remembered, Use-Vc {record.use_vc}; recounted "
+                        f"{step.tracked}, {step.remembered}, {use_vc}")
+        use_vc = bool(step.remembered) and step.remembered[-1] == step.frame_index
     try:
         check_route_connected(m.route)
     except InvariantError as exc:

@@ -77,7 +77,7 @@ def make_report(command: str, **sections: Any) -> dict[str, Any]:
         "albot2d_version": __version__,
         "command": command,
     }
-    return plain(head | sections)  # type: ignore[no-any-return]
+    return plain(head | sections)
 
 
 def report_json(report: Mapping[str, Any]) -> str:

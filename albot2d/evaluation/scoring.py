@@ -223,6 +223,7 @@ def snapshots_section(trace: Trace, mapper: Mapper, n: int) -> list[dict[str, An
     for row in snapshot_rows(trace, n):
         view = int(trace.frame_indices[row])
         update = int(np.count_nonzero(map_frames <= view))
+        # at_update (the map's history) is not in the Mapper protocol; route_of() found one.
         surfaces = len(mapper.global_map(at_update=update).segments)  # type: ignore[call-arg]
         out.append({"view": view, "row": row, "travelled_m": float(trace.travelled_m[row]),
                     "update": update, "surfaces": surfaces})

@@ -56,6 +56,7 @@ class SensitivitySetup:
 def run_one(seed: int, preset: str, setup: SensitivitySetup) -> dict[str, Any]:
     """One run: its homing errors per stop and Albot1's update counts per region kind."""
     from albot2d.evaluation.experiment import RunSpec, run_experiment
+    from albot2d.mapping import Albot1
 
     spec = RunSpec(
         seed=seed,
@@ -74,7 +75,9 @@ def run_one(seed: int, preset: str, setup: SensitivitySetup) -> dict[str, Any]:
     ]
     trace = result.trace
     assert trace.true_poses is not None  # simulated runs always have the truth
-    flags = albot1_update_flags(trace.mappers["albot1"].steps, trace.frame_indices)
+    albot1_mapper = trace.mappers["albot1"]
+    assert isinstance(albot1_mapper, Albot1)  # the run's spec names the albot1 mapper
+    flags = albot1_update_flags(albot1_mapper.steps, trace.frame_indices)
     xy = trace.true_poses[:, :2]
     labels = np.full(len(xy), "", dtype="<U8")  # only update rows are read
     labels[flags] = region_labels(result.world, xy[flags])

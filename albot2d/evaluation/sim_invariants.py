@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TypedDict, Unpack
 
 import numpy as np
 import shapely
@@ -79,6 +80,15 @@ def _overlap_with_ring(centres: FloatArray, ring: FloatArray, radius_m: float) -
     return radius_m + np.where(inside, dist, -dist)
 
 
+class CheckerOptions(TypedDict, total=False):
+    """The optional keywords of ``ClearanceChecker`` that ``for_world`` passes on."""
+
+    tolerance_m: float
+    moving_tolerance_m: float
+    batch: int
+    raise_at_once: bool
+
+
 class ClearanceChecker:
     """``robot_clear_of_obstacles`` pose by pose, static and moving obstacles alike.
 
@@ -121,13 +131,13 @@ class ClearanceChecker:
 
     @classmethod
     def for_world(cls, world: World, radius_m: float | None = None,
-                  **kwargs: object) -> ClearanceChecker:
+                  **kwargs: Unpack[CheckerOptions]) -> ClearanceChecker:
         """A checker for ``world``'s walls, clutter and moving obstacles."""
         obstacles = world.dynamic_obstacles
         return cls(world.obstacle_segments, [o.shape for o in obstacles],
                    world.robot_radius_m if radius_m is None else radius_m,
                    names=[f"dynamic_obstacles[{m}] ({o.kind})" for m, o in enumerate(obstacles)],
-                   **kwargs)  # type: ignore[arg-type]
+                   **kwargs)
 
     def add(self, robot_pose: Pose, obstacle_poses: FloatArray | None = None,
             row: int | None = None) -> None:

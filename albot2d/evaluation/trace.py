@@ -267,7 +267,7 @@ def drive_mappers(
     stops: list[Stop] = []
     passed = 0  # multiples of stop_every_m passed so far
     steps = StepTimes()
-    perceives = {name: m.perception() for name, m in mappers.items()  # type: ignore[attr-defined]
+    perceives = {name: m.perception() for name, m in mappers.items()
                  if takes_perceived_views(m)}  # fmt: skip
     probes = {name: _Probe(m) for name, m in mappers.items()}
     for extraction in set(perceives.values()):
@@ -307,6 +307,7 @@ def drive_mappers(
             if name in perceives:
                 view, shared_ns = views[perceives[name]]
                 probes[name].charge_extraction(shared_ns)
+                # perceives holds only the mappers takes_perceived_views() accepted.
                 mapper.observe_perceived(frame, view)  # type: ignore[attr-defined]
             else:
                 mapper.observe(frame)
@@ -387,6 +388,7 @@ class _Probe:
                 if not (self.shared and stage == "extraction"):
                     row[f"{name}.{stage}_ms"] = ns / 1e6
         row[f"{name}.total_ms"] = total_ns / 1e6
+        # steps and map are not in the Mapper protocol: __init__ checked for them (duck typing).
         steps = self.mapper.steps if self.has_steps else None  # type: ignore[attr-defined]
         if steps:
             row[f"{name}.tracked"] = getattr(steps[-1], "tracked", 0)
@@ -394,4 +396,4 @@ class _Probe:
         row[f"{name}.remembered"] = local_maps - self.local_maps
         self.local_maps = local_maps
         if self.has_map:
-            row[f"{name}.map_surfaces"] = len(self.mapper.map)  # type: ignore[attr-defined]
+            row[f"{name}.map_surfaces"] = len(self.mapper.map)  # type: ignore[attr-defined]  # has_map

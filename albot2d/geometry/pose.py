@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -26,6 +27,12 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 
+@overload
+def wrap_angle(angle: float) -> float: ...
+@overload
+def wrap_angle(angle: NDArray[Any]) -> FloatArray: ...
+@overload
+def wrap_angle(angle: ArrayLike) -> FloatArray | float: ...
 def wrap_angle(angle: ArrayLike) -> FloatArray | float:
     """Wrap angles (radians) to [-pi, pi). Scalars in, scalar out; arrays keep their shape."""
     wrapped = (np.asarray(angle, dtype=np.float64) + np.pi) % (2.0 * np.pi) - np.pi

@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 import os
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import TypeAlias
 
@@ -378,7 +378,7 @@ def _parse_neff(tokens: list[str], line_number: int) -> NeffRecord:
     return NeffRecord(value=_float(tokens, 1, "value"), line_number=line_number)
 
 
-_PARSERS = {
+_PARSERS: dict[str, Callable[[list[str], int], Record]] = {
     "FLASER": _parse_flaser,
     "RLASER": _parse_flaser,
     "ROBOTLASER1": _parse_robotlaser,

@@ -63,12 +63,12 @@ def atomic_text_output(path: str | os.PathLike[str]) -> Iterator[TextIO]:
     with atomic_path(target) as tmp, open(tmp, "wb") as raw:
         if target.name.endswith(".gz"):
             # filename="" and mtime=0 keep the gzip header free of run-dependent bytes.
-            binary: io.BufferedIOBase | gzip.GzipFile = gzip.GzipFile(
+            binary: io.BufferedWriter | gzip.GzipFile = gzip.GzipFile(
                 filename="", mode="wb", fileobj=raw, mtime=0
             )
         else:
             binary = raw
-        text = io.TextIOWrapper(binary, encoding="utf-8", newline="\n")  # type: ignore[arg-type]
+        text = io.TextIOWrapper(binary, encoding="utf-8", newline="\n")
         try:
             yield text
             text.flush()

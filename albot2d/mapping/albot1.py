@@ -154,7 +154,9 @@ class _ViewState:
 class Albot1:
     """Albot1 (the paper's robot) as a mapper; see the module docstring.
 
-    ``on_update`` is called with each global-map ``UpdateReport`` (e.g. to check invariants).
+    ``on_update`` is called with each global-map ``UpdateReport`` (e.g. to check invariants);
+    ``on_view`` with each view as given, before it is processed (frame index, surfaces,
+    odometry increment), so a check can recount tracking from the views themselves.
     """
 
     name = "albot1"
@@ -164,12 +166,14 @@ class Albot1:
         params: Albot1Params | None = None,
         *,
         on_update: Callable[[UpdateReport, LocalMap], None] | None = None,
+        on_view: Callable[[int, Surfaces, Pose], None] | None = None,
     ) -> None:
         self.params = params or Albot1Params()
         self.route = RouteMap()
         self.map = GlobalMap(self.params.global_map)
         self.timer = StageTimer()
         self.on_update = on_update
+        self.on_view = on_view
         self.last_update: UpdateReport | None = None
         self._tracked: TrackedSurfaces | None = None
         self._prev: _ViewState | None = None
@@ -223,6 +227,8 @@ class Albot1:
         self, frame_index: int, timestamp: float, view: Surfaces, increment: Pose
     ) -> None:
         """Process one view whose surfaces are already extracted (the main loop's body)."""
+        if self.on_view is not None:
+            self.on_view(frame_index, view, increment)
         self._views += 1
         n_maps = len(self.route)
         prev = self._prev

@@ -21,7 +21,7 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Protocol, TypeGuard, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -118,7 +118,7 @@ class PerceivingMapper(Mapper, Protocol):
         """Consume the next frame, its surfaces ``view`` extracted with ``perception()``."""
 
 
-def takes_perceived_views(mapper: object) -> bool:
+def takes_perceived_views(mapper: object) -> TypeGuard[PerceivingMapper]:
     """Whether a driver may call ``mapper.observe_perceived`` instead of ``observe``.
 
     True for a ``PerceivingMapper`` whose ``observe`` is defined no later in its class

@@ -121,7 +121,7 @@ def mapper_factory(spec: str) -> Callable[[], Mapper]:
         raise InputError(
             f"mapper {spec!r} does not implement the mapper protocol: missing {', '.join(missing)}"
         )
-    return cls  # type: ignore[no-any-return]
+    return cls
 
 
 def report_name(spec: str, factory: Callable[[], Mapper]) -> str:

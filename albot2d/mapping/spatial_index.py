@@ -59,7 +59,7 @@ class SegmentGridIndex:
         else:
             for ix in range(x0, x1 + 1):
                 for iy in range(y0, y1 + 1):
-                    ids = cells.get((ix, iy))
-                    if ids:
-                        found.extend(ids)
+                    in_cell = cells.get((ix, iy))
+                    if in_cell:
+                        found.extend(in_cell)
         return np.unique(np.asarray(found, dtype=np.int64))

@@ -274,15 +274,15 @@ def triangulate(
         best = int(kept[np.argmin(d_pi)])
     if params.heading == "selected":
         return Pose.from_array(poses[best])
-    gate = np.radians(params.heading_consensus_deg)
+    consensus = float(np.radians(params.heading_consensus_deg))
     if params.heading == "inlier_mean":
         if len(kept) == 1:
             return Pose.from_array(poses[best])
         dev = np.asarray(wrap_angle(poses[kept, 2] - poses[best, 2]))
-        offset = float(dev[np.abs(dev) <= gate].mean())
+        offset = float(dev[np.abs(dev) <= consensus].mean())
     else:
         offset = _weighted_heading_offset(
-            local, current, path_integration, float(poses[best, 2]), gate,
+            local, current, path_integration, float(poses[best, 2]), consensus,
             k * np.radians(gate_deg),
         )
     heading = float(wrap_angle(poses[best, 2] + offset))

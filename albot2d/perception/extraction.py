@@ -42,6 +42,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -357,7 +358,7 @@ def _occlusion(
     return np.column_stack(flags)
 
 
-_numba_extract: Callable[..., tuple] | None = None  # type: ignore[type-arg]
+_numba_extract: Callable[..., tuple[Any, ...]] | None = None
 _numba_missing = False
 
 

@@ -28,7 +28,7 @@ _MIN_CHORD_M = 1e-9
 
 
 @njit(cache=True, nogil=True)
-def _fit(sums, a, b):  # type: ignore[no-untyped-def]
+def _fit(sums, a, b):
     """Total-least-squares line of beams ``a..b``: unit normal (nx, ny) and offset c."""
     cnt = sums[b + 1, 0] - sums[a, 0]
     mx = (sums[b + 1, 1] - sums[a, 1]) / cnt
@@ -42,7 +42,7 @@ def _fit(sums, a, b):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True)
-def _max_residual(sums, x, y, a, b):  # type: ignore[no-untyped-def]
+def _max_residual(sums, x, y, a, b):
     nx, ny, c = _fit(sums, a, b)
     worst = 0.0
     for i in range(a, b + 1):
@@ -53,7 +53,7 @@ def _max_residual(sums, x, y, a, b):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True)
-def _farthest_from_chord(x, y, a, b):  # type: ignore[no-untyped-def]
+def _farthest_from_chord(x, y, a, b):
     ax, ay = x[a], y[a]
     ex, ey = x[b] - ax, y[b] - ay
     chord = np.hypot(ex, ey)
@@ -70,7 +70,7 @@ def _farthest_from_chord(x, y, a, b):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True)
-def _split(sums, x, y, starts, ends, split_d, min_points):  # type: ignore[no-untyped-def]
+def _split(sums, x, y, starts, ends, split_d, min_points):
     """Depth-first IEPF split of every run; pieces come out sorted by first beam."""
     n_max = 2 * len(x) + 2
     out = np.empty((n_max, 2), np.int64)
@@ -98,12 +98,12 @@ def _split(sums, x, y, starts, ends, split_d, min_points):  # type: ignore[no-un
 
 
 @njit(cache=True, nogil=True)
-def _run_of(starts, a):  # type: ignore[no-untyped-def]
+def _run_of(starts, a):
     return np.searchsorted(starts, a, side="right") - 1
 
 
 @njit(cache=True, nogil=True)
-def _merge(sums, x, y, ab, run, merge_d):  # type: ignore[no-untyped-def]
+def _merge(sums, x, y, ab, run, merge_d):
     m = len(ab)
     a = ab[:, 0].copy()
     b = ab[:, 1].copy()
@@ -145,7 +145,7 @@ def _merge(sums, x, y, ab, run, merge_d):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True)
-def _fitting_steps(x, y, end, limit, step, nx, ny, c, tol):  # type: ignore[no-untyped-def]
+def _fitting_steps(x, y, end, limit, step, nx, ny, c, tol):
     span = (limit - end) * step
     count = 0
     while count < span:
@@ -157,7 +157,7 @@ def _fitting_steps(x, y, end, limit, step, nx, ny, c, tol):  # type: ignore[no-u
 
 
 @njit(cache=True, nogil=True)
-def _grow(sums, x, y, a, b, starts, ends, split_d):  # type: ignore[no-untyped-def]
+def _grow(sums, x, y, a, b, starts, ends, split_d):
     m = len(a)
     run = _run_of(starts, a)
     nx = np.empty(m)
@@ -204,13 +204,13 @@ def _grow(sums, x, y, a, b, starts, ends, split_d):  # type: ignore[no-untyped-d
 
 
 @njit(cache=True, nogil=True)
-def _nothing(max_dphi):  # type: ignore[no-untyped-def]
+def _nothing(max_dphi):
     return (max_dphi, np.zeros((0, 4)), np.zeros((0, 2), np.bool_),
             np.zeros((0, 2), np.int64), np.zeros((0, 2), np.bool_))  # fmt: skip
 
 
 @njit(cache=True, nogil=True)
-def extract_kernel(  # type: ignore[no-untyped-def]
+def extract_kernel(
     ranges, angles, valid, max_range, lam, sigma_add, split_d, merge_d, min_points,
     cont_d, max_gap, corner_sin, corner_max_shift, pose_x, pose_y, pose_cos, pose_sin,
 ):  # fmt: skip

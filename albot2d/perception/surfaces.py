@@ -8,6 +8,7 @@ or the edge of the field of view hides where the surface really ends.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,7 +27,7 @@ FloatArray = NDArray[np.float64]
 
 
 def _readonly(arr: ArrayLike, dtype: type, shape: tuple[int, ...]) -> np.ndarray:
-    out = np.array(arr, dtype=dtype, copy=True).reshape(shape)
+    out: np.ndarray = np.array(arr, dtype=dtype, copy=True).reshape(shape)
     out.flags.writeable = False
     return out
 
@@ -110,7 +111,7 @@ class Surfaces:
     def from_segments(cls, segments: ArrayLike, occluded: ArrayLike | None = None) -> Surfaces:
         """Surfaces from bare segments (no beams); endpoints unoccluded unless given."""
         segs = as_segments(segments)
-        occ = np.zeros((len(segs), 2), bool) if occluded is None else occluded
+        occ = np.zeros((len(segs), 2), bool) if occluded is None else np.asarray(occluded)
         return cls(segs, occ, np.full((len(segs), 2), -1, np.int64))
 
     def __len__(self) -> int:
@@ -147,5 +148,5 @@ class Surfaces:
             bool(self.occluded[i, 1]),
         )
 
-    def __iter__(self):  # type: ignore[no-untyped-def]
+    def __iter__(self) -> Iterator[Surface]:
         return (self.surface(i) for i in range(len(self)))

@@ -368,9 +368,9 @@ class Dynamics:
         distance = math.hypot(rx, ry)
         if gap_before < self.params.person_yield_distance_m and distance > 0.0:
             # Blocked with the robot close by (it may be turning into the robot): back away.
-            away = (ox - side_m * rx / distance, oy - side_m * ry / distance)
-            if math.hypot(*away) <= self.params.person_max_sidestep_m:
-                candidates.append((walker.s, walker.direction, away))
+            back_off = (ox - side_m * rx / distance, oy - side_m * ry / distance)
+            if math.hypot(*back_off) <= self.params.person_max_sidestep_m:
+                candidates.append((walker.s, walker.direction, back_off))
         for cs, cd, offset in candidates:
             x, y, heading = walker.pose(cs, cd, offset)
             self._place(body, x, y, heading)

@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,6 +39,9 @@ from albot2d.frames import Scan, beam_angles
 from albot2d.geometry import Pose
 from albot2d.sim.raycast import BeamFan, RayCaster
 from albot2d.validation import check_finite, check_in_range, check_non_negative
+
+if TYPE_CHECKING:
+    from worldgen.world import World
 
 __all__ = ["Laser", "LaserNoise", "LaserParams"]
 
@@ -182,10 +186,10 @@ class Laser:
 
     @classmethod
     def for_world(
-        cls, world: object, params: LaserParams | None = None, noise: LaserNoise | None = None
+        cls, world: World, params: LaserParams | None = None, noise: LaserNoise | None = None
     ) -> Laser:
         """A laser seeing a ``worldgen.World``'s walls and clutter (``obstacle_segments``)."""
-        return cls(world.obstacle_segments, params, noise)  # type: ignore[attr-defined]
+        return cls(world.obstacle_segments, params, noise)
 
     @property
     def n_beams(self) -> int:

@@ -16,7 +16,7 @@ __all__ = ["apply_noise"]
 
 
 @njit(cache=True, nogil=True)
-def apply_noise(  # type: ignore[no-untyped-def]
+def apply_noise(
     r, hit, mixed_prob, mixed_jump, mixed_draws, sigma_m, sigma_per_m, normal,
     inv_resolution, resolution, min_range, max_range, dropout_prob, dropout_draws,
 ):  # fmt: skip

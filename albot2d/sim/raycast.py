@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -186,7 +186,7 @@ class RayCaster:
 
     def cast(
         self,
-        origin: ArrayLike,
+        origin: Sequence[float] | NDArray[np.floating],
         angles: ArrayLike | BeamFan,
         max_range: float,
         *,
@@ -202,7 +202,7 @@ class RayCaster:
         """
         fan = angles if isinstance(angles, BeamFan) else BeamFan.from_angles(angles)
         try:
-            x, y = origin  # type: ignore[misc]
+            x, y = origin
             ox, oy = float(x), float(y)
         except (TypeError, ValueError):
             raise InputError(f"ray origin must be two numbers (x, y), got {origin!r}") from None
@@ -349,7 +349,9 @@ def cast_brute_force(
     e = q - p
     cross_de = d[..., 0] * e[..., 1] - d[..., 1] * e[..., 0]
     cross_pd = p[..., 0] * d[..., 1] - p[..., 1] * d[..., 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # A ray (nearly) parallel to a segment divides by (almost) zero: t and u are then
+    # huge, infinite or NaN and the hit test below rejects them, as it should.
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         t = (p[..., 0] * e[..., 1] - p[..., 1] * e[..., 0]) / cross_de
         u = cross_pd / cross_de
     hit = (cross_de != 0.0) & (t >= 0.0) & (u >= 0.0) & (u <= 1.0)

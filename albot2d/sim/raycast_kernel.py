@@ -194,7 +194,7 @@ def cast_pieces(
 
 
 def _degenerate(
-    z: np.ndarray, s: FloatArray, conj_n: np.ndarray, tol: float
+    z: NDArray[np.complex128], s: FloatArray, conj_n: NDArray[np.complex128], tol: float
 ) -> tuple[bool, NDArray[np.complex128], NDArray[np.bool_]]:
     """Pieces whose line passes within ``tol`` of the origin; returns (inside, w, edge_on).
 

@@ -31,7 +31,7 @@ _EDGE_ON_SLOTS = 32
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _touches(table, j, ox, oy, tol):  # type: ignore[no-untyped-def]
+def _touches(table, j, ox, oy, tol):
     """Whether the origin lies on piece ``j`` (its line within ``tol``, beside the piece)."""
     a, b, cn = table[0, j], table[1, j], table[2, j]
     ar, ai = a.real - ox, a.imag - oy
@@ -46,7 +46,7 @@ def _touches(table, j, ox, oy, tol):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _hits(table, lo, hi, ox, oy, dr, di, tol, best, edges):  # type: ignore[no-untyped-def]
+def _hits(table, lo, hi, ox, oy, dr, di, tol, best, edges):
     """``best`` raised to 1 / distance of the nearest of pieces ``[lo, hi)`` the beam crosses.
 
     Pieces seen edge-on are only noted in ``edges`` (see ``_note_edge_on``): handling them
@@ -69,7 +69,7 @@ def _hits(table, lo, hi, ox, oy, dr, di, tol, best, edges):  # type: ignore[no-u
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _note_edge_on(edges, j):  # type: ignore[no-untyped-def]
+def _note_edge_on(edges, j):
     """Add piece ``j`` to the set ``edges[1 : edges[0] + 1]``; ``edges[0] = -1`` once full."""
     count = edges[0]
     if count < 0:
@@ -85,7 +85,7 @@ def _note_edge_on(edges, j):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True)
-def _edge_on_hits(table, j, ox, oy, tol, directions, ext_rel, mid, dens):  # type: ignore[no-untyped-def]
+def _edge_on_hits(table, j, ox, oy, tol, directions, ext_rel, mid, dens):
     """If piece ``j`` is seen edge-on, the beam pointing exactly at its near end hits it."""
     a, cn, b = table[0, j], table[2, j], table[1, j]
     ar, ai = a.real - ox, a.imag - oy
@@ -106,12 +106,12 @@ def _edge_on_hits(table, j, ox, oy, tol, directions, ext_rel, mid, dens):  # typ
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _cell_of(v, v0, c, n):  # type: ignore[no-untyped-def]
+def _cell_of(v, v0, c, n):
     return min(max(math.floor((v - v0) / c), 0), n - 1)
 
 
 @njit(cache=True, nogil=True)
-def _origin_on_a_piece(table, cell_start, layout, extra, ox, oy, tol, pad):  # type: ignore[no-untyped-def]
+def _origin_on_a_piece(table, cell_start, layout, extra, ox, oy, tol, pad):
     """Contact: whether a piece near the origin (or an extra one) passes through it."""
     x0, y0, c = layout[0], layout[1], layout[2]
     nx, ny = int(layout[3]), int(layout[4])
@@ -129,7 +129,7 @@ def _origin_on_a_piece(table, cell_start, layout, extra, ox, oy, tol, pad):  # t
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _walk(table, cell_start, layout, ox, oy, dr, di, r_max, tol, pad, best, edges):  # type: ignore[no-untyped-def]
+def _walk(table, cell_start, layout, ox, oy, dr, di, r_max, tol, pad, best, edges):
     """``best`` raised by the pieces along the ray ``origin + t (dr, di)``, cell by cell
     from the origin on (Amanatides & Woo), until a cell ends beyond the nearest hit."""
     x0, y0, c = layout[0], layout[1], layout[2]
@@ -211,7 +211,7 @@ def _walk(table, cell_start, layout, ox, oy, dr, di, r_max, tol, pad, best, edge
 
 
 @njit(cache=True, nogil=True)
-def cast_beams(table, cell_start, layout, extra, directions, ext_rel, scan, out):  # type: ignore[no-untyped-def]
+def cast_beams(table, cell_start, layout, extra, directions, ext_rel, scan, out):
     """Fill ``out`` (``(B,)``, beams in sorted order) with ranges; ``inf`` for no hit.
 
     ``table``/``cell_start``/``layout`` (``[x0, y0, cell, nx, ny]``) are the grid's,

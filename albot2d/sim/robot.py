@@ -191,10 +191,10 @@ class KinematicRobot:
             near.add(hit.shape)
         end = (sx + dx * length, sy + dy * length)
         allowed, blocked = length, False
-        for hit in self.space.segment_query((sx, sy), end, reach, self._query_filter):
-            if hit.shape in near or not self._blocks(hit.shape):
+        for seg_hit in self.space.segment_query((sx, sy), end, reach, self._query_filter):
+            if seg_hit.shape in near or not self._blocks(seg_hit.shape):
                 continue
-            stop = hit.alpha * length
+            stop = seg_hit.alpha * length
             if stop < allowed:
                 allowed, blocked = stop, True
         return allowed, blocked

@@ -54,7 +54,7 @@ def _overlaps_any(rects: FloatArray, others: FloatArray) -> NDArray[np.bool_]:
     a, b = rects[:, None, :], others[None, :, :]
     hit = (b[..., 0] < a[..., 2]) & (a[..., 0] < b[..., 2])
     hit &= (b[..., 1] < a[..., 3]) & (a[..., 1] < b[..., 3])
-    return hit.any(axis=1)
+    return np.asarray(hit.any(axis=1))
 
 
 def _rot_rect(cx: float, cy: float, w: float, d: float, angle: float) -> FloatArray:

@@ -271,8 +271,8 @@ def _nearest_line(point: np.ndarray, lines: np.ndarray) -> int:
 def layout_mixed(rect: np.ndarray, p: MixedParams, rng: np.random.Generator) -> Layout:
     ht = 0.5 * p.wall_thickness_m
     inner = np.asarray(rect, float) + np.array([ht, ht, -ht, -ht])
-    spine_cells, regions = _spine(inner, p.regions, p.corridor_width_m + p.wall_thickness_m, rng)
-    spine_cells = np.array(spine_cells)
+    spine, regions = _spine(inner, p.regions, p.corridor_width_m + p.wall_thickness_m, rng)
+    spine_cells = np.array(spine)
     spine_in = shrink(spine_cells, ht)
     spine_lines = cell_centrelines(spine_cells)
     kinds = [str(k) for k in rng.permutation(_PART_KINDS)]

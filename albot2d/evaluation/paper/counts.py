@@ -72,7 +72,7 @@ def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str
             else mark,
         }  # fmt: skip
         entry: dict[str, Any] = {}
-        if p_views is not None:
+        if p_views is not None and p_maps is not None:
             entry |= {
                 "views": p_views,
                 "local_maps": p_maps,
@@ -82,7 +82,7 @@ def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str
             entry["path_integrations"] = p_pi
         paper[dataset] = entry
         mean_ratio = ours[dataset]["local_maps_per_view"]["mean"]
-        if p_views is not None and mean_ratio is not None:
+        if p_views is not None and p_maps is not None and mean_ratio is not None:
             target = p_maps / p_views
             ok = abs(mean_ratio / target - 1.0) <= RATIO_TOLERANCE
             ours[dataset]["ratio_within_25pct"] = ok

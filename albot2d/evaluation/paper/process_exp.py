@@ -211,7 +211,7 @@ class FIG16:
             None if a is None or b is None or a == 0 else b / a for a, b in zip(a2, n2, strict=True)
         ]
         pi1, pi2 = pis("fig6_dataset1"), pis("fig6_dataset2")
-        ours = {
+        ours: dict[str, Any] = {
             "map_accuracy_p95_m": acc["dataset2"],
             "map_accuracy_p95_m_dataset1": acc["dataset1"],
             "naive_over_albot1_p95_dataset2": over_seeds(ratio, seeds),

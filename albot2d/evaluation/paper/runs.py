@@ -186,8 +186,10 @@ def run_job(
         spec, params, on_start=on_start, on_frame=on_frame, on_mappers=on_mappers
     )
     trace = result.trace
+    truth, world = trace.true_poses, result.world
+    assert truth is not None and world is not None  # the paper's runs are all simulated
     end = _snapshot(
-        state["mappers"], trace.true_poses[-1], state["travelled"], int(trace.frame_indices[-1])
+        state["mappers"], truth[-1], state["travelled"], int(trace.frame_indices[-1])
     )
     for mark in run.marks:
         # a --quick run is cut short: the marks it never reached are taken at its end
@@ -217,13 +219,13 @@ def run_job(
         from albot2d.evaluation.updates import albot1_update_flags, region_labels
 
         flags = albot1_update_flags(albot1.steps, trace.frame_indices)
-        regions = region_labels(result.world, trace.true_poses[:, :2])
+        regions = region_labels(world, truth[:, :2])
         summary["updates"] = {
             "flags": flags.tolist(),
             "regions": regions.tolist(),
             "methods": _methods_per_row(albot1.steps, trace.frame_indices),
             "tracked": _tracked_per_row(albot1.steps, trace.frame_indices),
-            "true_xy": trace.true_poses[:, :2].tolist(),
+            "true_xy": truth[:, :2].tolist(),
         }
     if "E1#2" in state["snaps"] and "E7" in state["snaps"]:
         from albot2d.evaluation.paper.figdata import deleted_surfaces
@@ -232,15 +234,15 @@ def run_job(
             deleted_surfaces(state["snaps"]["E1#2"], state["snaps"]["E7"])
         )
     summary["map_quality_at_marks"] = _quality_at_marks(
-        state["snaps"], result.world, trace.true_poses[0]
+        state["snaps"], world, truth[0]
     )
     if keep_figures:
         summary["figures"] = {
-            "world_walls": np.asarray(result.world.walls),
-            "true_poses": trace.true_poses,
+            "world_walls": np.asarray(world.walls),
+            "true_poses": truth,
             "odom_poses": trace.odom_poses,
             "snaps": state["snaps"],
-            "waypoints": dict(result.world.features.get("waypoints", {})),
+            "waypoints": dict(world.features.get("waypoints", {})),
             "updates": summary.get("updates"),
         }
     return summary

@@ -1,18 +1,27 @@
 """Figures of ``albot2d experiments`` (the paper's Figs. 7, 10–16, Table 1 and the counts).
 
-Each ``plot_x(data, *, ax=None)`` draws the plain data an experiment produced
-(``albot2d.evaluation.paper``) on ``ax`` (a new figure when None; multi-panel plots take a
-sequence of axes) and returns the figure. ``save_figure(spec, path)`` draws one figure
-spec (``{"plot", "data", ...}``) to a PNG. matplotlib is imported lazily (``viz`` extra).
+Each function draws the plain data an experiment produced (``albot2d.evaluation.paper``):
+single-panel plots are ``plot_x(data, *, ax=None) -> Axes`` (``plot_bars``,
+``plot_homing``); multi-panel plots are figure-level composites
+``plot_x(data, *, fig=None) -> Figure`` (``plot_maps``, ``plot_updates``,
+``plot_sequence``). ``save_figure(spec, path)`` draws one figure spec
+(``{"plot", "data", ...}``) to a PNG. matplotlib is imported lazily (``viz`` extra); the
+figures use the Agg canvas directly (no pyplot, no global backend switch).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from albot2d.viz._figure import line_segments, new_figure
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = [
     "PLOTS",
@@ -29,40 +38,39 @@ _REGION_COLOURS = {"corridor": "tab:blue", "hall": "tab:orange", "room": "tab:gr
 _METHOD_COLOURS = {"triangulation": "tab:blue", "path_integration": "tab:red", "": "0.5"}
 
 
-def _plt() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _axes(ax: Any, n: int, ncols: int | None = None, size: float = 4.5) -> tuple[Any, list]:
-    if ax is not None:
-        axes = list(ax) if isinstance(ax, Sequence | np.ndarray) else [ax]
-        return axes[0].figure, axes
-    plt = _plt()
+def _panels(fig: Figure | None, n: int, ncols: int | None = None,
+            size: float = 4.5) -> tuple[Figure, list[Axes]]:
+    """``n`` panels on ``fig`` (a new figure of ``size``-inch panels when None)."""
     ncols = ncols or n
     nrows = int(np.ceil(n / ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(size * ncols, size * 0.75 * nrows),
-                             squeeze=False)  # fmt: skip
-    return fig, list(axes.ravel())
+    if fig is None:
+        fig = new_figure(size * ncols, size * 0.75 * nrows, layout=None)
+    return fig, list(np.ravel(fig.subplots(nrows, ncols, squeeze=False)))
 
 
-def _segments(ax: Any, segs: Any, **kw: Any) -> None:
+def _axes(ax: Axes | None, size: float) -> Axes:
+    return ax if ax is not None else new_figure(size, size * 0.75, layout=None).add_subplot()
+
+
+def _tight(ax: Axes) -> None:
+    fig = ax.get_figure(root=True)
+    if fig is not None:
+        fig.tight_layout()
+
+
+def _segments(ax: Axes, segs: Any, **kw: Any) -> None:
     from matplotlib.collections import LineCollection
 
     s = np.asarray(segs, dtype=float).reshape(-1, 4)
     if len(s):
-        ax.add_collection(LineCollection(s.reshape(-1, 2, 2), **kw))
+        ax.add_collection(LineCollection(line_segments(s), **kw))
 
 
-def plot_maps(data: dict[str, Any], *, ax: Any = None) -> Any:
+def plot_maps(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
     """Map panels: faint true walls, the map (black), deleted surfaces (red), the true path
     so far (blue) and the named waypoints."""
     panels = data["panels"]
-    fig, axes = _axes(ax, max(1, len(panels)), data.get("ncols"))
+    fig, axes = _panels(fig, max(1, len(panels)), data.get("ncols"))
     for a, p in zip(axes, panels, strict=False):
         _segments(a, p["walls"], colors="0.8", linewidths=0.6)
         if p.get("deleted") is not None:
@@ -87,9 +95,9 @@ def plot_maps(data: dict[str, Any], *, ax: Any = None) -> Any:
     return fig
 
 
-def plot_bars(data: dict[str, Any], *, ax: Any = None) -> Any:
+def plot_bars(data: dict[str, Any], *, ax: Axes | None = None) -> Axes:
     """Ours (mean ± sd) beside the paper's value, one pair of bars per label."""
-    fig, (a,) = _axes(ax, 1, size=6.0)
+    a = _axes(ax, size=6.0)
     bars = data["bars"]
     x = np.arange(len(bars))
     ours = [b["ours"] if b["ours"] is not None else np.nan for b in bars]
@@ -100,15 +108,15 @@ def plot_bars(data: dict[str, Any], *, ax: Any = None) -> Any:
     a.set_xticks(x, [b["label"] for b in bars], fontsize=8)
     a.set_ylabel(data.get("ylabel", ""))
     a.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+    _tight(a)
+    return a
 
 
-def plot_homing(data: dict[str, Any], *, ax: Any = None) -> Any:
+def plot_homing(data: dict[str, Any], *, ax: Axes | None = None) -> Axes:
     """Bearing error against distance error per stop, the bound as a box."""
     from matplotlib.patches import Rectangle
 
-    fig, (a,) = _axes(ax, 1, size=5.5)
+    a = _axes(ax, size=5.5)
     b_max, d_max = data["bound"]
     a.add_patch(Rectangle((-d_max, -b_max), 2 * d_max, 2 * b_max, fill=False, ls="--",
                           color="tab:green", label=f"±{b_max:g}° / ±{d_max:g} m"))  # fmt: skip
@@ -126,13 +134,13 @@ def plot_homing(data: dict[str, Any], *, ax: Any = None) -> Any:
     a.set_xlabel("distance error (m)")
     a.set_ylabel("bearing error (deg)")
     a.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+    _tight(a)
+    return a
 
 
-def plot_updates(data: dict[str, Any], *, ax: Any = None) -> Any:
+def plot_updates(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
     """The route with every view, updates coloured by region kind, and moves per update."""
-    fig, axes = _axes(ax, 2, size=6.0)
+    fig, axes = _panels(fig, 2, size=6.0)
     a, h = axes[0], axes[1]
     _segments(a, data["walls"], colors="0.8", linewidths=0.6)
     xy = np.asarray(data["xy"], float)
@@ -155,7 +163,7 @@ def plot_updates(data: dict[str, Any], *, ax: Any = None) -> Any:
         per_kind.setdefault(str(regions[row]), []).append(int(moved[last + 1 : row + 1].sum()))
         last = int(row)
     kinds = sorted(per_kind)
-    bins = np.arange(0, max((max(v) for v in per_kind.values()), default=1) + 2) - 0.5
+    bins = (np.arange(0, max((max(v) for v in per_kind.values()), default=1) + 2) - 0.5).tolist()
     h.hist([per_kind[k] for k in kinds], bins=bins, label=kinds,
            color=[_REGION_COLOURS.get(k, "k") for k in kinds])  # fmt: skip
     h.set_xlabel("moves since the previous update")
@@ -165,10 +173,10 @@ def plot_updates(data: dict[str, Any], *, ax: Any = None) -> Any:
     return fig
 
 
-def plot_sequence(data: dict[str, Any], *, ax: Any = None) -> Any:
+def plot_sequence(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
     """One panel per view of a sequence: the walls around the robot and the update method."""
     poses = np.asarray(data["poses"], float)
-    fig, axes = _axes(ax, len(poses), size=3.2)
+    fig, axes = _panels(fig, len(poses), size=3.2)
     for a, pose, row, method, tracked in zip(axes, poses, data["rows"], data["methods"],
                                              data["tracked"], strict=False):  # fmt: skip
         _segments(a, data["walls"], colors="0.6", linewidths=0.7)
@@ -184,13 +192,17 @@ def plot_sequence(data: dict[str, Any], *, ax: Any = None) -> Any:
     return fig
 
 
-PLOTS = {"maps": plot_maps, "bars": plot_bars, "homing": plot_homing,
-         "updates": plot_updates, "sequence": plot_sequence}  # fmt: skip
+PLOTS: dict[str, Callable[[dict[str, Any]], Axes | Figure]] = {
+    "maps": plot_maps, "bars": plot_bars, "homing": plot_homing,
+    "updates": plot_updates, "sequence": plot_sequence,
+}  # fmt: skip
 
 
 def save_figure(spec: dict[str, Any], path: Path) -> None:
     """Draw the figure ``spec`` (``{"plot", "data"}``) to the PNG ``path``."""
-    plt = _plt()
-    fig = PLOTS[spec["plot"]](spec["data"])
+    from matplotlib.figure import Figure
+
+    drawn = PLOTS[spec["plot"]](spec["data"])
+    fig = drawn if isinstance(drawn, Figure) else drawn.get_figure(root=True)
+    assert fig is not None  # the axes were made on a new figure above
     fig.savefig(path, dpi=110)
-    plt.close(fig)

@@ -1,21 +1,26 @@
 """The fuzzing campaign's figure: histograms of homing and pose errors over all episodes.
 
-matplotlib (the ``viz`` extra) is imported inside the function; the figure is drawn on the
-Agg canvas directly, headless. Panels comparing the mapper with raw odometry say in how
-many episodes it was better, worse or tied (``campaign_summary.mapper_vs_odometry``).
+``plot_campaign_histograms(records, *, fig=None) -> Figure`` (a figure-level composite, six
+panels); ``render_campaign_histograms_png`` gives it as PNG bytes. matplotlib (the ``viz``
+extra) is imported inside the functions; the figure is drawn on the Agg canvas directly.
+Panels comparing the mapper with raw odometry say in how many episodes it was better,
+worse or tied (``campaign_summary.mapper_vs_odometry``).
 """
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from albot2d.evaluation.campaign_summary import mapper_vs_odometry
+from albot2d.viz._figure import new_figure, png_bytes
 
-__all__ = ["campaign_histograms"]
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["plot_campaign_histograms", "render_campaign_histograms_png"]
 
 MAPPER_COLOR = "#1f77b4"
 ODOMETRY_COLOR = "#9e9e9e"
@@ -40,13 +45,13 @@ def _values(records: Sequence[Mapping[str, Any]], name: str) -> np.ndarray:
     return np.asarray(out, dtype=np.float64)
 
 
-def campaign_histograms(records: Sequence[Mapping[str, Any]], *, dpi: int = DEFAULT_DPI) -> bytes:
-    """PNG bytes: one histogram per error metric, the mapper against raw odometry."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(12.0, 6.5), layout="constrained")
-    FigureCanvasAgg(fig)
+def plot_campaign_histograms(
+    records: Sequence[Mapping[str, Any]], *, fig: Figure | None = None
+) -> Figure:
+    """One histogram per error metric over the campaign's episode ``records``, the mapper
+    against raw odometry, on ``fig`` (a new figure when None); returns the figure."""
+    if fig is None:
+        fig = new_figure(12.0, 6.5)
     axes = fig.subplots(2, 3).ravel()
     mapper = next((r["mapper"] for r in records if r.get("mapper")), "mapper")
     comparison = mapper_vs_odometry(records)
@@ -67,10 +72,15 @@ def campaign_histograms(records: Sequence[Mapping[str, Any]], *, dpi: int = DEFA
                     label=f"{label} (median {np.median(values):.3g})")
         ax.set_ylabel("episodes")
         cmp = comparison.get(mine) if odometry is not None else None
-        title = (f"{mapper}: better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']},"
+        summary = (f"{mapper}: better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']},"
                  f"\ntied in {cmp['ties']} of {cmp['episodes']} episodes" if cmp else None)
-        ax.legend(fontsize=8, title=title, title_fontsize=8)
+        ax.legend(fontsize=8, title=summary, title_fontsize=8)
     fig.suptitle(f"fuzzing campaign: {len(records)} episodes, {mapper}")
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    return buf.getvalue()
+    return fig
+
+
+def render_campaign_histograms_png(
+    records: Sequence[Mapping[str, Any]], *, dpi: int = DEFAULT_DPI
+) -> bytes:
+    """``plot_campaign_histograms`` as PNG bytes (``histograms.png`` of ``albot2d fuzz``)."""
+    return png_bytes(plot_campaign_histograms(records), dpi)

@@ -9,13 +9,14 @@ the columns of its ``steps.csv`` (e.g. ``read_steps_csv``). matplotlib is import
 
 from __future__ import annotations
 
-import io
 import itertools
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from albot2d.viz._figure import new_figure, png_bytes
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -36,10 +37,11 @@ def read_steps_csv(path: str) -> dict[str, NDArray[np.float64]]:
 
 
 def _columns(data: StepTimes | Mapping[str, ArrayLike]) -> dict[str, NDArray[np.float64]]:
-    names = getattr(data, "columns", data)
-    if hasattr(data, "column"):
-        return {name: data.column(name) for name in names}  # type: ignore[union-attr]
-    return {name: np.asarray(v, np.float64) for name, v in data.items()}  # type: ignore[union-attr]
+    from albot2d.evaluation.trace import StepTimes
+
+    if isinstance(data, StepTimes):
+        return {name: data.column(name) for name in data.columns}
+    return {name: np.asarray(v, np.float64) for name, v in data.items()}
 
 
 def _binned(values: NDArray[np.float64], bins: int) -> tuple[NDArray, NDArray, NDArray]:
@@ -63,11 +65,9 @@ def plot_step_times(
     mark the views where a mapper remembered a local map (mappers that remember only some
     views: Albot1, not the integrators that keep every view)."""
     if ax is None:
-        from matplotlib.figure import Figure
-
-        ax = Figure(figsize=(10.0, 4.0), layout="constrained").subplots()
+        ax = new_figure(10.0, 4.0).add_subplot()
     cols = _columns(data)
-    lines = [name for name in ("simulation_ms", "extraction_ms") if name in cols]
+    lines: list[str] = [name for name in ("simulation_ms", "extraction_ms") if name in cols]
     lines += [name for name in cols if name.endswith(".total_ms")]
     for name in lines:
         v = np.maximum(cols[name], 1e-4)  # a log axis cannot show 0
@@ -95,12 +95,6 @@ def render_step_times_png(
     data: StepTimes | Mapping[str, ArrayLike], *, dpi: int = DEFAULT_DPI
 ) -> bytes:
     """``plot_step_times`` as PNG bytes."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig: Any = Figure(figsize=(10.0, 4.0), layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = new_figure(10.0, 4.0)
     plot_step_times(data, ax=fig.subplots())
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
-    return buf.getvalue()
+    return png_bytes(fig, dpi)

@@ -19,18 +19,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from albot2d.plots_maps import (
+from albot2d.viz._figure import line_segments, new_figure
+from albot2d.viz.maps import (
     EST_PATH_COLOR,
     MAP_CMAP,
     START_COLOR,
     TRUE_PATH_COLOR,
     WORLD_COLOR,
-    _anchor,
-    _anchor_path,
-    _figure,
-    _mapper_extent,
-    _set_extent,
+    anchor_path,
+    anchor_segments,
+    set_extent,
 )
+from albot2d.viz.run_figures import mapper_extent
 
 if TYPE_CHECKING:
     from albot2d.evaluation.experiment import ExperimentResult
@@ -105,20 +105,20 @@ def render_map_animation(
     mapper = trace.mappers[name]
     truth = trace.true_poses
     start = None if truth is None else truth[0]
-    est = _anchor_path(start, np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3))
+    est = anchor_path(start, np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3))
     plan = _moments(result, name, moments)
-    extent = _mapper_extent(result, name)
+    extent = mapper_extent(result, name)
     span = 1.0 if extent is None else max(extent[2] - extent[0], extent[3] - extent[1])
     arrow = span / 40.0
 
-    fig = _figure(11.0, 5.6)
+    fig = new_figure(11.0, 5.6)
     ax_true, ax_map = fig.subplots(1, 2)
     for ax in (ax_true, ax_map):
         if result.world is not None and len(result.world.obstacle_segments):
-            segs = result.world.obstacle_segments.reshape(-1, 2, 2)
+            segs = line_segments(result.world.obstacle_segments)
             color = "#1a1a1a" if ax is ax_true else WORLD_COLOR
             ax.add_collection(LineCollection(segs, colors=color, linewidths=0.8, zorder=1))
-        _set_extent(ax, extent)
+        set_extent(ax, extent)
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
     (true_line,) = ax_true.plot([], [], "-", color=TRUE_PATH_COLOR, lw=1.2, zorder=3)
@@ -126,7 +126,7 @@ def render_map_animation(
     ax_true.set_title("truth: world, true path and robot", fontsize=10)
     if truth is None:
         ax_true.set_title("no ground truth (a real log)", fontsize=10)
-    surfaces = LineCollection(np.zeros((0, 2, 2)), linewidths=1.6, cmap=MAP_CMAP, zorder=3)
+    surfaces = LineCollection([], linewidths=1.6, cmap=MAP_CMAP, zorder=3)
     surfaces.set_clim(0, max(len(getattr(mapper, "route", [])) - 1, 1))
     ax_map.add_collection(surfaces)
     (est_line,) = ax_map.plot([], [], "-", color=EST_PATH_COLOR, lw=1.0, zorder=4)
@@ -149,9 +149,10 @@ def render_map_animation(
 
     def draw(k: int) -> list[Any]:
         row, update = plan[k]
+        # at_update is not in the Mapper protocol: animated_mapper() chose one with a history.
         snap = mapper.global_map(at_update=update)  # type: ignore[call-arg]
-        segs = _anchor(start, np.asarray(snap.segments, np.float64).reshape(-1, 4))
-        surfaces.set_segments(segs.reshape(-1, 2, 2))
+        segs = anchor_segments(start, np.asarray(snap.segments, np.float64).reshape(-1, 4))
+        surfaces.set_segments(line_segments(segs))
         surfaces.set_array(np.asarray(snap.map_ids, dtype=np.float64))
         est_line.set_data(est[: row + 1, 0], est[: row + 1, 1])
         _place_robot(*est_robot, est[row], arrow)
