@@ -17,7 +17,6 @@ import pytest
 
 from albot2d.cli import main
 from albot2d.errors import InputError
-from albot2d.evaluation.experiment import plan_tour
 from albot2d.evaluation.map_quality import map_quality
 from albot2d.evaluation.rpe import relative_pose_error
 from albot2d.frames import Frame, Scan, beam_angles
@@ -28,6 +27,7 @@ from albot2d.mapping.registry import BUILTIN_MAPPERS
 from albot2d.mapping.slam import ScanMatchingParams, ScanMatchingSLAM
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
+from worldgen import plan_tour
 from worldgen.generate import generate
 from worldgen.world import World
 

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from albot2d.errors import InputError
-from albot2d.evaluation.experiment import plan_tour
 from albot2d.frames import Frame
 from albot2d.geometry import between_arrays, compose_arrays
 from albot2d.mapping import Mapper
@@ -23,6 +22,7 @@ from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams
 from albot2d.mapping.slam_loops import LoopClosureParams
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
+from worldgen import plan_tour
 from worldgen.generate import generate
 
 MISSING = "the [slam] extra is not installed (pip install -e '.[slam]')"

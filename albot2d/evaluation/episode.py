@@ -37,16 +37,16 @@ from albot2d.evaluation import sim_invariants as sim_inv
 from albot2d.evaluation.experiment import (
     ExperimentResult,
     RunSpec,
-    build_world,
     evaluation_params_dict,
     run_experiment,
 )
 from albot2d.evaluation.report import make_report, plain
 from albot2d.evaluation.scoring import EvaluationParams, route_of
+from albot2d.evaluation.setup import build_world
 from albot2d.mapping.albot1 import Albot1
 from albot2d.mapping.protocol import Mapper
 from albot2d.sim.driving import get_profile
-from albot2d.sim.laser import LaserNoise
+from albot2d.sim.laser import laser_noise_preset
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.robot import RobotParams
 from albot2d.validation import parse_json
@@ -177,7 +177,7 @@ class _Checks:
 
     def __init__(self, spec: EpisodeSpec) -> None:
         self.spec = spec
-        self.laser = LaserNoise.zero() if spec.laser_noise == "zero" else LaserNoise.sick_lms200()
+        self.laser = laser_noise_preset(spec.laser_noise)
         self.frames: sim_inv.FrameChecker | None = None
         self.clearance: sim_inv.ClearanceChecker | None = None
         self.updates: inv.UpdateRecorder | None = None
