@@ -3,7 +3,7 @@
 Three cases run through the real command line (in this process, real files):
 
 - ``run``: ``albot2d run`` with its defaults (office world seed 0, dataset1, typical noise,
-  mappers albot1 naive truth), cut to the first 300 views, no figures;
+  mappers albot1 naive truth), cut to the first 1000 views (36 m: two homing stops), no figures;
 - ``replay``: ``albot2d replay`` of the first 300 scans of the shared MIT CSAIL log (needs
   the shared data: ``$ALBOT2D_DATA``, ``../shared/data`` or ``/work/shared/data``);
 - ``fuzz``: ``albot2d fuzz`` with 6 episodes on one worker (the issue's 20 episodes take
@@ -105,7 +105,7 @@ def _read_json(path: Path) -> Any:
 
 
 def _run(out: Path) -> dict[str, str]:
-    _cli(["run", "--max-frames", "300", "--no-figures", "--out", str(out)])
+    _cli(["run", "--max-frames", "1000", "--no-figures", "--out", str(out)])
     return dict(_sections(canonical(_read_json(out / "report.json")), "", 3))
 
 
