@@ -92,7 +92,8 @@ def test_report_has_the_documented_shape(result: Any) -> None:
                                 "distance_true_m"} <= set(m["homing"][0])
         assert "extraction" in m["timing_ms"] and m["timing_ms"]["total"] > 0
     assert "rpe" in report["odometry"]
-    assert "albot1" in format_summary_table(report) and "stop" in format_homing_table(report)
+    assert "albot1" in format_summary_table(result.scores)
+    assert "stop" in format_homing_table(result.scores)
 
 
 def test_truth_mapper_is_exact(result: Any) -> None:

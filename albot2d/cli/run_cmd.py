@@ -306,8 +306,8 @@ def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
         print(report_json(report))
         return
     print(f"{result.title}  ({report['wall_time_s']:.1f} s)")
-    print(format_summary_table(report))
-    print(format_homing_table(report))
+    print(format_summary_table(result.scores))
+    print(format_homing_table(result.scores))
     files = report["figures"] + report.get("exports", [])
     print(f"-> {out / REPORT_NAME} + {len(files)} files ({', '.join(files)})"
           if len(files) <= 4 else f"-> {out / REPORT_NAME} + {len(files)} files")

@@ -23,10 +23,10 @@ import numpy as np
 from albot2d.errors import InputError
 from albot2d.evaluation.map_quality import MapQualityParams
 from albot2d.evaluation.report import make_report
-from albot2d.evaluation.scoring import EvaluationParams, odometry_section, score_mappers
+from albot2d.evaluation.results import RunScores
+from albot2d.evaluation.scoring import EvaluationParams, score_run
 from albot2d.evaluation.setup import DEFAULT_MAPPERS, RunSpec, build_run
 from albot2d.evaluation.trace import HomingParams, Trace, drive_mappers
-from albot2d.evaluation.updates import updates_section
 from albot2d.frames import Frame
 from albot2d.logs.relations import Relations, RelationsOptions, relations_from_truth
 from albot2d.mapping.protocol import Mapper
@@ -68,7 +68,8 @@ def evaluation_params_dict(params: EvaluationParams) -> dict[str, Any]:
 
 @dataclass(eq=False)
 class ExperimentResult:
-    """A finished run or replay: the report, and what the figures are drawn from."""
+    """A finished run or replay: its typed scores, the report (``report.json``: a view of
+    the scores plus what was run), and what the figures are drawn from."""
 
     report: dict[str, Any]
     trace: Trace
@@ -76,6 +77,7 @@ class ExperimentResult:
     tour: Tour | None
     relations: Relations | None
     title: str
+    scores: RunScores
 
     def __repr__(self) -> str:
         return f"ExperimentResult({self.title!r}, {self.trace!r}, report keys {list(self.report)})"
@@ -122,10 +124,7 @@ def run_experiment(
     if on_stage is not None:
         on_stage("scoring")
     relations = relations_from_truth(trace.timestamps, trace.true_poses, options=params.relations)
-    scores = score_mappers(trace, relations, world.obstacle_segments, params)
-    for name, mapper in trace.mappers.items():
-        # Fig. 14: instructions and moves per global-map update, by region kind.
-        scores[name]["updates_by_region"] = updates_section(world, trace, mapper)
+    scores = score_run(trace, relations, params, world)
     world_info = {
         "kind": world.kind, "seed": world.seed, "params": dict(spec.world_params),
         "source": spec.world_file, "width_m": world.width_m, "height_m": world.height_m,
@@ -153,8 +152,8 @@ def run_experiment(
             "simulator": sim.params(),
         },
         run=run_info,
-        odometry=odometry_section(trace, relations, params),
-        mappers=scores,
+        odometry=scores.odometry.to_dict(),
+        mappers=scores.mappers_dict(),
         # Per-view stage times: mean, p50, p95 and max ms (the rows are in steps.csv).
         timing_ms=trace.step_times.summary_ms(),
         figures=[],
@@ -165,4 +164,4 @@ def run_experiment(
         driven = f"{run_info['travelled_m']:.0f} m of a {driven}"
     title = (f"{world.kind} seed {world.seed}  {profile.name}  {driven}  "
              f"odometry noise {spec.noise}  {trace.n_frames} views")
-    return ExperimentResult(report, trace, world, tour, relations, title)
+    return ExperimentResult(report, trace, world, tour, relations, title, scores)
