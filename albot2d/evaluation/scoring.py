@@ -40,7 +40,7 @@ from albot2d.evaluation.rpe import RPEResult, relative_pose_error
 from albot2d.evaluation.trace import HomingParams, Stop, Trace
 from albot2d.geometry import Pose, between_arrays, wrap_angle
 from albot2d.logs.relations import Relations, RelationsOptions
-from albot2d.mapping.protocol import Mapper
+from albot2d.mapping.protocol import LoopClosingMapper, Mapper, ViewBasedMapper
 from albot2d.mapping.route_map import RouteMap
 from albot2d.validation import check_positive, check_positive_int
 
@@ -92,16 +92,15 @@ class EvaluationParams:
 
 def route_of(mapper: Mapper) -> RouteMap | None:
     """The mapper's route map when it is view-based like Albot1, else None."""
-    route = getattr(mapper, "route", None)
-    return route if isinstance(route, RouteMap) else None
+    return mapper.route_map() if isinstance(mapper, ViewBasedMapper) else None
 
 
 def revisits_section(mapper: Mapper, min_gap_maps: int) -> Revisits | None:
     """Transience on revisits (paper Fig. 10): updates whose view touched a map more than
     ``min_gap_maps`` maps back in the route, and how many surfaces each deleted."""
-    log = getattr(mapper, "update_log", None)
-    if not isinstance(log, list):
+    if not isinstance(mapper, ViewBasedMapper):
         return None
+    log = mapper.update_log
     return Revisits(min_gap_maps, tuple(
         RevisitEvent(u.map_id, u.frame_index, u.oldest_affected,
                      u.deleted_current + u.deleted_older)
@@ -184,10 +183,9 @@ def counts_section(trace: Trace, mapper: Mapper) -> ProcessCounts:
     counts = mapper.counts()
     moves_mean = counts.views / counts.local_maps if counts.local_maps else None
     moves_max = metres_mean = loop_closures = None
-    slam_stats = getattr(mapper, "slam_stats", None)
-    if callable(slam_stats):
+    if isinstance(mapper, LoopClosingMapper):
         # Loop-closing mappers: keyframes, closure candidates accepted/rejected, optimisations.
-        loop_closures = dict(slam_stats())
+        loop_closures = dict(mapper.slam_stats())
     route = route_of(mapper)
     if route is not None and len(route) > 1:
         rows = _map_rows(trace, route)
@@ -206,15 +204,14 @@ def counts_section(trace: Trace, mapper: Mapper) -> ProcessCounts:
 
 def snapshots_section(trace: Trace, mapper: Mapper, n: int) -> tuple[Snapshot, ...] | None:
     """The history moments of a view-based mapper: view, update number, surfaces then."""
-    route = route_of(mapper)
-    if route is None:
+    if not isinstance(mapper, ViewBasedMapper):
         return None
-    map_frames = np.array([m.frame_index for m in route], dtype=np.int64)
+    map_frames = np.array([m.frame_index for m in mapper.route_map()], dtype=np.int64)
     out = []
     for row in snapshot_rows(trace, n):
         view = int(trace.frame_indices[row])
         update = int(np.count_nonzero(map_frames <= view))
-        surfaces = len(mapper.global_map(at_update=update).segments)  # type: ignore[call-arg]
+        surfaces = len(mapper.global_map(at_update=update).segments)
         out.append(Snapshot(view, row, float(trace.travelled_m[row]), update, surfaces))
     return tuple(out)
 
