@@ -11,9 +11,29 @@ import numpy as np
 
 from albot2d.errors import InputError
 
-__all__ = ["SeedLike", "make_rng", "spawn_rngs", "spawn_seeds"]
+__all__ = [
+    "RUN_STREAMS",
+    "WORLD_STREAMS",
+    "SeedLike",
+    "make_rng",
+    "spawn_rngs",
+    "spawn_seeds",
+    "stream_rng",
+    "stream_seed",
+]
 
 SeedLike = int | np.random.SeedSequence | np.random.Generator
+
+# Named child streams (the simulator's own are ``sim.simulator._STREAMS``): a stream's
+# position in its tuple is its spawn index, so these tuples are never reordered (that
+# would change every recorded run).
+#: Children of a run seed (``RunSpec.seed``). The world is generated from the run seed
+#: itself and the tour from the world's seed, so only the simulator stream is drawn; the
+#: first two stay reserved so the simulator keeps the seeds recorded runs were made with.
+RUN_STREAMS = ("reserved_0", "reserved_1", "simulator")
+#: Children of a world's seed (the generator draws from the seed itself): the tour the
+#: command line plans (``worldgen.plan_tour``), so planning never shifts the world's draws.
+WORLD_STREAMS = ("reserved_0", "tour")
 
 
 def _seed_sequence(seed: SeedLike) -> np.random.SeedSequence:
@@ -50,3 +70,23 @@ def spawn_seeds(seed: SeedLike, n: int) -> list[np.random.SeedSequence]:
 def spawn_rngs(seed: SeedLike, n: int) -> list[np.random.Generator]:
     """``n`` independent Generators derived from ``seed``."""
     return [np.random.Generator(np.random.PCG64(s)) for s in spawn_seeds(seed, n)]
+
+
+def stream_seed(seed: SeedLike, streams: tuple[str, ...], name: str) -> np.random.SeedSequence:
+    """The child of ``seed`` named ``name`` in ``streams`` (e.g. ``RUN_STREAMS``).
+
+    The same child ``SeedSequence(seed).spawn(len(streams))`` gives at that position, built
+    directly, so it does not depend on (or advance) the parent's spawn counter.
+    """
+    if name not in streams:
+        raise ValueError(f"no random stream {name!r}; streams: {', '.join(streams)}")
+    parent = _seed_sequence(seed)
+    return np.random.SeedSequence(
+        parent.entropy, spawn_key=(*parent.spawn_key, streams.index(name)),
+        pool_size=parent.pool_size,
+    )  # fmt: skip
+
+
+def stream_rng(seed: SeedLike, streams: tuple[str, ...], name: str) -> np.random.Generator:
+    """A Generator on the child stream ``name`` of ``seed`` (see ``stream_seed``)."""
+    return np.random.Generator(np.random.PCG64(stream_seed(seed, streams, name)))

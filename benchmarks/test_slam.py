@@ -19,12 +19,12 @@ from typing import Any
 
 import pytest
 
-from albot2d.evaluation.experiment import plan_tour
 from albot2d.frames import Frame
 from albot2d.mapping import Albot1, Mapper
 from albot2d.mapping.slam import LoopClosingSLAM, ScanMatchingSLAM
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
+from worldgen import plan_tour
 from worldgen.generate import generate
 
 pytest.importorskip("kiss_icp", reason="kiss-icp is not installed (pip install -e '.[slam]')")

@@ -17,7 +17,6 @@ from typing import TypeVar
 
 import numpy as np
 
-from albot2d.evaluation.experiment import plan_tour
 from albot2d.evaluation.invariants import UpdateRecorder, ViewRecorder
 from albot2d.frames import Frame
 from albot2d.mapping import Albot1, Albot1Params, Mapper, MapperCounts
@@ -25,6 +24,7 @@ from albot2d.seeding import make_rng
 from albot2d.sim.laser import LaserNoise
 from albot2d.sim.odometry import NOISE_PRESETS, noise_preset
 from albot2d.sim.simulator import Simulator
+from worldgen import plan_tour
 from worldgen.generate import generate
 from worldgen.world import World
 

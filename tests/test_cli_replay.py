@@ -15,12 +15,13 @@ import pytest
 
 from albot2d.cli import main
 from albot2d.evaluation import RunSpec, run_experiment
-from albot2d.evaluation.experiment import plan_tour
 from albot2d.evaluation.replay import find_relations, log_stem
 from albot2d.geometry import Pose
 from albot2d.logs import read_frames, read_relations, read_run, write_run
+from albot2d.seeding import RUN_STREAMS, stream_seed
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
+from worldgen import plan_tour
 from worldgen.generate import generate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,7 +32,7 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A short simulated run (rooms world, dataset3, typical odometry noise) on disk."""
     world = generate("rooms", seed=5, width_m=15.0, height_m=15.0)
-    sim = Simulator(world, seed=np.random.SeedSequence(5).spawn(3)[2],
+    sim = Simulator(world, seed=stream_seed(5, RUN_STREAMS, "simulator"),
                     odometry=noise_preset("typical"))
     out = tmp_path_factory.mktemp("run")
     write_run(out, sim.drive(plan_tour(world, "loop", 20.0), "dataset3"), params={"seed": 5})

@@ -25,7 +25,7 @@ from albot2d.evaluation import (
     drive_mappers,
     run_experiment,
 )
-from albot2d.evaluation.experiment import evaluation_params_from_report, plan_tour
+from albot2d.evaluation.experiment import evaluation_params_from_report
 from albot2d.evaluation.report import (
     format_homing_table,
     format_summary_table,
@@ -36,8 +36,10 @@ from albot2d.frames import Frame, Scan
 from albot2d.geometry import Pose
 from albot2d.logs import relations_from_truth
 from albot2d.mapping import Albot1, GroundTruthIntegration
+from albot2d.seeding import RUN_STREAMS, stream_seed
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
+from worldgen import plan_tour
 from worldgen.generate import generate
 
 SPEC = RunSpec(kind="rooms", seed=3, world_params={"width_m": 15.0, "height_m": 15.0},
@@ -55,7 +57,7 @@ def frames() -> list[Frame]:
     """The run's frames, simulated here as ``albot2d simulate`` seeds them."""
     world = generate("rooms", seed=3, width_m=15.0, height_m=15.0)
     tour = plan_tour(world, "loop", 20.0)
-    sim = Simulator(world, seed=np.random.SeedSequence(3).spawn(3)[2],
+    sim = Simulator(world, seed=stream_seed(3, RUN_STREAMS, "simulator"),
                     odometry=noise_preset("typical"))
     return list(sim.drive(tour, "dataset3"))
 
@@ -90,7 +92,8 @@ def test_report_has_the_documented_shape(result: Any) -> None:
                                 "distance_true_m"} <= set(m["homing"][0])
         assert "extraction" in m["timing_ms"] and m["timing_ms"]["total"] > 0
     assert "rpe" in report["odometry"]
-    assert "albot1" in format_summary_table(report) and "stop" in format_homing_table(report)
+    assert "albot1" in format_summary_table(result.scores)
+    assert "stop" in format_homing_table(result.scores)
 
 
 def test_truth_mapper_is_exact(result: Any) -> None:

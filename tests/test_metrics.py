@@ -80,10 +80,12 @@ def test_homing_to_start_compares_each_trajectory_in_its_own_frame() -> None:
     est = np.column_stack(
         [c * truth[:, 0] - s * truth[:, 1], s * truth[:, 0] + c * truth[:, 1], truth[:, 2] + rot]
     )
-    h = homing_to_start(1, est, truth)
+    h = homing_to_start(1, est[1], est[0], truth[1], truth[0])
     assert h.distance_true_m == pytest.approx(5.0)
     assert h.bearing_error_deg == pytest.approx(0.0, abs=1e-9)
     assert h.distance_error_m == pytest.approx(0.0, abs=1e-9)
+    unknown = homing_to_start(1, est[1], est[0])  # a real log: no truth, no errors
+    assert unknown.bearing_est_deg == h.bearing_est_deg and unknown.bearing_error_deg is None
 
 
 # -- map quality ----------------------------------------------------------------------

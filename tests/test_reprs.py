@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import itertools
 
-from albot2d.evaluation.experiment import plan_tour
 from albot2d.geometry import Pose
 from albot2d.mapping import Albot1
 from albot2d.perception import extract_surfaces
 from albot2d.sim.simulator import Simulator
+from worldgen import plan_tour
 from worldgen.generate import generate
 
 

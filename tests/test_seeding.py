@@ -31,3 +31,20 @@ def test_generator_passes_through() -> None:
 def test_bad_seed_names_value(bad: object) -> None:
     with pytest.raises(InputError, match="seed"):
         make_rng(bad)  # type: ignore[arg-type]
+
+
+def test_named_streams_are_the_spawn_children_they_replace():
+    """The named streams keep the seeds recorded runs were made with (``spawn`` order)."""
+    from albot2d.seeding import RUN_STREAMS, WORLD_STREAMS, stream_rng, stream_seed
+
+    for seed in (0, 5, 2**40):
+        assert stream_seed(seed, RUN_STREAMS, "simulator").spawn_key == (2,)
+        assert (stream_rng(seed, RUN_STREAMS, "simulator").random(4)
+                == spawn_rngs(seed, 3)[2].random(4)).all()
+        assert (stream_rng(seed, WORLD_STREAMS, "tour").random(4)
+                == spawn_rngs(seed, 2)[1].random(4)).all()
+    parent = np.random.SeedSequence(7, spawn_key=(3,))
+    parent.spawn(5)  # a used parent: the named child does not depend on its spawn counter
+    assert stream_seed(parent, WORLD_STREAMS, "tour").spawn_key == (3, 1)
+    with pytest.raises(ValueError, match="no random stream 'laser'"):
+        stream_seed(0, RUN_STREAMS, "laser")

@@ -44,7 +44,7 @@ import numpy as np
 import shapely
 
 from albot2d.errors import InputError
-from albot2d.seeding import SeedLike, make_rng, spawn_rngs
+from albot2d.seeding import WORLD_STREAMS, SeedLike, make_rng, stream_rng
 from worldgen.world import Tour
 
 if TYPE_CHECKING:
@@ -69,7 +69,6 @@ _MAX_PLAN_STEPS = 100_000  # backtracking: planning steps before giving up (neve
 # on a roadmap that can make a tour; bounds the planning of one that cannot)
 _STRAIGHTEN_OFFSET_M = 0.5  # circuit: a skipped waypoint lies at most this far off a leg
 _STRAIGHTEN_CLEARANCE_M = 0.25  # circuit: straightened legs keep radius + this from walls
-_TOUR_STREAM = 1  # plan_tour: child of the seed that plans the tour (as the CLI does)
 
 
 def _walk_length(nodes: np.ndarray, walk: list[int]) -> float:
@@ -425,11 +424,11 @@ def plan_tour(
 ) -> Tour:
     """The tour the command line plans for ``world``: ``kind``, at least ``length_m`` long.
 
-    ``seed`` defaults to the world's seed (0 if it has none); child ``_TOUR_STREAM`` of
-    ``spawn_rngs(seed, 2)`` plans it, as ``albot2d world``, ``simulate`` and ``run`` do, so
-    ``plan_tour(world)`` is the tour those commands drive on that world.
+    ``seed`` defaults to the world's seed (0 if it has none); its ``"tour"`` stream
+    (``albot2d.seeding.WORLD_STREAMS``) plans it, as ``albot2d world``, ``simulate`` and
+    ``run`` do, so ``plan_tour(world)`` is the tour those commands drive on that world.
     """
     if seed is None:
         seed = world.seed or 0
-    rng = spawn_rngs(seed, _TOUR_STREAM + 1)[_TOUR_STREAM]
+    rng = stream_rng(seed, WORLD_STREAMS, "tour")
     return make_tour(world, rng, kind=kind, min_length_m=length_m)

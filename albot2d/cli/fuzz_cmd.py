@@ -263,7 +263,9 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
         print(f"reproduce: crash: {type(exc).__name__}: {exc} (drawing the episode)")
         return 1
     # A mapper that cannot be imported here is bad input, not a reproduced crash.
-    run_cmd.check_spec(spec.run_spec())
+    from albot2d.evaluation.setup import check_spec
+
+    check_spec(spec.run_spec())
     out, created = run_cmd.prepare_out_dir(args.out)
     result = None
     try:

@@ -34,7 +34,6 @@ __all__ = [
     "add_json_option",
     "add_run_options",
     "add_scoring_options",
-    "check_spec",
     "finish",
     "positive_int",
     "positive_number",
@@ -164,23 +163,6 @@ def spec_from_args(args: argparse.Namespace) -> Any:
         mappers=tuple(getattr(args, "mapper", None) or DEFAULT_MAPPERS),
         max_frames=positive_int(args.max_frames, "--max-frames"),
     )
-
-
-def check_spec(spec: Any) -> None:
-    """Everything a run needs that can be checked without running it."""
-    from albot2d.mapping.registry import resolve_mappers
-    from albot2d.sim.driving import get_profile
-    from albot2d.sim.odometry import noise_preset
-
-    get_profile(spec.profile)
-    noise_preset(spec.noise)
-    resolve_mappers(list(spec.mappers))
-    if spec.world_file is not None and not Path(spec.world_file).is_file():
-        raise InputError(f"{spec.world_file}: no such world file")
-    if spec.kind is not None:
-        from worldgen.generate import make_params
-
-        make_params(spec.kind, **spec.world_params)
 
 
 # -- output -----------------------------------------------------------------------------
@@ -324,8 +306,8 @@ def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
         print(report_json(report))
         return
     print(f"{result.title}  ({report['wall_time_s']:.1f} s)")
-    print(format_summary_table(report))
-    print(format_homing_table(report))
+    print(format_summary_table(result.scores))
+    print(format_homing_table(result.scores))
     files = report["figures"] + report.get("exports", [])
     print(f"-> {out / REPORT_NAME} + {len(files)} files ({', '.join(files)})"
           if len(files) <= 4 else f"-> {out / REPORT_NAME} + {len(files)} files")
@@ -346,6 +328,7 @@ def _differences(a: Any, b: Any, path: str = "") -> list[str]:
 def run(args: argparse.Namespace) -> int:
     from albot2d.evaluation import RunSpec, evaluation_params_from_report, run_experiment
     from albot2d.evaluation.report import read_report, without_timings
+    from albot2d.evaluation.setup import check_spec
 
     recorded = None
     if args.reproduce is not None:

@@ -74,19 +74,15 @@ def _render_png(world: Any, frames: list[Any], title: str) -> bytes | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from albot2d.cli.run_cmd import check_spec, spec_from_args
-    from albot2d.evaluation.experiment import build_world, make_simulator, plan_tour
+    from albot2d.cli.run_cmd import spec_from_args
+    from albot2d.evaluation.setup import build_run
     from albot2d.logs import write_run
     from albot2d.logs.run_files import LOG_NAME, MANIFEST_NAME, RELATIONS_NAME, TRUTH_NAME
-    from albot2d.sim.driving import get_profile
 
     out = _out_dir(args.out)
     spec = spec_from_args(args)
-    check_spec(spec)
-    profile = get_profile(spec.profile)
-    world = build_world(spec)
-    tour = plan_tour(world, spec.tour_kind, spec.tour_length_m)
-    sim = make_simulator(world, spec)
+    setup = build_run(spec)
+    world, tour, profile, sim = setup.world, setup.tour, setup.profile, setup.simulator
     frames = _frames(sim.drive(tour, profile), spec.max_frames, sys.stderr.isatty())
     travelled = (f"first {len(frames)} frames of a " if spec.max_frames is not None else "")
     title = (f"{world.kind} seed {world.seed}  {profile.name}  {travelled}{tour.kind} tour "

@@ -15,7 +15,6 @@ from typing import Any
 from albot2d.atomic import atomic_path
 from albot2d.cli.options import parse_param, positive_number, seed_value, world_params
 from albot2d.errors import InputError
-from albot2d.seeding import spawn_rngs
 from worldgen.tours import TOUR_KINDS
 
 __all__ = ["parse_param", "register", "run", "summary"]
@@ -69,11 +68,12 @@ def _build_world(args: argparse.Namespace, seed: int | None, params: dict[str, A
         return worldgen.from_houseexpo(args.from_houseexpo, seed=seed, **params)
     if args.kind is None:
         raise InputError("give --kind KIND or --from-houseexpo PLAN.json")
-    from worldgen.generate import generate
+    from albot2d.evaluation.setup import RunSpec, build_world
 
     # generate() rejects an unknown kind with the list of valid kinds, and bad
     # parameters with the field name and value.
-    return generate(args.kind, seed=0 if seed is None else seed, **params)
+    return build_world(RunSpec(seed=0 if seed is None else seed, kind=args.kind,
+                               world_params=params))
 
 
 def _tour_options(args: argparse.Namespace) -> tuple[str, float] | None:
@@ -89,10 +89,11 @@ def _tour_options(args: argparse.Namespace) -> tuple[str, float] | None:
 def _plan_tour(world: Any, options: tuple[str, float] | None) -> Any:
     if options is None:
         return None
+    from worldgen.tours import plan_tour
+
     kind, length = options
-    # The tour gets its own stream so it never shifts the world's random numbers.
-    rng = spawn_rngs(world.seed or 0, 2)[1]
-    return world.tour(rng, kind=kind, min_length_m=length)
+    # the tour of ``albot2d simulate``/``run`` (the world seed's "tour" stream)
+    return plan_tour(world, kind=kind, length_m=length)
 
 
 def _write_together(outputs: dict[Path, bytes]) -> None:

@@ -2,7 +2,10 @@
 
 - ``experiment``: ``run_experiment(RunSpec)`` — world, tour, simulator, every mapper, report;
 - ``replay``: ``replay_log(path)`` — the same on a recorded CARMEN log and its relations;
-- ``trace`` / ``scoring``: stream frames through the mappers once, then score the trace;
+- ``setup``: ``build_run(RunSpec)`` — the one path from a run description to world, tour
+  and simulator;
+- ``trace`` / ``scoring``: stream frames through the mappers once, then score the trace
+  into typed ``results`` (report.json, tables, figures and fuzz metrics are views);
 - ``report``: report.json's header, writing, reading and the printed tables;
 - ``rpe``, ``homing``, ``map_quality``: the metrics themselves;
 - ``alignment``: a mapper's frame → the world frame, APE after SE(2) alignment;
@@ -32,8 +35,9 @@ from albot2d.evaluation.report import (
     read_report,
     write_report,
 )
+from albot2d.evaluation.results import MapperScores, OdometryScores, RunScores
 from albot2d.evaluation.rpe import RPEResult, RPEStats, relative_pose_error
-from albot2d.evaluation.scoring import EvaluationParams, score_mappers
+from albot2d.evaluation.scoring import EvaluationParams, score_mappers, score_run
 from albot2d.evaluation.trace import HomingParams, StepTimes, Trace, drive_mappers
 
 __all__ = [
@@ -47,8 +51,11 @@ __all__ = [
     "HomingResult",
     "MapQuality",
     "MapQualityParams",
+    "MapperScores",
+    "OdometryScores",
     "RPEResult",
     "RPEStats",
+    "RunScores",
     "RunSpec",
     "StepTimes",
     "Trace",
@@ -68,5 +75,6 @@ __all__ = [
     "replay_log",
     "run_experiment",
     "score_mappers",
+    "score_run",
     "write_report",
 ]

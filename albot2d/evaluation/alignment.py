@@ -29,7 +29,7 @@ __all__ = [
     "AbsolutePoseError",
     "absolute_pose_error",
     "align_se2",
-    "ape_section",
+    "ape_result",
     "evo_absolute_pose_error",
     "in_world_frame",
     "map_in_world_frame",
@@ -156,9 +156,9 @@ def evo_absolute_pose_error(
     )
 
 
-def ape_section(
+def ape_result(
     timestamps: ArrayLike, estimate: ArrayLike, reference: ArrayLike | None
-) -> dict[str, Any] | None:
+) -> AbsolutePoseError | None:
     """report.json's ``ape``: computed by evo when it is installed, else by
     ``absolute_pose_error`` (the same numbers to ~1e-9); ``None`` without a reference."""
     if reference is None or len(np.asarray(reference)) < 2:
@@ -166,8 +166,8 @@ def ape_section(
     try:
         from evo.core.geometry import GeometryException
     except ImportError:
-        return absolute_pose_error(estimate, reference).to_dict()
+        return absolute_pose_error(estimate, reference)
     try:
-        return evo_absolute_pose_error(timestamps, estimate, reference).to_dict()
+        return evo_absolute_pose_error(timestamps, estimate, reference)
     except GeometryException:  # evo's 3D Umeyama needs a path that is not a straight line
-        return absolute_pose_error(estimate, reference).to_dict()
+        return absolute_pose_error(estimate, reference)

@@ -99,11 +99,12 @@ class CampaignParams:
     tour_length_max_m: float = 60.0
 
     def __post_init__(self) -> None:
-        from albot2d.evaluation.experiment import LASER_NOISE_CHOICES, TOUR_KINDS
         from albot2d.mapping.registry import resolve_mappers
         from albot2d.sim.driving import get_profile
+        from albot2d.sim.laser import laser_noise_preset
         from albot2d.sim.odometry import noise_preset
         from worldgen.generate import KINDS
+        from worldgen.tours import TOUR_KINDS
 
         for name in ("episodes", "seed"):
             value = getattr(self, name)
@@ -120,9 +121,7 @@ class CampaignParams:
         object.__setattr__(self, "kinds", kinds)
         get_profile(self.profile)
         noise_preset(self.noise)
-        if self.laser_noise not in LASER_NOISE_CHOICES:
-            raise InputError(f"unknown laser noise {self.laser_noise!r}; "
-                             f"valid: {', '.join(LASER_NOISE_CHOICES)}")
+        laser_noise_preset(self.laser_noise)
         if self.tour_kind not in TOUR_KINDS:
             raise InputError(f"unknown tour kind {self.tour_kind!r}; "
                              f"valid: {', '.join(TOUR_KINDS)}")

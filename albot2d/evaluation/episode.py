@@ -37,16 +37,16 @@ from albot2d.evaluation import sim_invariants as sim_inv
 from albot2d.evaluation.experiment import (
     ExperimentResult,
     RunSpec,
-    build_world,
     evaluation_params_dict,
     run_experiment,
 )
 from albot2d.evaluation.report import make_report, plain
 from albot2d.evaluation.scoring import EvaluationParams, route_of
+from albot2d.evaluation.setup import build_world
 from albot2d.mapping.albot1 import Albot1
 from albot2d.mapping.protocol import Mapper
 from albot2d.sim.driving import get_profile
-from albot2d.sim.laser import LaserNoise
+from albot2d.sim.laser import laser_noise_preset
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.robot import RobotParams
 from albot2d.validation import parse_json
@@ -177,7 +177,7 @@ class _Checks:
 
     def __init__(self, spec: EpisodeSpec) -> None:
         self.spec = spec
-        self.laser = LaserNoise.zero() if spec.laser_noise == "zero" else LaserNoise.sick_lms200()
+        self.laser = laser_noise_preset(spec.laser_noise)
         self.frames: sim_inv.FrameChecker | None = None
         self.clearance: sim_inv.ClearanceChecker | None = None
         self.updates: inv.UpdateRecorder | None = None
@@ -274,30 +274,33 @@ class _Checks:
         return metrics
 
 
-def _report_metrics(report: Mapping[str, Any], mapper: str) -> dict[str, Any]:
-    m = report["mappers"][mapper]
-    counts, home, quality = m["counts"], m["homing_summary"], m["map"]
-    rpe, odo_rpe = m["rpe"] or {}, report["odometry"]["rpe"] or {}
-    end, odo_end = m["end_pose_error"] or {}, report["odometry"]["end_pose_error"] or {}
-    run = report["run"]
+def _score_metrics(result: ExperimentResult) -> dict[str, Any]:
+    """An episode's metrics: a flat view of its (only) mapper's and odometry's scores."""
+    (m,) = result.scores.mappers.values()
+    odometry, trace = result.scores.odometry, result.trace
+    counts, home, quality = m.counts, m.homing_summary, m.map.quality
     return {
-        "frames": run["frames"], "travelled_m": run["travelled_m"],
-        "collided_frames": run["collided_frames"], "local_maps": counts["local_maps"],
-        "triangulations": counts["triangulations"],
-        "path_integrations": counts["path_integrations"],
-        "global_map_surfaces": counts["global_map_surfaces"],
-        "homing_stops": home["stops"],
-        "homing_bearing_error_max_deg": home["bearing_abs_max_deg"],
-        "homing_distance_error_max_m": home["distance_abs_max_m"],
-        "rpe_trans_m": rpe.get("trans_m_mean"), "rpe_rot_deg": rpe.get("rot_deg_mean"),
-        "odometry_rpe_trans_m": odo_rpe.get("trans_m_mean"),
-        "odometry_rpe_rot_deg": odo_rpe.get("rot_deg_mean"),
-        "end_trans_m": end.get("trans_m"), "end_rot_deg": end.get("rot_deg"),
-        "odometry_end_trans_m": odo_end.get("trans_m"),
-        "odometry_end_rot_deg": odo_end.get("rot_deg"),
-        "map_accuracy_m": quality["accuracy_m_mean"],
-        "map_accuracy_p95_m": quality["accuracy_m_p95"],
-        "map_completeness": quality["completeness"],
+        "frames": trace.n_frames, "travelled_m": float(trace.travelled_m[-1]),
+        "collided_frames": int(trace.collided.sum()), "local_maps": counts.local_maps,
+        "triangulations": counts.triangulations,
+        "path_integrations": counts.path_integrations,
+        "global_map_surfaces": counts.global_map_surfaces,
+        "homing_stops": home.stops,
+        "homing_bearing_error_max_deg": home.bearing_abs_max_deg,
+        "homing_distance_error_max_m": home.distance_abs_max_m,
+        "rpe_trans_m": None if m.rpe is None else m.rpe.overall.trans_m_mean,
+        "rpe_rot_deg": None if m.rpe is None else m.rpe.overall.rot_deg_mean,
+        "odometry_rpe_trans_m": None if odometry.rpe is None else odometry.rpe.overall.trans_m_mean,
+        "odometry_rpe_rot_deg": None if odometry.rpe is None else odometry.rpe.overall.rot_deg_mean,
+        "end_trans_m": None if m.end_pose_error is None else m.end_pose_error.trans_m,
+        "end_rot_deg": None if m.end_pose_error is None else m.end_pose_error.rot_deg,
+        "odometry_end_trans_m": (None if odometry.end_pose_error is None
+                                 else odometry.end_pose_error.trans_m),
+        "odometry_end_rot_deg": (None if odometry.end_pose_error is None
+                                 else odometry.end_pose_error.rot_deg),
+        "map_accuracy_m": quality.accuracy_m_mean,
+        "map_accuracy_p95_m": quality.accuracy_m_p95,
+        "map_completeness": quality.completeness,
     }  # fmt: skip
 
 
@@ -438,7 +441,7 @@ def run_checked(
         result = run_experiment(spec.run_spec(), params, on_start=checks.on_start,
                                 on_frame=checks.chain(hooks.pop("on_frame", None)),
                                 on_mappers=checks.on_mappers, **hooks)
-        metrics = _report_metrics(result.report, next(iter(result.report["mappers"])))
+        metrics = _score_metrics(result)
         metrics |= checks.finish(result)
     except Exception as exc:  # any failure is a finding, not the end of the campaign
         error = {"type": type(exc).__name__, "message": str(exc),

@@ -22,24 +22,29 @@ __all__ = ["HomingResult", "homing", "homing_to_start"]
 
 @dataclass(frozen=True, slots=True)
 class HomingResult:
-    """Estimated and true bearing (deg) and distance (m) to the start at one stop."""
+    """Estimated and true bearing (deg) and distance (m) to the start at one stop; the
+    true values (and so the errors) are None when the truth is unknown (a real log)."""
 
     view: int
     bearing_est_deg: float
-    bearing_true_deg: float
+    bearing_true_deg: float | None
     distance_est_m: float
-    distance_true_m: float
+    distance_true_m: float | None
 
     @property
-    def bearing_error_deg(self) -> float:
+    def bearing_error_deg(self) -> float | None:
+        if self.bearing_true_deg is None:
+            return None
         diff = math.radians(self.bearing_est_deg - self.bearing_true_deg)
         return math.degrees(float(wrap_angle(diff)))
 
     @property
-    def distance_error_m(self) -> float:
+    def distance_error_m(self) -> float | None:
+        if self.distance_true_m is None:
+            return None
         return self.distance_est_m - self.distance_true_m
 
-    def to_dict(self) -> dict[str, float | int]:
+    def to_dict(self) -> dict[str, float | int | None]:
         return asdict(self)
 
 
@@ -52,11 +57,17 @@ def homing(robot: Pose, start_xy: ArrayLike) -> tuple[float, float]:
 
 
 def homing_to_start(
-    view: int, est_poses: ArrayLike, true_poses: ArrayLike
+    view: int,
+    est_pose: ArrayLike,
+    est_start: ArrayLike,
+    true_pose: ArrayLike | None = None,
+    true_start: ArrayLike | None = None,
 ) -> HomingResult:
-    """Homing at frame ``view``: each trajectory's own first pose is its start."""
-    est = np.asarray(est_poses, np.float64).reshape(-1, 3)
-    tru = np.asarray(true_poses, np.float64).reshape(-1, 3)
-    be, de = homing(Pose.from_array(est[view]), est[0, :2])
-    bt, dt = homing(Pose.from_array(tru[view]), tru[0, :2])
+    """Homing at frame ``view``: the estimated pose and start (``(x, y[, theta])``) in the
+    mapper's frame, and the true ones in the world frame when known. Each pair is
+    compared in its own frame, so a mapper's frame need not be the world's."""
+    be, de = homing(Pose.from_array(est_pose), np.asarray(est_start, np.float64)[:2])
+    if true_pose is None or true_start is None:
+        return HomingResult(int(view), be, None, de, None)
+    bt, dt = homing(Pose.from_array(true_pose), np.asarray(true_start, np.float64)[:2])
     return HomingResult(int(view), be, bt, de, dt)

@@ -27,7 +27,7 @@ import numpy as np
 from albot2d.errors import InputError
 from albot2d.evaluation.experiment import ExperimentResult, evaluation_params_dict
 from albot2d.evaluation.report import make_report
-from albot2d.evaluation.scoring import EvaluationParams, odometry_section, score_mappers
+from albot2d.evaluation.scoring import EvaluationParams, score_run
 from albot2d.evaluation.trace import drive_mappers
 from albot2d.frames import Frame
 from albot2d.logs.anomalies import ordered_frames
@@ -133,9 +133,9 @@ def replay_log(
     )  # fmt: skip
     if on_stage is not None:
         on_stage("scoring")
-    scores = score_mappers(trace, relations, None, params)
-    odometry = odometry_section(trace, relations, params)
-    used = (odometry["rpe"] or {}).get("relations", 0)
+    scores = score_run(trace, relations, params)
+    rpe = scores.odometry.rpe
+    used = 0 if rpe is None else rpe.overall.relations
     log_info = {
         "path": os.fspath(log_path),
         "relations_path": None if rel_path is None else os.fspath(rel_path),
@@ -161,11 +161,11 @@ def replay_log(
         },
         run=log_info,
         log={"path": os.fspath(log_path), "anomalies": anomalies.as_dict()},
-        odometry=odometry,
-        mappers=scores,
+        odometry=scores.odometry.to_dict(),
+        mappers=scores.mappers_dict(),
         timing_ms=trace.step_times.summary_ms(),  # per-view stage times (steps.csv)
         figures=[],
         wall_time_s=time.perf_counter() - t0,
     )
     title = f"{log_path.name}  {trace.n_frames} views  {trace.travelled_m[-1]:.0f} m (odometry)"
-    return ExperimentResult(report, trace, None, None, relations, title)
+    return ExperimentResult(report, trace, None, None, relations, title, scores)

@@ -1,5 +1,5 @@
 """report.json: the schema's header, plain-JSON conversion, atomic writing, reading back,
-and the short tables printed at the end of a run.
+and the short tables printed at the end of a run (views of ``results.RunScores``).
 
 Top level (see the README's "report.json" section): ``format``, ``format_version``,
 ``albot2d_version``, ``command`` (run/replay), ``seed``, ``world``, ``profile``, ``params``,
@@ -15,7 +15,7 @@ import json
 import math
 import os
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -23,6 +23,10 @@ from albot2d import __version__
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
 from albot2d.validation import parse_json
+
+if TYPE_CHECKING:
+    from albot2d.evaluation.results import RunScores
+    from albot2d.evaluation.rpe import RPEResult
 
 __all__ = [
     "NONDETERMINISTIC_KEYS",
@@ -118,17 +122,18 @@ def _num(value: Any, fmt: str) -> str:
     return "-" if value is None else format(value, fmt)
 
 
-def _pm(stats: Mapping[str, Any] | None, key: str, fmt: str) -> str:
-    if not stats or stats.get(f"{key}_mean") is None:
-        return "-"
-    return f"{stats[f'{key}_mean']:{fmt}}±{stats[f'{key}_std']:{fmt}}"
+def _pm(mean: float | None, std: float | None, fmt: str) -> str:
+    return "-" if mean is None else f"{mean:{fmt}}±{std:{fmt}}"
 
 
-def _rpe_cells(rpe: Mapping[str, Any] | None) -> list[str]:
-    short = rpe.get("short") if rpe else None
-    long = rpe.get("long") if rpe else None
-    return [_pm(rpe, "trans_m", ".3f"), _pm(rpe, "rot_deg", ".2f"),
-            _pm(short, "rot_deg", ".2f"), _pm(long, "trans_m", ".2f"), _pm(long, "rot_deg", ".1f")]
+def _rpe_cells(rpe: RPEResult | None) -> list[str]:
+    if rpe is None:
+        return ["-"] * 5
+    o, short, long = rpe.overall, rpe.short, rpe.long
+    return [_pm(o.trans_m_mean, o.trans_m_std, ".3f"), _pm(o.rot_deg_mean, o.rot_deg_std, ".2f"),
+            _pm(short.rot_deg_mean, short.rot_deg_std, ".2f"),
+            _pm(long.trans_m_mean, long.trans_m_std, ".2f"),
+            _pm(long.rot_deg_mean, long.rot_deg_std, ".1f")]
 
 
 def _table(header: list[str], rows: list[list[str]]) -> str:
@@ -139,57 +144,55 @@ def _table(header: list[str], rows: list[list[str]]) -> str:
     return "\n".join(lines)
 
 
-def format_summary_table(report: Mapping[str, Any]) -> str:
+def format_summary_table(scores: RunScores) -> str:
     """Two tables of one row per mapper (and raw odometry), each under 100 columns:
     accuracy (RPE overall/short/long, APE, worst homing error) and process/map quality."""
     header = ["", "RPE m", "RPE deg", "short deg", "long m", "long deg", "APE m",
               "home max°", "max m"]
-    odometry = report["odometry"]
-    rows = [["odometry", *_rpe_cells(odometry.get("rpe")),
-             _num((odometry.get("ape") or {}).get("trans_m_rmse"), ".3f"), "", ""]]
-    for name, m in report["mappers"].items():
-        h = m.get("homing_summary") or {}
+    odometry = scores.odometry
+    ape = None if odometry.ape is None else odometry.ape.trans_m_rmse
+    rows = [["odometry", *_rpe_cells(odometry.rpe), _num(ape, ".3f"), "", ""]]
+    for name, m in scores.mappers.items():
+        h = m.homing_summary
         rows.append([
-            name, *_rpe_cells(m.get("rpe")), _num((m.get("ape") or {}).get("trans_m_rmse"), ".3f"),
-            _num(h.get("bearing_abs_max_deg"), ".1f"), _num(h.get("distance_abs_max_m"), ".2f"),
+            name, *_rpe_cells(m.rpe), _num(None if m.ape is None else m.ape.trans_m_rmse, ".3f"),
+            _num(h.bearing_abs_max_deg, ".1f"), _num(h.distance_abs_max_m, ".2f"),
         ])  # fmt: skip
     header2 = ["", "views", "local maps", "triangulated", "integrated", "surfaces",
                "map acc m", "p95 m", "complete"]
     rows2 = []
-    for name, m in report["mappers"].items():
-        c, q = m["counts"], m["map"]
+    for name, m in scores.mappers.items():
+        c, q = m.counts, m.map.quality
         rows2.append([
-            name, str(c["views"]), str(c["local_maps"]), str(c["triangulations"]),
-            str(c["path_integrations"]), _num(c.get("global_map_surfaces"), "d"),
-            _num(q.get("accuracy_m_mean"), ".3f"), _num(q.get("accuracy_m_p95"), ".3f"),
-            _num(q.get("completeness"), ".2f"),
+            name, str(c.views), str(c.local_maps), str(c.triangulations),
+            str(c.path_integrations), _num(c.global_map_surfaces, "d"),
+            _num(q.accuracy_m_mean, ".3f"), _num(q.accuracy_m_p95, ".3f"),
+            _num(q.completeness, ".2f"),
         ])  # fmt: skip
     return _table(header, rows) + "\n\n" + _table(header2, rows2)
 
 
-def format_homing_table(report: Mapping[str, Any]) -> str:
+def format_homing_table(scores: RunScores) -> str:
     """Per stop: distance travelled, true bearing/distance to the start, and each mapper's
     error (bearing °/distance m) when the truth is known, else its estimate."""
-    mappers = report["mappers"]
+    mappers = scores.mappers
     names = list(mappers)
-    if not names or not mappers[names[0]]["homing"]:
+    if not names or not mappers[names[0]].homing:
         return "homing: no stops (the run never got far enough from its start)"
-    known = mappers[names[0]]["homing"][0]["bearing_true_deg"] is not None
+    known = mappers[names[0]].homing[0].homing.bearing_true_deg is not None
     header = ["stop", "view", "odo m"] + (["true °/m"] if known else [])
     header += [f"{n[:12]} {'Δ°/Δm' if known else '°/m'}" for n in names]
     rows = []
-    for k, first in enumerate(mappers[names[0]]["homing"]):
-        true = (f"{first['bearing_true_deg']:+.1f}/{first['distance_true_m']:.1f}"
-                if known else "")
-        row = [str(k + 1), str(first["view"]), f"{first['travelled_m']:.1f}"] + (
-            [true] if known else []
-        )
+    for k, first in enumerate(mappers[names[0]].homing):
+        row = [str(k + 1), str(first.homing.view), f"{first.travelled_m:.1f}"]
+        if known:
+            row.append(f"{first.homing.bearing_true_deg:+.1f}/{first.homing.distance_true_m:.1f}")
         for name in names:
-            e = mappers[name]["homing"][k]
-            if known and e["bearing_error_deg"] is not None:
-                row.append(f"{e['bearing_error_deg']:+.1f}/{e['distance_error_m']:+.1f}")
+            e = mappers[name].homing[k].homing
+            if known and e.bearing_error_deg is not None:
+                row.append(f"{e.bearing_error_deg:+.1f}/{e.distance_error_m:+.1f}")
             else:
-                row.append(f"{e['bearing_est_deg']:+.1f}/{e['distance_est_m']:.1f}")
+                row.append(f"{e.bearing_est_deg:+.1f}/{e.distance_est_m:.1f}")
         rows.append(row)
     title = ("homing: error of each mapper's bearing/distance to the start (estimates in "
              "report.json)" if known else "homing: each mapper's bearing/distance to the start")

@@ -1,43 +1,62 @@
-"""Score a :class:`~albot2d.evaluation.trace.Trace`: the per-mapper sections of report.json.
+"""Score a :class:`~albot2d.evaluation.trace.Trace` into typed results (``results.RunScores``).
 
-For each mapper: process counts, homing at the trace's stops, relative pose error against
-the relations, absolute pose error after SE(2) alignment (``alignment.ape_section``),
-map quality against the true walls, end-pose error, per-stage timings, and
-(for view-based mappers with a route map) the moments at which its map history is shown.
-Sections that need the truth (simulation) hold ``None`` on real logs.
+``score_run`` scores raw odometry and every mapper; report.json's ``odometry``/``mappers``
+sections are ``RunScores``'s ``to_dict`` views. For each mapper: process counts, homing at
+the trace's stops, relative pose error against the relations, absolute pose error after
+SE(2) alignment (``alignment.ape_result``), map quality against the true walls, end-pose
+error, per-stage timings, (for view-based mappers with a route map) the moments at which
+its map history is shown, and (simulated runs) the updates by region kind. Sections that
+need the truth (simulation) hold ``None`` on real logs.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.errors import InputError
-from albot2d.evaluation.alignment import ape_section
+from albot2d.evaluation.alignment import ape_result
 from albot2d.evaluation.egocentric import EgocentricQuality, egocentric_quality
-from albot2d.evaluation.homing import homing
-from albot2d.evaluation.map_quality import MapQualityParams, map_quality
-from albot2d.evaluation.rpe import relative_pose_error
+from albot2d.evaluation.homing import homing_to_start
+from albot2d.evaluation.map_quality import MapQuality, MapQualityParams, map_quality
+from albot2d.evaluation.results import (
+    EndPoseError,
+    HomingStop,
+    HomingSummary,
+    MapperScores,
+    MapScore,
+    OdometryScores,
+    ProcessCounts,
+    RevisitEvent,
+    Revisits,
+    RunScores,
+    Snapshot,
+)
+from albot2d.evaluation.rpe import RPEResult, relative_pose_error
 from albot2d.evaluation.trace import HomingParams, Stop, Trace
 from albot2d.geometry import Pose, between_arrays, wrap_angle
 from albot2d.logs.relations import Relations, RelationsOptions
-from albot2d.mapping.protocol import Mapper
+from albot2d.mapping.protocol import LoopClosingMapper, Mapper, ViewBasedMapper
 from albot2d.mapping.route_map import RouteMap
 from albot2d.validation import check_positive, check_positive_int
+
+if TYPE_CHECKING:
+    from worldgen.world import World
 
 __all__ = [
     "MAX_SNAPSHOTS",
     "EvaluationParams",
     "end_pose_error",
     "homing_section",
-    "odometry_section",
+    "odometry_scores",
     "route_of",
     "rpe_section",
     "score_mappers",
+    "score_run",
     "snapshot_rows",
 ]
 
@@ -45,7 +64,6 @@ FloatArray = NDArray[np.float64]
 # A view touching a map this many local maps back counts as a revisit (the authors' code
 # splits deletion groups at gaps of 20 views; a revisit is what crosses such a gap).
 REVISIT_GAP_MAPS = 20
-_MAP_FIELDS = ("accuracy_m_mean", "accuracy_m_p95", "accuracy_m_max", "completeness")
 
 
 #: Most map-history moments a run draws and reports (each is a full map drawn in a figure).
@@ -74,27 +92,20 @@ class EvaluationParams:
 
 def route_of(mapper: Mapper) -> RouteMap | None:
     """The mapper's route map when it is view-based like Albot1, else None."""
-    route = getattr(mapper, "route", None)
-    return route if isinstance(route, RouteMap) else None
+    return mapper.route_map() if isinstance(mapper, ViewBasedMapper) else None
 
 
-def revisits_section(mapper: Mapper, min_gap_maps: int) -> dict[str, Any] | None:
+def revisits_section(mapper: Mapper, min_gap_maps: int) -> Revisits | None:
     """Transience on revisits (paper Fig. 10): updates whose view touched a map more than
     ``min_gap_maps`` maps back in the route, and how many surfaces each deleted."""
-    log = getattr(mapper, "update_log", None)
-    if not isinstance(log, list):
+    if not isinstance(mapper, ViewBasedMapper):
         return None
-    events = [
-        {"map_id": u.map_id, "view": u.frame_index, "oldest_map": u.oldest_affected,
-         "deleted": u.deleted_current + u.deleted_older}
+    log = mapper.update_log
+    return Revisits(min_gap_maps, tuple(
+        RevisitEvent(u.map_id, u.frame_index, u.oldest_affected,
+                     u.deleted_current + u.deleted_older)
         for u in log if u.oldest_affected >= 0 and u.map_id - u.oldest_affected > min_gap_maps
-    ]  # fmt: skip
-    return {
-        "min_gap_maps": min_gap_maps,
-        "updates": len(events),
-        "deleted_surfaces": int(sum(e["deleted"] for e in events)),
-        "events": events,
-    }
+    ))  # fmt: skip
 
 
 def trajectory_of(name: str, mapper: Mapper, n_frames: int) -> FloatArray:
@@ -110,65 +121,48 @@ def trajectory_of(name: str, mapper: Mapper, n_frames: int) -> FloatArray:
 
 def rpe_section(
     trace: Trace, poses: FloatArray, relations: Relations | None, split_s: float
-) -> dict[str, Any] | None:
+) -> RPEResult | None:
     """Kümmerle RPE of ``poses`` (one per trace row) against ``relations``; None without any."""
     if relations is None:
         return None
-    result = relative_pose_error(
+    return relative_pose_error(
         trace.timestamps, poses, relations.t1, relations.t2, relations.motion, split_s=split_s
     )
-    return result.to_dict()
 
 
-def end_pose_error(trace: Trace, poses: FloatArray) -> dict[str, float] | None:
+def end_pose_error(trace: Trace, poses: FloatArray) -> EndPoseError | None:
     """Error of the estimated motion from the first to the last view (needs the truth)."""
     if trace.true_poses is None:
         return None
     truth = between_arrays(trace.true_poses[0], trace.true_poses[-1])
     est = between_arrays(poses[0], poses[-1])
     err = between_arrays(truth, est)
-    return {
-        "trans_m": float(math.hypot(err[0], err[1])),
-        "rot_deg": abs(math.degrees(float(wrap_angle(err[2])))),
-    }
+    return EndPoseError(
+        trans_m=float(math.hypot(err[0], err[1])),
+        rot_deg=abs(math.degrees(float(wrap_angle(err[2])))),
+    )
 
 
-def homing_section(trace: Trace, name: str) -> list[dict[str, Any]]:
-    """Bearing (deg, + = turn left) and distance (m) to the start at each stop."""
+def homing_section(
+    trace: Trace, name: str, world_segments: FloatArray | None = None
+) -> tuple[HomingStop, ...]:
+    """Bearing (deg, + = turn left) and distance (m) to the start at each stop, with the
+    egocentric map quality there when the world is known."""
     out = []
     for stop in trace.stops:
         pose, start = stop.estimates[name]
-        bearing_est, distance_est = homing(Pose.from_array(pose), start[:2])
-        entry: dict[str, Any] = {
-            "view": int(trace.frame_indices[stop.row]),
-            "travelled_m": stop.travelled_m,
-            "bearing_est_deg": bearing_est,
-            "bearing_true_deg": None,
-            "distance_est_m": distance_est,
-            "distance_true_m": None,
-            "bearing_error_deg": None,
-            "distance_error_m": None,
-        }
-        if trace.true_poses is not None:
-            bt, dt = homing(Pose.from_array(trace.true_poses[stop.row]), trace.true_poses[0, :2])
-            diff = math.degrees(float(wrap_angle(math.radians(bearing_est - bt))))
-            entry |= {"bearing_true_deg": bt, "distance_true_m": dt,
-                      "bearing_error_deg": diff, "distance_error_m": distance_est - dt}
-        out.append(entry)
-    return out
+        view = int(trace.frame_indices[stop.row])
+        truth = trace.true_poses
+        result = (homing_to_start(view, pose, start) if truth is None
+                  else homing_to_start(view, pose, start, truth[stop.row], truth[0]))
+        ego = egocentric_at(trace, stop, name, world_segments)
+        out.append(HomingStop(result, stop.travelled_m, ego))
+    return tuple(out)
 
 
-def homing_summary(entries: list[dict[str, Any]]) -> dict[str, Any]:
+def homing_summary(stops: tuple[HomingStop, ...]) -> HomingSummary:
     """Worst and mean absolute homing errors (None without truth or stops)."""
-    errors = [(e["bearing_error_deg"], e["distance_error_m"]) for e in entries
-              if e["bearing_error_deg"] is not None]
-    if not errors:
-        return {"stops": len(entries), "bearing_abs_max_deg": None, "bearing_abs_mean_deg": None,
-                "distance_abs_max_m": None, "distance_abs_mean_m": None}
-    b, d = np.abs(np.array(errors, dtype=np.float64)).T
-    return {"stops": len(entries), "bearing_abs_max_deg": float(b.max()),
-            "bearing_abs_mean_deg": float(b.mean()), "distance_abs_max_m": float(d.max()),
-            "distance_abs_mean_m": float(d.mean())}
+    return HomingSummary.of(stops)
 
 
 def snapshot_rows(trace: Trace, n: int) -> list[int]:
@@ -185,49 +179,41 @@ def _map_rows(trace: Trace, route: RouteMap) -> NDArray[np.int64]:
     return order[np.clip(pos, 0, len(order) - 1)]
 
 
-def counts_section(trace: Trace, mapper: Mapper) -> dict[str, Any]:
+def counts_section(trace: Trace, mapper: Mapper) -> ProcessCounts:
     counts = mapper.counts()
-    out: dict[str, Any] = {
-        "views": counts.views,
-        "local_maps": counts.local_maps,
-        "triangulations": counts.triangulations,
-        "path_integrations": counts.path_integrations,
-        "global_map_surfaces": len(mapper.global_map().segments),
-        "moves_between_updates_mean": (
-            counts.views / counts.local_maps if counts.local_maps else None
-        ),
-        "moves_between_updates_max": None,
-        "metres_between_updates_mean": None,
-    }
-    slam_stats = getattr(mapper, "slam_stats", None)
-    if callable(slam_stats):
+    moves_mean = counts.views / counts.local_maps if counts.local_maps else None
+    moves_max = metres_mean = loop_closures = None
+    if isinstance(mapper, LoopClosingMapper):
         # Loop-closing mappers: keyframes, closure candidates accepted/rejected, optimisations.
-        out["loop_closures"] = dict(slam_stats())
+        loop_closures = dict(mapper.slam_stats())
     route = route_of(mapper)
     if route is not None and len(route) > 1:
         rows = _map_rows(trace, route)
         moves = np.diff(rows)
-        out["moves_between_updates_mean"] = float(moves.mean())
-        out["moves_between_updates_max"] = int(moves.max())
-        out["metres_between_updates_mean"] = float(np.diff(trace.travelled_m[rows]).mean())
-    return out
+        moves_mean = float(moves.mean())
+        moves_max = int(moves.max())
+        metres_mean = float(np.diff(trace.travelled_m[rows]).mean())
+    return ProcessCounts(
+        views=counts.views, local_maps=counts.local_maps,
+        triangulations=counts.triangulations, path_integrations=counts.path_integrations,
+        global_map_surfaces=len(mapper.global_map().segments),
+        moves_between_updates_mean=moves_mean, moves_between_updates_max=moves_max,
+        metres_between_updates_mean=metres_mean, loop_closures=loop_closures,
+    )  # fmt: skip
 
 
-def snapshots_section(trace: Trace, mapper: Mapper, n: int) -> list[dict[str, Any]] | None:
+def snapshots_section(trace: Trace, mapper: Mapper, n: int) -> tuple[Snapshot, ...] | None:
     """The history moments of a view-based mapper: view, update number, surfaces then."""
-    route = route_of(mapper)
-    if route is None:
+    if not isinstance(mapper, ViewBasedMapper):
         return None
-    map_frames = np.array([m.frame_index for m in route], dtype=np.int64)
+    map_frames = np.array([m.frame_index for m in mapper.route_map()], dtype=np.int64)
     out = []
     for row in snapshot_rows(trace, n):
         view = int(trace.frame_indices[row])
         update = int(np.count_nonzero(map_frames <= view))
-        # at_update (the map's history) is not in the Mapper protocol; route_of() found one.
-        surfaces = len(mapper.global_map(at_update=update).segments)  # type: ignore[call-arg]
-        out.append({"view": view, "row": row, "travelled_m": float(trace.travelled_m[row]),
-                    "update": update, "surfaces": surfaces})
-    return out
+        surfaces = len(mapper.global_map(at_update=update).segments)
+        out.append(Snapshot(view, row, float(trace.travelled_m[row]), update, surfaces))
+    return tuple(out)
 
 
 def egocentric_at(
@@ -252,30 +238,29 @@ def map_section(
     world_segments: FloatArray | None,
     params: MapQualityParams,
     name: str | None = None,
-) -> dict[str, Any]:
+) -> MapScore:
     """Map accuracy and completeness against the true walls (None fields on real logs),
     anchored at the start, and egocentric (from the robot's place at the end)."""
     segments = mapper.global_map().segments
     ego = egocentric_at(trace, trace.final, name or mapper.name, world_segments)
-    ego_dict = ego.to_dict() if ego is not None else None
     if world_segments is None or trace.true_poses is None:
-        return dict.fromkeys(_MAP_FIELDS) | {"surfaces": len(segments), "egocentric": ego_dict}
+        return MapScore(MapQuality(None, None, None, None, len(segments)), ego)
     quality = map_quality(
         segments, world_segments, start_pose=Pose.from_array(trace.true_poses[0]),
         seen_points=trace.seen_points, params=params,
     )  # fmt: skip
-    return quality.to_dict() | {"egocentric": ego_dict}
+    return MapScore(quality, ego)
 
 
-def odometry_section(
+def odometry_scores(
     trace: Trace, relations: Relations | None, params: EvaluationParams
-) -> dict[str, Any]:
+) -> OdometryScores:
     """Raw odometry scored like a mapper (its trajectory is the odometry poses)."""
-    return {
-        "rpe": rpe_section(trace, trace.odom_poses, relations, params.rpe_split_s),
-        "end_pose_error": end_pose_error(trace, trace.odom_poses),
-        "ape": ape_section(trace.timestamps, trace.odom_poses, trace.true_poses),
-    }
+    return OdometryScores(
+        rpe=rpe_section(trace, trace.odom_poses, relations, params.rpe_split_s),
+        end_pose_error=end_pose_error(trace, trace.odom_poses),
+        ape=ape_result(trace.timestamps, trace.odom_poses, trace.true_poses),
+    )
 
 
 def score_mappers(
@@ -283,28 +268,42 @@ def score_mappers(
     relations: Relations | None,
     world_segments: FloatArray | None,
     params: EvaluationParams,
-) -> dict[str, dict[str, Any]]:
-    """The ``mappers`` section of report.json, in the order the mappers were given."""
-    out: dict[str, dict[str, Any]] = {}
+    world: World | None = None,
+) -> dict[str, MapperScores]:
+    """Every mapper's scores, in the order the mappers were given. With the ``world``
+    (a simulated run), the global-map updates are also counted by region kind (Fig. 14)."""
+    from albot2d.evaluation.updates import updates_section
+
+    out: dict[str, MapperScores] = {}
     for name, mapper in trace.mappers.items():
         poses = trajectory_of(name, mapper, trace.n_frames)
-        entries = homing_section(trace, name)
-        for entry, stop in zip(entries, trace.stops, strict=True):
-            ego = egocentric_at(trace, stop, name, world_segments)
-            entry["egocentric_completeness"] = None if ego is None else ego.completeness
-            entry["egocentric_accuracy_m_p95"] = None if ego is None else ego.accuracy_m_p95
+        stops = homing_section(trace, name, world_segments)
         timing = dict(mapper.timings_ms())
         timing["total"] = trace.wall_ms.get(name, 0.0) / max(trace.n_frames, 1)
-        out[name] = {
-            "counts": counts_section(trace, mapper),
-            "homing": entries,
-            "homing_summary": homing_summary(entries),
-            "rpe": rpe_section(trace, poses, relations, params.rpe_split_s),
-            "end_pose_error": end_pose_error(trace, poses),
-            "ape": ape_section(trace.timestamps, poses, trace.true_poses),
-            "map": map_section(trace, mapper, world_segments, params.map_quality, name),
-            "snapshots": snapshots_section(trace, mapper, params.snapshots),
-            "revisits": revisits_section(mapper, REVISIT_GAP_MAPS),
-            "timing_ms": timing,
-        }
+        out[name] = MapperScores(
+            counts=counts_section(trace, mapper),
+            homing=stops,
+            homing_summary=homing_summary(stops),
+            rpe=rpe_section(trace, poses, relations, params.rpe_split_s),
+            end_pose_error=end_pose_error(trace, poses),
+            ape=ape_result(trace.timestamps, poses, trace.true_poses),
+            map=map_section(trace, mapper, world_segments, params.map_quality, name),
+            snapshots=snapshots_section(trace, mapper, params.snapshots),
+            revisits=revisits_section(mapper, REVISIT_GAP_MAPS),
+            timing_ms=timing,
+            updates_by_region=None if world is None else updates_section(world, trace, mapper),
+            regions_scored=world is not None,
+        )
     return out
+
+
+def score_run(
+    trace: Trace,
+    relations: Relations | None,
+    params: EvaluationParams,
+    world: World | None = None,
+) -> RunScores:
+    """Raw odometry and every mapper scored; ``world`` for a simulated run (None: a log)."""
+    segments = None if world is None else world.obstacle_segments
+    return RunScores(odometry_scores(trace, relations, params),
+                     score_mappers(trace, relations, segments, params, world))

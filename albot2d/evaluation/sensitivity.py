@@ -69,10 +69,11 @@ def run_one(seed: int, preset: str, setup: SensitivitySetup) -> dict[str, Any]:
         mappers=("albot1",),
     )
     result = run_experiment(spec)
-    albot1 = result.report["mappers"]["albot1"]
-    stops = [
-        (float(h["bearing_error_deg"]), float(h["distance_error_m"])) for h in albot1["homing"]
-    ]
+    stops = []
+    for stop in result.scores.mappers["albot1"].homing:
+        h = stop.homing
+        assert h.bearing_error_deg is not None and h.distance_error_m is not None  # simulated
+        stops.append((h.bearing_error_deg, h.distance_error_m))
     trace = result.trace
     assert trace.true_poses is not None  # simulated runs always have the truth
     albot1_mapper = trace.mappers["albot1"]

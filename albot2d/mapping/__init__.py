@@ -2,14 +2,16 @@
 
 from albot2d.mapping.albot1 import Albot1, Albot1Params, StepRecord
 from albot2d.mapping.baselines import GroundTruthIntegration, NaiveIntegration
-from albot2d.mapping.global_map import (
-    GlobalMap,
-    GlobalMapParams,
+from albot2d.mapping.global_map import GlobalMap, GlobalMapParams, UpdateReport, view_polygon
+from albot2d.mapping.protocol import (
+    LoopClosingMapper,
+    Mapper,
+    MapperCounts,
     MapSnapshot,
-    UpdateReport,
-    view_polygon,
+    PerceivingMapper,
+    StageTimer,
+    ViewBasedMapper,
 )
-from albot2d.mapping.protocol import Mapper, MapperCounts, PerceivingMapper, StageTimer
 from albot2d.mapping.route_map import LocalMap, Method, RouteMap
 from albot2d.mapping.triangulation import (
     Affordances,
@@ -26,6 +28,7 @@ __all__ = [
     "GlobalMapParams",
     "GroundTruthIntegration",
     "LocalMap",
+    "LoopClosingMapper",
     "MapSnapshot",
     "Mapper",
     "MapperCounts",
@@ -37,6 +40,7 @@ __all__ = [
     "StepRecord",
     "TriangulationParams",
     "UpdateReport",
+    "ViewBasedMapper",
     "pose_affordances",
     "triangulate",
     "view_polygon",

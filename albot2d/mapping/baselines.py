@@ -18,15 +18,16 @@ from numpy.typing import NDArray
 from albot2d.errors import InputError
 from albot2d.frames import Frame
 from albot2d.geometry import Pose, transform_segments
-from albot2d.mapping.global_map import GlobalMap, MapSnapshot
-from albot2d.mapping.protocol import MapperCounts, StageTimer
+from albot2d.mapping.global_map import GlobalMap
+from albot2d.mapping.protocol import MapperCounts, MapSnapshot, StageTimer
 from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
 
-__all__ = ["GroundTruthIntegration", "NaiveIntegration"]
+__all__ = ["GroundTruthIntegration", "NaiveIntegration", "ViewIntegrator"]
 
 
-class _ViewIntegrator:
-    """Places every view's surfaces at a pose chosen by the subclass; deletes nothing."""
+class ViewIntegrator:
+    """Places every view's surfaces at a pose chosen by the subclass (``_source_pose``);
+    deletes nothing. The base of the baselines and of ``slam.ScanMatchingSLAM``."""
 
     name = "integrator"
 
@@ -74,7 +75,7 @@ class _ViewIntegrator:
         return self.timer.mean_ms_per(len(self._poses))
 
 
-class NaiveIntegration(_ViewIntegrator):
+class NaiveIntegration(ViewIntegrator):
     """Albot_x without error correction: views placed by raw odometry."""
 
     name = "naive"
@@ -83,7 +84,7 @@ class NaiveIntegration(_ViewIntegrator):
         return frame.odom_pose
 
 
-class GroundTruthIntegration(_ViewIntegrator):
+class GroundTruthIntegration(ViewIntegrator):
     """Views placed by the true pose (simulation only): the exact map."""
 
     name = "truth"

@@ -36,22 +36,12 @@ from albot2d.mapping.deletion import (
     touching_mask,
     view_polygon,
 )
+from albot2d.mapping.protocol import MapSnapshot  # the value type every mapper returns
 from albot2d.mapping.spatial_index import SegmentGridIndex
-from albot2d.reprs import compact_fields
 
 __all__ = ["GlobalMap", "GlobalMapParams", "MapSnapshot", "UpdateReport", "view_polygon"]
 
 _NEVER = np.iinfo(np.int64).max
-
-
-class MapSnapshot(NamedTuple):
-    """Surfaces of the map at one moment: ``segments (M, 4)`` and ``map_ids (M,)``."""
-
-    segments: NDArray[np.float64]
-    map_ids: NDArray[np.int64]
-
-    def __repr__(self) -> str:
-        return compact_fields("MapSnapshot", segments=self.segments, map_ids=self.map_ids)
 
 
 class UpdateReport(NamedTuple):

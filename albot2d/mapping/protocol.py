@@ -13,25 +13,51 @@ what ``observe(frame)`` does after extracting ``view``. Mappers that want raw sc
 implement ``observe`` only and still get every frame, and so does a subclass that
 overrides ``observe`` but not ``observe_perceived`` (``takes_perceived_views``), so a
 plugin extending a built-in mapper's ``observe`` keeps working.
+
+View-based mappers (Albot1) also implement ``ViewBasedMapper``: their route map of
+remembered views, their global map as it was after any past update (the map history) and
+the record of each update; loop-closing mappers implement ``LoopClosingMapper``
+(``slam_stats``). Scoring and the figures use these protocols, never attribute probing.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Protocol, TypeGuard, runtime_checkable
+from typing import NamedTuple, Protocol, TypeGuard, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
-from albot2d.mapping.global_map import MapSnapshot
+from albot2d.mapping.route_map import RouteMap
 from albot2d.perception import ExtractionParams, Surfaces
+from albot2d.reprs import compact_fields
 
-__all__ = ["Mapper", "MapperCounts", "PerceivingMapper", "StageTimer", "takes_perceived_views"]
+__all__ = [
+    "LoopClosingMapper",
+    "MapSnapshot",
+    "MapUpdate",
+    "Mapper",
+    "MapperCounts",
+    "PerceivingMapper",
+    "StageTimer",
+    "ViewBasedMapper",
+    "takes_perceived_views",
+]
+
+
+class MapSnapshot(NamedTuple):
+    """Surfaces of the map at one moment: ``segments (M, 4)`` and ``map_ids (M,)``."""
+
+    segments: NDArray[np.float64]
+    map_ids: NDArray[np.int64]
+
+    def __repr__(self) -> str:
+        return compact_fields("MapSnapshot", segments=self.segments, map_ids=self.map_ids)
 
 
 @dataclass(frozen=True, slots=True)
@@ -116,6 +142,43 @@ class PerceivingMapper(Mapper, Protocol):
 
     def observe_perceived(self, frame: Frame, view: Surfaces) -> None:
         """Consume the next frame, its surfaces ``view`` extracted with ``perception()``."""
+
+
+class MapUpdate(Protocol):
+    """What one global-map update of a view-based mapper deleted (``oldest_affected``: the
+    oldest local map whose surfaces the view touched, -1 for none)."""
+
+    @property
+    def map_id(self) -> int: ...
+    @property
+    def frame_index(self) -> int: ...
+    @property
+    def deleted_current(self) -> int: ...
+    @property
+    def deleted_older(self) -> int: ...
+    @property
+    def oldest_affected(self) -> int: ...
+
+
+@runtime_checkable
+class ViewBasedMapper(Mapper, Protocol):
+    """A mapper that remembers views as local maps on a route, like Albot1."""
+
+    update_log: Sequence[MapUpdate]
+
+    def route_map(self) -> RouteMap:
+        """The remembered views (local maps) and how each was placed."""
+
+    def global_map(self, at_update: int | None = None) -> MapSnapshot:
+        """The global map now, or as it was right after update ``at_update`` (history)."""
+
+
+@runtime_checkable
+class LoopClosingMapper(Mapper, Protocol):
+    """A mapper that closes loops (keyframes, verified closures, optimisations)."""
+
+    def slam_stats(self) -> Mapping[str, int]:
+        """Counters of its loop closing: keyframes, candidates accepted/rejected, …"""
 
 
 def takes_perceived_views(mapper: object) -> TypeGuard[PerceivingMapper]:

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from albot2d.errors import InputError
 from albot2d.frames import Frame
 from albot2d.geometry import Pose, between_arrays, compose_arrays, transform_points
-from albot2d.mapping.baselines import _ViewIntegrator
+from albot2d.mapping.baselines import ViewIntegrator as _ViewIntegrator
 from albot2d.mapping.global_map import MapSnapshot
 from albot2d.mapping.protocol import MapperCounts, StageTimer
 from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams

@@ -43,7 +43,7 @@ from albot2d.validation import check_finite, check_in_range, check_non_negative
 if TYPE_CHECKING:
     from worldgen.world import World
 
-__all__ = ["Laser", "LaserNoise", "LaserParams"]
+__all__ = ["LASER_NOISE_PRESETS", "Laser", "LaserNoise", "LaserParams", "laser_noise_preset"]
 
 FloatArray = NDArray[np.float64]
 
@@ -147,6 +147,23 @@ class LaserNoise:
             and self.range_resolution_m == 0.0
             and self.mixed_pixel_prob == 0.0
         )
+
+
+#: The laser noise presets by name (``--laser-noise``, ``RunSpec.laser_noise``).
+LASER_NOISE_PRESETS: dict[str, Callable[[], LaserNoise]] = {
+    "sick_lms200": LaserNoise.sick_lms200,
+    "zero": LaserNoise.zero,
+}
+
+
+def laser_noise_preset(name: str) -> LaserNoise:
+    """The named laser noise preset; unknown names raise InputError listing the valid ones."""
+    try:
+        return LASER_NOISE_PRESETS[name]()
+    except KeyError:
+        raise InputError(
+            f"unknown laser noise {name!r}; valid: {', '.join(LASER_NOISE_PRESETS)}"
+        ) from None
 
 
 class Laser:
