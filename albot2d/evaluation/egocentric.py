@@ -71,7 +71,16 @@ def unique_on_grid(points: FloatArray, grid_m: float) -> FloatArray:
     pts = np.asarray(points, np.float64).reshape(-1, 2)
     if len(pts) == 0:
         return pts
-    _, first = np.unique(np.floor(pts / grid_m).astype(np.int64), axis=0, return_index=True)
+    cells = np.floor(pts / grid_m).astype(np.int64)
+    lo = cells.min(axis=0)
+    span = cells.max(axis=0) - lo + 1
+    if float(span[0]) * float(span[1]) < 2.0**62:
+        # One int64 key per cell: a 1-D stable sort, ~10x faster than unique rows (axis=0)
+        # and the same first index per cell.
+        key = (cells[:, 0] - lo[0]) * span[1] + (cells[:, 1] - lo[1])
+        _, first = np.unique(key, return_index=True)
+    else:
+        _, first = np.unique(cells, axis=0, return_index=True)
     return pts[np.sort(first)]
 
 
