@@ -24,10 +24,22 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
+import shapely
 from numpy.typing import NDArray
 
-from albot2d.evaluation.map_quality import nearest_segment_distance, sample_segments
-from albot2d.geometry import Pose, as_segments, transform_points, transform_segments
+from albot2d.evaluation.map_quality import (
+    nearest_segment_distance,
+    point_to_segment_geos,
+    sample_segments,
+)
+from albot2d.geometry import (
+    Pose,
+    as_segments,
+    point_segment_distance,
+    segment_lengths,
+    transform_points,
+    transform_segments,
+)
 from albot2d.validation import check_positive
 
 __all__ = [
@@ -71,7 +83,16 @@ def unique_on_grid(points: FloatArray, grid_m: float) -> FloatArray:
     pts = np.asarray(points, np.float64).reshape(-1, 2)
     if len(pts) == 0:
         return pts
-    _, first = np.unique(np.floor(pts / grid_m).astype(np.int64), axis=0, return_index=True)
+    cells = np.floor(pts / grid_m).astype(np.int64)
+    lo = cells.min(axis=0)
+    span = cells.max(axis=0) - lo + 1
+    if float(span[0]) * float(span[1]) < 2.0**62:
+        # One int64 key per cell: a 1-D stable sort, ~10x faster than unique rows (axis=0)
+        # and the same first index per cell.
+        key = (cells[:, 0] - lo[0]) * span[1] + (cells[:, 1] - lo[1])
+        _, first = np.unique(key, return_index=True)
+    else:
+        _, first = np.unique(cells, axis=0, return_index=True)
     return pts[np.sort(first)]
 
 
@@ -106,14 +127,64 @@ def egocentric_quality(
     if len(seen) == 0:
         return EgocentricQuality(p.window_m, None, None, n)
     reach = float(np.max(np.hypot(seen[:, 0], seen[:, 1])))
-    completeness = float(np.mean(nearest_segment_distance(seen, segs) <= p.coverage_tolerance_m))
-    samples = unique_on_grid(sample_segments(segs, p.sample_spacing_m), p.grid_m)
-    samples = samples[np.hypot(samples[:, 0], samples[:, 1]) <= reach]
+    completeness = float(np.mean(_covered(seen, segs, p.coverage_tolerance_m)))
+    samples = _grid_samples_within(segs, p.sample_spacing_m, p.grid_m, reach)
     accuracy = None
     if len(samples):
         walls = in_robot_frame(true_pose, walls_world, reach + 1.0)
         accuracy = float(np.percentile(nearest_segment_distance(samples, walls), 95))
     return EgocentricQuality(p.window_m, completeness, accuracy, n)
+
+
+# Seen points per block in _covered (bounds the candidate pairs held at once).
+_BLOCK_POINTS = 1 << 13
+
+
+def _covered(points: FloatArray, segs: FloatArray, tolerance_m: float) -> NDArray[np.bool_]:
+    """Per point, whether a segment lies within ``tolerance_m`` (as
+    ``nearest_segment_distance(points, segs) <= tolerance_m``, twice as fast on a naive
+    map's overlapping surfaces): the segments whose bounding box meets the point's
+    tolerance box are measured with GEOS's formula (``map_quality``'s), no nearest search."""
+    out = np.zeros(len(points), bool)
+    if len(points) == 0 or len(segs) == 0:
+        return out
+    tree = shapely.STRtree(shapely.linestrings(segs.reshape(-1, 2, 2)))
+    for b0 in range(0, len(points), _BLOCK_POINTS):
+        pts = points[b0:b0 + _BLOCK_POINTS]
+        lo, hi = pts - tolerance_m, pts + tolerance_m
+        which, seg = tree.query(shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]))
+        d = point_to_segment_geos(pts[which, 0], pts[which, 1], segs[seg])
+        out[b0 + which[d <= tolerance_m]] = True
+    return out
+
+
+# Map-surface samples per block in _grid_samples_within (bounds the memory).
+_BLOCK_SAMPLES = 1 << 16
+
+
+def _grid_samples_within(
+    segs: FloatArray, spacing_m: float, grid_m: float, reach_m: float
+) -> FloatArray:
+    """``unique_on_grid(sample_segments(segs, spacing_m), grid_m)`` keeping the points
+    within ``reach_m`` of the origin, with the same points in the same order, but in
+    bounded memory: a long run's naive map gives a million samples.
+
+    Exact, not approximate: a cell whose first point is within reach has all its points
+    within reach + grid·√2, so surfaces farther than reach + 2·grid (dropped first) hold
+    none of them and the first point is unchanged; and the first point per cell of a
+    concatenation is the first of the blocks' own first points, in block order."""
+    if len(segs) == 0:
+        return np.zeros((0, 2))
+    near = point_segment_distance(np.zeros((1, 2)), segs)[0] <= reach_m + 2.0 * grid_m
+    segs = segs[near]
+    counts = np.maximum(np.ceil(segment_lengths(segs) / spacing_m).astype(np.int64), 1) + 1
+    cuts = np.searchsorted(np.cumsum(counts), np.arange(_BLOCK_SAMPLES, counts.sum(),
+                                                        _BLOCK_SAMPLES))  # fmt: skip
+    parts = [unique_on_grid(sample_segments(segs[s0:s1], spacing_m), grid_m)
+             for s0, s1 in zip(np.r_[0, cuts], np.r_[cuts, len(segs)], strict=True)
+             if s1 > s0]  # fmt: skip
+    samples = unique_on_grid(np.vstack(parts), grid_m) if parts else np.zeros((0, 2))
+    return samples[np.hypot(samples[:, 0], samples[:, 1]) <= reach_m]
 
 
 def seen_window_local(points_world: FloatArray, true_pose: FloatArray, grid_m: float) -> FloatArray:

@@ -37,6 +37,7 @@ __all__ = [
     "MapQualityParams",
     "map_quality",
     "nearest_segment_distance",
+    "point_to_segment_geos",
     "sample_segments",
 ]
 
@@ -90,10 +91,12 @@ _CHUNK_PAIRS = 1 << 16
 _BLOCK_SAMPLES = 1 << 15
 
 
-def _point_segment_distance(
+def point_to_segment_geos(
     px: NDArray[np.float64], py: NDArray[np.float64], seg: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    """GEOS's ``Distance::pointToSegment``, term for term (so it equals shapely's result)."""
+    """Distances of points ``(px[i], py[i])`` to segments ``seg[i]`` (pairwise, not all
+    pairs) by GEOS's ``Distance::pointToSegment``, term for term (so it equals shapely's
+    result)."""
     ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
     ex, ey = bx - ax, by - ay
     len2 = ex * ex + ey * ey
@@ -178,7 +181,7 @@ def _bounded_distances(
         k = np.arange(len(row)) - np.repeat(np.cumsum(w) - w, w)
         cand = wall[wall_start[owner[row]] + k]
         pts = samples[pending[row]]
-        d = _point_segment_distance(pts[:, 0], pts[:, 1], truth[cand])
+        d = point_to_segment_geos(pts[:, 0], pts[:, 1], truth[cand])
         out[rows] = np.minimum.reduceat(d, np.cumsum(w) - w)
     return out
 

@@ -35,6 +35,10 @@ def wrap_angle(angle: NDArray[Any]) -> FloatArray: ...
 def wrap_angle(angle: ArrayLike) -> FloatArray | float: ...
 def wrap_angle(angle: ArrayLike) -> FloatArray | float:
     """Wrap angles (radians) to [-pi, pi). Scalars in, scalar out; arrays keep their shape."""
+    if isinstance(angle, float | int) and not isinstance(angle, bool):
+        # Python's float % is numpy's remainder (fmod, then the divisor's sign), so this
+        # equals the array path bit for bit at a tenth of its cost (called per pose).
+        return float((float(angle) + math.pi) % (2.0 * math.pi) - math.pi)
     wrapped = (np.asarray(angle, dtype=np.float64) + np.pi) % (2.0 * np.pi) - np.pi
     if np.ndim(wrapped) == 0:
         return float(wrapped)

@@ -129,13 +129,21 @@ class Surfaces:
         """A subset by boolean mask or integer indices (order of ``index`` kept)."""
         idx = np.asarray(index)
         assert self.uncertain is not None
+        if idx.ndim == 1 and (idx.dtype == np.bool_ or idx.dtype.kind in "iu"):
+            # Fancy indexing made fresh arrays of the right dtypes and shapes: adopt them
+            # (the tracker selects twice per view; the copies cost more than the work).
+            return Surfaces.adopt(
+                self.segments[idx], self.occluded[idx], self.beams[idx], self.uncertain[idx]
+            )
         return Surfaces(
             self.segments[idx], self.occluded[idx], self.beams[idx], self.uncertain[idx]
         )
 
     def transformed(self, pose: ArrayLike) -> Surfaces:
         """The same surfaces mapped from this view's frame by ``pose`` ([x, y, theta])."""
-        return Surfaces(
+        assert self.uncertain is not None
+        # The flags are read-only already and shared; the segments are fresh.
+        return Surfaces.adopt(
             transform_segments(pose, self.segments), self.occluded, self.beams, self.uncertain
         )
 

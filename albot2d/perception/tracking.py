@@ -22,6 +22,7 @@ needs both observations.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -39,6 +40,7 @@ from albot2d.perception.surfaces import Surfaces
 from albot2d.validation import check_in_range, check_non_negative, check_positive
 
 __all__ = [
+    "MATCH_BACKENDS",
     "MatchInfo",
     "TrackedSurfaces",
     "TrackingParams",
@@ -262,25 +264,71 @@ def _endpoint_distances(
     return dist
 
 
+#: ``match_surfaces(backend=...)``: "auto" takes the compiled matching when numba imports
+#: and the settings are the ones it covers (``_compiled_settings``).
+MATCH_BACKENDS = ("auto", "numpy", "numba")
+
+_numba_match: Callable[..., tuple] | None = None  # type: ignore[type-arg]
+_numba_missing = False
+
+
+def _compiled_match() -> Callable[..., tuple] | None:  # type: ignore[type-arg]
+    """The compiled matching kernel, loaded on first use (None without numba)."""
+    global _numba_match, _numba_missing
+    if _numba_match is None and not _numba_missing:
+        try:
+            from albot2d.perception.tracking_numba import match_kernel
+        except ImportError:
+            _numba_missing = True
+        else:
+            _numba_match = match_kernel
+    return _numba_match
+
+
+def _compiled_settings(params: TrackingParams) -> bool:
+    """Whether the compiled kernel covers ``params`` (the paper's matching)."""
+    return (params.match_endpoint == "corresponding" and not params.line_distance_fallback
+            and params.match_order == "distance" and params.fitness_floor <= 0)  # fmt: skip
+
+
 def match_surfaces(
     predicted: Surfaces,
     view: Surfaces,
     params: TrackingParams | None = None,
     candidates: ArrayLike | None = None,
+    *,
+    backend: str = "auto",
 ) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
     """One-to-one greedy matching of ``predicted`` to ``view`` surfaces (same frame).
 
     Only ``view`` surfaces in ``candidates`` (bool mask; default all) may match. Returns
     ``(predicted_index, view_index, distance_m, angle_rad)`` sorted by predicted index.
-    Ties in distance go to the lower predicted, then lower view index.
+    Ties in distance go to the lower predicted, then lower view index. ``backend``:
+    "numpy", "numba" (the ``fast`` extra; the paper's settings only) or "auto" (numba
+    when it imports and covers the settings); both give the same matches.
     """
     params = TrackingParams() if params is None else params
+    if backend not in MATCH_BACKENDS:
+        raise ValueError(f"backend must be one of {MATCH_BACKENDS}, got {backend!r}")
     cand = np.ones(len(view), bool) if candidates is None else np.asarray(candidates, bool)
     if cand.shape != (len(view),):
         raise ValueError(f"candidates must have shape ({len(view)},), got {cand.shape}")
     empty_i = np.zeros(0, np.int64)
     if not len(predicted) or not cand.any():
         return empty_i, empty_i.copy(), np.zeros(0), np.zeros(0)
+    if backend != "numpy":
+        kernel = _compiled_match() if _compiled_settings(params) else None
+        if kernel is not None:
+            p, v = predicted.segments, view.segments
+            return kernel(  # type: ignore[no-any-return]
+                p, predicted.occluded, v, view.occluded, cand,
+                np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]),
+                np.arctan2(v[:, 3] - v[:, 1], v[:, 2] - v[:, 0]),
+                math.radians(params.match_angle_deg), params.match_distance_m,
+            )  # fmt: skip
+        if backend == "numba":
+            raise ValueError("backend='numba' needs numba (the fast extra) and the paper's "
+                             "matching settings (corresponding, distance, no fallback/floor)")
     angle = undirected_angle_difference(
         segment_angles(predicted.segments)[:, None], segment_angles(view.segments)[None, :]
     )
@@ -335,5 +383,12 @@ def rtsv(
     cand = trackable_mask(view, params) if candidates is None else np.asarray(candidates, bool)
     predicted = tracked.current.transformed(increment.inverse().as_array())
     ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
-    survivors = TrackedSurfaces(tracked.ids[ti], tracked.local.select(ti), view.select(vj))
+    # ti are distinct indices into a valid tracker state: its invariants hold by
+    # construction, so the survivors skip TrackedSurfaces' checks (a third of RTSV's time).
+    survivors = object.__new__(TrackedSurfaces)
+    ids = tracked.ids[ti]
+    ids.flags.writeable = False
+    for name, value in (("ids", ids), ("local", tracked.local.select(ti)),
+                        ("current", view.select(vj))):  # fmt: skip
+        object.__setattr__(survivors, name, value)
     return survivors, MatchInfo(ti, vj, dist, angle, predicted, cand)

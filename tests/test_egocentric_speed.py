@@ -1,0 +1,58 @@
+"""The egocentric measure's fast paths give the reference results exactly."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from albot2d.evaluation.egocentric import _covered, _grid_samples_within, unique_on_grid
+from albot2d.evaluation.map_quality import nearest_segment_distance, sample_segments
+
+
+def reference_unique_on_grid(points: np.ndarray, grid_m: float) -> np.ndarray:
+    """The first point of each occupied cell in input order, by unique rows."""
+    _, first = np.unique(np.floor(points / grid_m).astype(np.int64), axis=0, return_index=True)
+    return points[np.sort(first)]
+
+
+def test_unique_on_grid_equals_unique_rows_on_a_dense_cloud() -> None:
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(-20.0, 20.0, (50_000, 2))
+    pts = np.vstack([pts, pts[:5000] + 1e-4, np.round(pts[5000:9000], 1)])  # shared cells
+    out = unique_on_grid(pts, 0.05)
+    np.testing.assert_array_equal(out, reference_unique_on_grid(pts, 0.05))
+    assert 0 < len(out) < len(pts)
+
+
+def test_unique_on_grid_far_apart_cells_use_the_row_path() -> None:
+    """Cells too far apart for one int64 key (span ≥ 2^62) take the unique-rows path."""
+    pts = np.array([[-1e17, 0.0], [1e17, 3e2], [1e17, 3e2], [0.0, -1e17], [0.0, 1e17]])
+    np.testing.assert_array_equal(unique_on_grid(pts, 0.05), reference_unique_on_grid(pts, 0.05))
+
+
+def random_map(rng: np.random.Generator, n: int) -> np.ndarray:
+    """``n`` overlapping 0.2–3 m surfaces in a 40 m square, as a naive map's are."""
+    a = rng.uniform(-20.0, 20.0, (n, 2))
+    ang, length = rng.uniform(-np.pi, np.pi, n), rng.uniform(0.2, 3.0, n)
+    return np.hstack([a, a + length[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])])
+
+
+def test_covered_equals_nearest_distance_within_tolerance() -> None:
+    rng = np.random.default_rng(2)
+    segs = np.vstack([random_map(rng, 3000), [[0.0, 0.0, 1.0, 0.0]]])
+    pts = np.vstack([rng.uniform(-21.0, 21.0, (20_000, 2)),
+                     [[0.5, 0.25], [0.5, -0.25], [1.25, 0.0], [0.5, 0.2500001]]])  # fmt: skip
+    expected = nearest_segment_distance(pts, segs) <= 0.25
+    got = _covered(pts, segs, 0.25)
+    np.testing.assert_array_equal(got, expected)
+    assert got[-4:].tolist() == [True, True, True, False]  # exactly at the tolerance: in
+    assert not _covered(pts, np.zeros((0, 4)), 0.25).any()
+
+
+@pytest.mark.parametrize("reach_m", [0.5, 7.0, 100.0])
+def test_grid_samples_within_reach_equal_sampling_everything(reach_m: float) -> None:
+    rng = np.random.default_rng(3)
+    segs = random_map(rng, 4000)
+    everything = unique_on_grid(sample_segments(segs, 0.05), 0.05)
+    expected = everything[np.hypot(everything[:, 0], everything[:, 1]) <= reach_m]
+    np.testing.assert_array_equal(_grid_samples_within(segs, 0.05, 0.05, reach_m), expected)
