@@ -9,10 +9,18 @@ the robot "could 'see' from its current position" are removed, which "leaves mor
 information in the global map, thus creating a residual effect".
 
 It leaves open how P is enlarged, what "facing side" and "could see" mean, and how far a
-group reaches. Every reading is a field of ``GlobalMapParams``; three consistent sets are
+group reaches. Every reading is a field of ``GlobalMapParams``; four consistent sets are
 presets (``GlobalMapParams.preset(name)``):
 
-- ``"paper"`` (default): P enlarged by 0.5 m *in front of* the robot only (the buffer is
+- ``"visible"`` (default): "could see" read as visibility from the current position. P,
+  the facing side and Expand as in ``"paper"``; a surface touching P on the facing side is
+  deleted only if the robot is on the side it was seen from (a wall's face cannot be seen
+  from behind it) and all of it is visible through the incoming view: every sample point
+  lies in the fan of one of the view's surfaces (the sight line meets it) and at most the
+  0.5 m enlargement beyond the nearest one, so nothing hidden behind the view's surfaces,
+  in the gaps between them (doorways, unextracted clutter) or beside the view is deleted.
+  ``min_visible_share`` < 1 deletes surfaces partly in view (0: any sample).
+- ``"paper"``: P enlarged by 0.5 m *in front of* the robot only (the buffer is
   clipped at its lateral axis: "surfaces in front"); a surface is deleted only if the robot
   could see it: it touches P and both its endpoints are in front of the robot — for the
   current map too; affected maps (the current one included) are grouped as Expand, split
@@ -87,7 +95,7 @@ _CHOICES: dict[str, tuple[str, ...]] = {
 
 @dataclass(frozen=True, slots=True)
 class GlobalMapParams:
-    """Parameters of algorithm #5 (defaults: the ``"paper"`` reading; see the module doc).
+    """Parameters of algorithm #5 (defaults: the ``"visible"`` reading; see the module doc).
 
     - ``enlarge_m``: how much the view polygon is enlarged (paper: 50 cm).
     - ``enlarge``: ``"forward"`` buffer clipped at the robot's lateral axis, ``"all_round"``
@@ -126,7 +134,7 @@ class GlobalMapParams:
     current_map: CurrentMapRule = "could_see"
     facing_test: FacingTest = "both_endpoints"
     could_see: CouldSee = "visible"
-    min_visible_share: float = 0.5
+    min_visible_share: float = 1.0
     visible_samples: int = 8
     seen_side: SeenSide = "front"
     expand: GroupRule = "split"

@@ -8,7 +8,9 @@ Every surface is tagged with the id of the local map it came from. Adding a view
 2. surfaces touching P make their maps "affected"; those of the current map (the one the
    robot is leaving) that the robot could see are deleted;
 3. the affected maps are grouped (the paper's Expand: 25 and 28 → 25…28, split where the
-   ids jump) and the group's surfaces the robot could see from where it is are deleted;
+   ids jump) and the group's surfaces the robot could see from where it is are deleted
+   (by default: on the facing side, seen from this side, and wholly visible through the
+   incoming view, at most 0.5 m beyond its surfaces);
 4. the incoming view is added.
 
 Which surfaces "could be seen", how P is enlarged and how far a group reaches are the
@@ -142,9 +144,10 @@ class GlobalMap:
             visible = facing_mask(hsegs, robot, p.facing_test)
             if p.seen_side == "front":
                 visible &= seen_side_mask(hsegs, robot)
-            if p.could_see == "visible":
-                share = visible_share(hsegs, segs, robot, p.enlarge_m, p.visible_samples)
-                visible &= (share > 0.0) & (share >= p.min_visible_share)
+            if p.could_see == "visible" and visible.any():
+                share = visible_share(hsegs[visible], segs, robot, p.enlarge_m,
+                                      p.visible_samples)
+                visible[visible] = (share > 0.0) & (share >= p.min_visible_share)
             is_current = hit_maps == current
             cur_del = is_current if p.current_map == "touch" else is_current & visible
             doomed = hit[cur_del]
