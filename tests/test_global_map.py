@@ -66,7 +66,7 @@ def test_v1_rule_deletes_the_contiguous_group_on_the_facing_half_plane() -> None
 
 
 def test_paper_rule_deletes_only_what_the_robot_could_see() -> None:
-    g = build_maps_25_to_29()  # default: the paper reading
+    g = build_maps_25_to_29(GlobalMapParams.preset("paper"))
     report = g.add_view(INCOMING, 30, Pose(0.0, 0.0, 0.0))
     assert report.deleted_current == 1
     assert report.affected_maps == (25, 28, 29)  # the current map joins the group
@@ -145,7 +145,7 @@ def test_a_revisit_deletes_only_the_group_near_the_revisited_maps() -> None:
         return g
 
     for expand, lost_far in (("contiguous", 54), ("split", 0)):
-        g = build(GlobalMapParams(could_see="half_plane", expand=expand))
+        g = build(GlobalMapParams.preset("paper", could_see="half_plane", expand=expand))
         report = g.add_view(INCOMING, 60, Pose())
         far = g.snapshot().map_ids
         assert 54 - int(np.count_nonzero((far >= 5) & (far < 59))) == lost_far, expand
@@ -166,13 +166,14 @@ def test_forward_ray_touches_what_lies_across_the_heading() -> None:
     far_wall = seg(2.8, -0.2, 2.8, 0.2)  # across the heading, outside a view closed at 1 m
     view = np.array([[1.0, -3.0, 1.0, -2.0], [1.0, 2.0, 1.0, 3.0]])
     for ray, deleted in ((0.0, 0), (3.0, 1)):
-        g = GlobalMap(GlobalMapParams(enlarge_m=0.0, forward_ray_m=ray, include_viewpoint=False))
+        g = GlobalMap(GlobalMapParams.preset("paper", enlarge_m=0.0, forward_ray_m=ray,
+                                             include_viewpoint=False))
         g.insert(far_wall, 0)
         assert g.add_view(view, 1, Pose()).deleted_current == deleted
 
 
 def test_unknown_rule_names_are_refused_with_the_valid_ones() -> None:
-    with pytest.raises(InputError, match="valid: paper, v1, original"):
+    with pytest.raises(InputError, match="valid: visible, paper, v1, original"):
         GlobalMapParams.preset("papr")
     with pytest.raises(InputError, match="could_see must be one of"):
         GlobalMapParams(could_see="maybe")  # type: ignore[arg-type]

@@ -18,7 +18,7 @@ from albot2d.evaluation import sim_invariants as sim_inv
 from albot2d.evaluation.campaign import CampaignParams
 from albot2d.evaluation.episode import EpisodeSpec, run_episode
 from albot2d.frames import Frame, Scan
-from albot2d.geometry import Pose
+from albot2d.geometry import Pose, transform_segments
 from albot2d.mapping import Albot1, StepRecord, UpdateReport
 from albot2d.mapping.route_map import RouteMap
 from albot2d.sim.driving import get_profile
@@ -108,22 +108,20 @@ def test_the_tracked_counts_are_recounted_not_read_from_the_mapper(run) -> None:
 
 def test_an_update_that_keeps_older_facing_surfaces_is_caught(run) -> None:  # type: ignore[no-untyped-def]
     m = run[2]
-    snap = m.map.snapshot()
-    x0, y0 = snap.segments[:, [0, 2]].min() - 1, snap.segments[:, [1, 3]].min() - 1
-    x1, y1 = snap.segments[:, [0, 2]].max() + 1, snap.segments[:, [1, 3]].max() + 1
-    everything = shapely.box(x0, y0, x1, y1)
-    # A pretend update that "saw" the whole map from its left edge, looking along +x,
-    # yet deleted nothing: every older surface in front of the robot was left behind.
-    report = UpdateReport(m.map.n_updates + 1, int(snap.map_ids.max()) + 2, 0, (), (), 0, 0,
-                          everything)
+    last = m.route[-1]
+    view = transform_segments(last.pose.as_array(), last.view.segments)
+    # A pretend update that sees the last view again from its own viewpoint, yet deleted
+    # nothing: the surfaces it sees (the last map's own) were left behind.
+    report = UpdateReport(m.map.n_updates + 1, last.map_id + 2, 0, (), (), 0, 0,
+                          shapely.Polygon())
     with pytest.raises(inv.InvariantError, match="update_deletes_facing_overlap"):
-        inv.check_update_deleted_facing_overlap(m, report, Pose(x0, 0.5 * (y0 + y1), 0.0))
-    report = report._replace(map_id=int(snap.map_ids.max()) + 1)
+        inv.check_update_deleted_facing_overlap(m, report, last.pose, view)
+    report = report._replace(map_id=last.map_id + 1)
     with pytest.raises(inv.InvariantError, match="map being left"):
-        inv.check_update_deleted_facing_overlap(m, report, Pose(x0, 0.5 * (y0 + y1), 0.0))
-    # Everything is behind this robot: it could see none of it, so nothing had to go.
-    behind = Pose(x1 + 5.0, 0.5 * (y0 + y1), 0.0)
-    inv.check_update_deleted_facing_overlap(m, report, behind)
+        inv.check_update_deleted_facing_overlap(m, report, last.pose, view)
+    # Turned round, the robot has all of it behind: it could see none of it.
+    behind = Pose(last.pose.x, last.pose.y, last.pose.theta + np.pi)
+    inv.check_update_deleted_facing_overlap(m, report, behind, view)
 
 
 def test_a_robot_inside_a_wall_is_caught(run) -> None:  # type: ignore[no-untyped-def]

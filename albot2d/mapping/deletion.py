@@ -9,10 +9,18 @@ the robot "could 'see' from its current position" are removed, which "leaves mor
 information in the global map, thus creating a residual effect".
 
 It leaves open how P is enlarged, what "facing side" and "could see" mean, and how far a
-group reaches. Every reading is a field of ``GlobalMapParams``; three consistent sets are
+group reaches. Every reading is a field of ``GlobalMapParams``; four consistent sets are
 presets (``GlobalMapParams.preset(name)``):
 
-- ``"paper"`` (default): P enlarged by 0.5 m *in front of* the robot only (the buffer is
+- ``"visible"`` (default): "could see" read as visibility from the current position. P,
+  the facing side and Expand as in ``"paper"``; a surface touching P on the facing side is
+  deleted only if the robot is on the side it was seen from (a wall's face cannot be seen
+  from behind it) and all of it is visible through the incoming view: every sample point
+  lies in the fan of one of the view's surfaces (the sight line meets it) and at most the
+  0.5 m enlargement beyond the nearest one, so nothing hidden behind the view's surfaces,
+  in the gaps between them (doorways, unextracted clutter) or beside the view is deleted.
+  ``min_visible_share`` < 1 deletes surfaces partly in view (0: any sample).
+- ``"paper"``: P enlarged by 0.5 m *in front of* the robot only (the buffer is
   clipped at its lateral axis: "surfaces in front"); a surface is deleted only if the robot
   could see it: it touches P and both its endpoints are in front of the robot — for the
   current map too; affected maps (the current one included) are grouped as Expand, split
@@ -55,11 +63,14 @@ __all__ = [
     "FacingTest",
     "GlobalMapParams",
     "GroupRule",
+    "SeenSide",
     "facing_mask",
     "group_maps",
     "in_range_mask",
+    "seen_side_mask",
     "touching_mask",
     "view_polygon",
+    "visible_share",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -68,21 +79,23 @@ BoolArray = NDArray[np.bool_]
 EnlargeMode = Literal["forward", "all_round", "radial"]
 CurrentMapRule = Literal["could_see", "touch"]
 FacingTest = Literal["both_endpoints", "midpoint", "any_endpoint"]
-CouldSee = Literal["in_view", "in_range", "half_plane"]
+CouldSee = Literal["in_view", "visible", "in_range", "half_plane"]
+SeenSide = Literal["any", "front"]
 GroupRule = Literal["split", "contiguous", "none"]
 
 _CHOICES: dict[str, tuple[str, ...]] = {
     "enlarge": ("forward", "all_round", "radial"),
     "current_map": ("could_see", "touch"),
     "facing_test": ("both_endpoints", "midpoint", "any_endpoint"),
-    "could_see": ("in_view", "in_range", "half_plane"),
+    "could_see": ("in_view", "visible", "in_range", "half_plane"),
+    "seen_side": ("any", "front"),
     "expand": ("split", "contiguous", "none"),
 }
 
 
 @dataclass(frozen=True, slots=True)
 class GlobalMapParams:
-    """Parameters of algorithm #5 (defaults: the ``"paper"`` reading; see the module doc).
+    """Parameters of algorithm #5 (defaults: the ``"visible"`` reading; see the module doc).
 
     - ``enlarge_m``: how much the view polygon is enlarged (paper: 50 cm).
     - ``enlarge``: ``"forward"`` buffer clipped at the robot's lateral axis, ``"all_round"``
@@ -94,8 +107,16 @@ class GlobalMapParams:
     - ``facing_test``: which points of a surface must be in front of the robot for it to
       lie "on the facing side".
     - ``could_see``: which surfaces of the affected group are deleted besides facing:
-      ``"in_view"`` those touching P, ``"in_range"`` those within the view's reach (the
-      farthest view point + ``enlarge_m``), ``"half_plane"`` all facing ones.
+      ``"in_view"`` those touching P, ``"visible"`` those touching P of which at least
+      ``min_visible_share`` (and at least one) of ``visible_samples`` points spread along
+      the surface is visible from the viewpoint (:func:`visible_share`: inside the fan of
+      one of the view's surfaces, at most ``enlarge_m`` beyond the nearest one; not across
+      the gaps between them), ``"in_range"`` those within the view's reach (the farthest
+      view point + ``enlarge_m``), ``"half_plane"`` all facing ones. With
+      ``current_map="could_see"`` the current map's surfaces take the same test.
+    - ``seen_side``: ``"front"`` deletes a surface only when the robot is on the side it
+      was seen from (a wall's face cannot be seen from behind it; surfaces keep scan
+      order, which puts their seen side on their left); ``"any"`` either side.
     - ``expand``: Expand as ``"split"`` groups (break where consecutive affected map ids
       differ by more than ``group_gap_maps``), one ``"contiguous"`` group min…max, or
       ``"none"`` (only the affected maps).
@@ -112,7 +133,10 @@ class GlobalMapParams:
     include_viewpoint: bool = True
     current_map: CurrentMapRule = "could_see"
     facing_test: FacingTest = "both_endpoints"
-    could_see: CouldSee = "in_view"
+    could_see: CouldSee = "visible"
+    min_visible_share: float = 1.0
+    visible_samples: int = 8
+    seen_side: SeenSide = "front"
     expand: GroupRule = "split"
     group_gap_maps: int = 20
     current_in_group: bool = True
@@ -123,7 +147,10 @@ class GlobalMapParams:
     def __post_init__(self) -> None:
         check_non_negative(self, "enlarge_m", "forward_ray_m")
         check_positive(self, "index_cell_m")
-        check_positive_int(self, "group_gap_maps")
+        check_positive_int(self, "group_gap_maps", "visible_samples")
+        if not 0.0 <= self.min_visible_share <= 1.0:
+            raise InputError(f"GlobalMapParams.min_visible_share must be in [0, 1], got "
+                             f"{self.min_visible_share!r}")
         for name, valid in _CHOICES.items():
             value = getattr(self, name)
             if value not in valid:
@@ -138,7 +165,8 @@ class GlobalMapParams:
 
     @classmethod
     def preset(cls, name: str, **overrides: Any) -> GlobalMapParams:
-        """The named consistent set (``paper``, ``v1``, ``original``), with overrides."""
+        """The named consistent set (``visible``, ``paper``, ``v1``, ``original``), with
+        overrides."""
         if name not in DELETION_PRESETS:
             raise InputError(
                 f"unknown global-map deletion rule {name!r}; valid: {', '.join(DELETION_PRESETS)}"
@@ -147,12 +175,15 @@ class GlobalMapParams:
 
 
 DELETION_PRESETS: dict[str, GlobalMapParams] = {
-    "paper": GlobalMapParams(),
+    "visible": GlobalMapParams(),
+    "paper": GlobalMapParams(could_see="in_view", min_visible_share=0.0, seen_side="any"),
     "v1": GlobalMapParams(
         enlarge="all_round",
         current_map="touch",
         facing_test="midpoint",
         could_see="half_plane",
+        min_visible_share=0.0,
+        seen_side="any",
         expand="contiguous",
         current_in_group=False,
     ),
@@ -160,6 +191,8 @@ DELETION_PRESETS: dict[str, GlobalMapParams] = {
         enlarge_m=0.30,
         enlarge="radial",
         could_see="half_plane",
+        min_visible_share=0.0,
+        seen_side="any",
         forward_ray_m=3.0,
         keep_if_all=True,
     ),
@@ -285,3 +318,41 @@ def group_maps(
             prev = m
         runs.append((start, prev))
     return tuple(m for lo, hi in runs for m in range(lo, hi + 1) if m in existing)
+
+
+def seen_side_mask(segments: FloatArray, robot: Pose) -> BoolArray:
+    """``(N,)``: the robot is strictly on the left of each directed surface, the side a
+    surface in scan order was seen from."""
+    segs = as_segments(segments)
+    ex, ey = segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1]
+    return ex * (robot.y - segs[:, 1]) - ey * (robot.x - segs[:, 0]) > 0.0
+
+
+def visible_share(
+    segments: FloatArray, view: FloatArray, robot: Pose, beyond_m: float, samples: int = 8
+) -> FloatArray:
+    """``(N,)``: the share of ``samples`` points spread along each surface (centres of equal
+    pieces) that the robot at ``robot`` sees through the incoming ``view`` (surfaces in the
+    same frame): the ray from the viewpoint to the point crosses at least one view surface,
+    and the point lies at most ``beyond_m`` beyond the nearest crossing (the view's fan,
+    enlarged radially; a point in a gap between view surfaces or hidden behind one is not
+    visible)."""
+    segs = as_segments(segments)
+    vsegs = as_segments(view)
+    if len(segs) == 0 or len(vsegs) == 0:
+        return np.zeros(len(segs))
+    frac = (np.arange(samples) + 0.5) / samples
+    pts = segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2])
+    v = pts.reshape(-1, 2) - np.array([robot.x, robot.y])  # rays to the points (K, 2)
+    length = np.hypot(v[:, 0], v[:, 1])
+    e = vsegs[:, 2:] - vsegs[:, :2]  # (M, 2)
+    w = vsegs[:, :2] - np.array([robot.x, robot.y])
+    den = v[:, :1] * e[None, :, 1] - v[:, 1:] * e[None, :, 0]  # (K, M)
+    ok = np.abs(den) > 1e-12
+    den = np.where(ok, den, 1.0)
+    t = (w[None, :, 0] * e[None, :, 1] - w[None, :, 1] * e[None, :, 0]) / den  # along ray
+    u = (w[None, :, 0] * v[:, 1:] - w[None, :, 1] * v[:, :1]) / den  # along view surface
+    crosses = ok & (u >= 0.0) & (u <= 1.0) & (t > 0.0)
+    nearest = np.where(crosses, t, np.inf).min(axis=1)  # in units of the ray's length
+    seen = np.isfinite(nearest) & ((1.0 - nearest) * length <= beyond_m)
+    return seen.reshape(len(segs), samples).mean(axis=1)

@@ -8,7 +8,9 @@ Every surface is tagged with the id of the local map it came from. Adding a view
 2. surfaces touching P make their maps "affected"; those of the current map (the one the
    robot is leaving) that the robot could see are deleted;
 3. the affected maps are grouped (the paper's Expand: 25 and 28 → 25…28, split where the
-   ids jump) and the group's surfaces the robot could see from where it is are deleted;
+   ids jump) and the group's surfaces the robot could see from where it is are deleted
+   (by default: on the facing side, seen from this side, and wholly visible through the
+   incoming view, at most 0.5 m beyond its surfaces);
 4. the incoming view is added.
 
 Which surfaces "could be seen", how P is enlarged and how far a group reaches are the
@@ -33,8 +35,10 @@ from albot2d.mapping.deletion import (
     facing_mask,
     group_maps,
     in_range_mask,
+    seen_side_mask,
     touching_mask,
     view_polygon,
+    visible_share,
 )
 from albot2d.mapping.protocol import MapSnapshot  # the value type every mapper returns
 from albot2d.mapping.spatial_index import SegmentGridIndex
@@ -126,7 +130,14 @@ class GlobalMap:
             touch = touching_mask(poly, self._segments[cand], robot, p.forward_ray_m)
             hit = cand[touch]
             hit_maps = self._map_ids[hit]
-            visible = facing_mask(self._segments[hit], robot, p.facing_test)
+            hsegs = self._segments[hit]
+            visible = facing_mask(hsegs, robot, p.facing_test)
+            if p.seen_side == "front":
+                visible &= seen_side_mask(hsegs, robot)
+            if p.could_see == "visible" and visible.any():
+                share = visible_share(hsegs[visible], segs, robot, p.enlarge_m,
+                                      p.visible_samples)
+                visible[visible] = (share > 0.0) & (share >= p.min_visible_share)
             is_current = hit_maps == current
             cur_del = is_current if p.current_map == "touch" else is_current & visible
             doomed = hit[cur_del]
@@ -136,13 +147,15 @@ class GlobalMap:
             group = group_maps(affected, p.expand, p.group_gap_maps, self._by_map)
             older_group = tuple(m for m in group if m != current)
             if older_group:
-                if p.could_see == "in_view":
+                if p.could_see in ("in_view", "visible"):
                     in_group = np.isin(hit_maps, older_group)
                     older = hit[in_group & visible]
                 else:
                     ids = self._alive_ids(np.concatenate([self._by_map[m] for m in older_group]))
                     gsegs = self._segments[ids]
                     keep = facing_mask(gsegs, robot, p.facing_test)
+                    if p.seen_side == "front":
+                        keep &= seen_side_mask(gsegs, robot)
                     if p.could_see == "in_range":
                         pts = segs.reshape(-1, 2)
                         reach = float(np.max(np.hypot(pts[:, 0] - robot.x, pts[:, 1] - robot.y),
