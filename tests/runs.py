@@ -40,13 +40,23 @@ __all__ = [
 M = TypeVar("M", bound=Mapper)
 
 
-def simulate(world: World, seed: int, *, noise: str = "typical",
-             laser: LaserNoise | None = None, profile: str = "dataset3",
-             length_m: float = 20.0) -> list[Frame]:
+def simulate(
+    world: World,
+    seed: int,
+    *,
+    noise: str = "typical",
+    laser: LaserNoise | None = None,
+    profile: str = "dataset3",
+    length_m: float = 20.0,
+) -> list[Frame]:
     """The frames of a loop tour of at least ``length_m`` through ``world``."""
     tour = world.tour(make_rng(seed), kind="loop", min_length_m=length_m)
-    sim = Simulator(world, seed=seed, odometry=NOISE_PRESETS[noise],
-                    laser_noise=laser if laser is not None else LaserNoise())
+    sim = Simulator(
+        world,
+        seed=seed,
+        odometry=NOISE_PRESETS[noise],
+        laser_noise=laser if laser is not None else LaserNoise(),
+    )
     return list(sim.drive(tour, profile=profile))
 
 
@@ -106,7 +116,7 @@ def check_mapper_contract(mapper: Mapper, frames: list[Frame]) -> None:
         wanted = [(p.name, p.kind) for p in spec.parameters.values()]
         given = [(p.name, p.kind) for p in impl.parameters.values()][: len(wanted)]
         assert given == wanted, (member, impl, spec)
-        extra = list(impl.parameters.values())[len(wanted):]
+        extra = list(impl.parameters.values())[len(wanted) :]
         assert all(p.default is not inspect.Parameter.empty for p in extra), (member, impl)
         protocol_return = _hints(getattr(Mapper, member))["return"]
         assert _hints(getattr(type(mapper), member))["return"] == protocol_return, member

@@ -160,6 +160,7 @@ def reference(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
     return assert_whole_lines(out / EPISODES_NAME)
 
 
+@pytest.mark.slow  # several campaigns in subprocesses, killed and resumed
 def test_kill_9_at_random_moments_then_resume_gives_the_uninterrupted_campaign(
     reference: list[dict],
     tmp_path: Path,
@@ -261,6 +262,7 @@ def test_a_second_ctrl_c_stops_the_campaign_within_seconds(tmp_path: Path) -> No
     assert stopped_s < SECOND_INTERRUPT_GRACE_S
 
 
+@pytest.mark.slow  # waits for real episodes to finish after the interrupt
 def test_a_first_ctrl_c_lets_the_running_episodes_finish(tmp_path: Path) -> None:
     out = tmp_path / "fuzz"
     proc = start_fuzz(out, episodes=20)

@@ -27,6 +27,7 @@ def albot2d(*args: str, extra_path: Path | None = None, code: str | None = None,
     )  # fmt: skip
 
 
+@pytest.mark.slow  # a whole (small) campaign with its figures
 def test_fuzz_writes_the_stream_summary_and_histograms(tmp_path: Path,
                                                        capsys: pytest.CaptureFixture) -> None:
     out = tmp_path / "out"

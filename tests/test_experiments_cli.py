@@ -15,6 +15,8 @@ import pytest
 from albot2d.cli import main
 
 pytest.importorskip("matplotlib")
+# Every experiment of the paper, run --quick (about a minute even on a quiet machine).
+pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")

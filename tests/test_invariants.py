@@ -209,6 +209,7 @@ def test_albot1_heading_error_stays_within_the_noise_bound(world, seed, noise) -
     inv.check_heading_error_bound(m.trajectory(), truth, bound)
 
 
+@pytest.mark.slow  # ten full episodes
 @pytest.mark.parametrize(("profile", "noise", "episodes", "tour_m"),
                          [("dataset3", "high", 8, 25.0), ("dataset2", "none", 2, 8.0)])
 def test_albot1_beats_raw_odometry_on_average(profile, noise, episodes, tour_m) -> None:  # type: ignore[no-untyped-def]

@@ -11,7 +11,8 @@ records the name and message. Which checks apply:
   ``zero_noise_localisation`` (with no odometry or laser noise, each local map is placed in
   its predecessor within 5 cm / 0.5°) and ``heading_error_bound`` (see
   :func:`heading_error_bound`);
-- Albot1 only: ``local_map_rule`` (algorithm #2's remembering rule with Use-Vc) and
+- Albot1 only: ``local_map_rule`` (algorithm #2's remembering rule with Use-Vc, its
+  tracked counts recounted from the views a ``ViewRecorder`` kept) and
   ``update_deletes_facing_overlap`` (algorithm #5's postcondition after every update).
 """
 
