@@ -107,7 +107,7 @@ def test_presets_select_consistent_sets_and_refuse_unknown_names() -> None:
     assert original.triangulation.choose == "fitness"
     assert original.global_map.enlarge == "radial"
     assert Albot1Params.preset("original", min_tracked=4).min_tracked == 4
-    with pytest.raises(InputError, match="valid: paper, original"):
+    with pytest.raises(InputError, match="valid: paper, original, start_stop"):
         Albot1Params.preset("orignal")
 
 

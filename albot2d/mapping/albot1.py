@@ -107,7 +107,10 @@ class Albot1Params:
     authors' C++ code where it differs from the paper: key-endpoint matching with a fitness
     floor, no 3° viewing-angle test, update at < 3, heuristic 2 by fitness with the chosen
     surface's own heading, every view localised with the odometry fallback, and the code's
-    global-map deletion rule) select consistent sets; keyword overrides apply on top.
+    global-map deletion rule) select consistent sets; ``preset("start_stop")`` is the paper
+    with ``heading_fallback_surfaces=1``, the reading for start–stop driving (moves of
+    ~3 m, whose odometric heading is less precise than one tracked wall's direction);
+    keyword overrides apply on top.
     """
 
     extraction: ExtractionParams = field(default_factory=ExtractionParams)
@@ -137,7 +140,8 @@ class Albot1Params:
 
     @classmethod
     def preset(cls, name: str, **overrides: Any) -> Albot1Params:
-        """``"paper"`` or ``"original"`` (see the class doc), with field overrides."""
+        """``"paper"``, ``"original"`` or ``"start_stop"`` (see the class doc), with field
+        overrides."""
         if name == "paper":
             base = cls()
         elif name == "original":
@@ -151,8 +155,12 @@ class Albot1Params:
                 min_tracked=3,
                 localise_every_view=True,
             )
+        elif name == "start_stop":
+            base = cls(heading_fallback_surfaces=1)
         else:
-            raise InputError(f"unknown Albot1 preset {name!r}; valid: paper, original")
+            raise InputError(
+                f"unknown Albot1 preset {name!r}; valid: paper, original, start_stop"
+            )
         return dataclasses.replace(base, **overrides)
 
 
