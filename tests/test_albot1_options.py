@@ -107,6 +107,10 @@ def test_presets_select_consistent_sets_and_refuse_unknown_names() -> None:
     assert original.triangulation.choose == "fitness"
     assert original.global_map.enlarge == "radial"
     assert Albot1Params.preset("original", min_tracked=4).min_tracked == 4
+    # start-stop: the paper plus the heading of views whose surfaces give no position
+    assert Albot1Params.preset("start_stop") == Albot1Params(heading_fallback_surfaces=1)
+    made = mapper_factory("albot1[preset=start_stop]")()
+    assert made.params.heading_fallback_surfaces == 1  # type: ignore[attr-defined]
     with pytest.raises(InputError, match="valid: paper, original, start_stop"):
         Albot1Params.preset("orignal")
 
