@@ -278,16 +278,16 @@ def triangulate(
         best = int(kept[np.argmin(d_pi)])
     if params.heading == "selected":
         return Pose.from_array(poses[best])
-    gate = np.radians(params.heading_consensus_deg)
+    consensus = float(np.radians(params.heading_consensus_deg))
     if params.heading == "inlier_mean":
         if len(kept) == 1:
             return Pose.from_array(poses[best])
         dev = np.asarray(wrap_angle(poses[kept, 2] - poses[best, 2]))
-        offset = float(dev[np.abs(dev) <= gate].mean())
+        offset = float(dev[np.abs(dev) <= consensus].mean())
     else:
         fused = _weighted_heading_offset(
-            local, current, path_integration, float(poses[best, 2]), gate,
-            k * np.radians(gate_deg),
+            local, current, path_integration, float(poses[best, 2]), consensus,
+            k * float(np.radians(gate_deg)),
         )
         offset = 0.0 if fused is None else fused[0]
     heading = float(wrap_angle(poses[best, 2] + offset))
