@@ -6,6 +6,7 @@ import pytest
 
 from albot2d.errors import InputError
 from albot2d.evaluation.sensitivity import (
+    PAPER_FIG8,
     SensitivitySetup,
     format_table,
     homing_sensitivity,
@@ -80,3 +81,18 @@ def test_sensitivity_rejects_bad_arguments(capsys):
         main(["--seeds", "1", "--presets", "nonsense", "--mappers", "naive"])
     assert exc.value.code == 2
     assert "nonsense" in capsys.readouterr().err
+
+
+def test_paper_fig8_setting_drives_both_journeys_with_stops_every_4_m():
+    setup = SensitivitySetup(mappers=("truth",), **PAPER_FIG8)
+    result = homing_sensitivity([0], ("none",), setup)
+    assert [r["direction"] for r in result["runs"]] == ["fig8_clockwise", "fig8_anticlockwise"]
+    truth = result["presets"]["none"]["truth"]
+    assert truth["table1"]["stops"] > 0 and truth["table1"]["fraction_within_bound"] == 1.0
+    for run in result["runs"]:
+        stops = run["mappers"]["truth"]["stops"]
+        # a stop every 4 odometer metres: many more than the 20 m default would give
+        assert len(stops) >= run["tour_m"] / 4.0 - 2
+    assert "fig8_clockwise/fig8_anticlockwise" in format_table(result)
+    with pytest.raises(InputError, match="stop_every_m"):
+        SensitivitySetup(stop_every_m=0.0)

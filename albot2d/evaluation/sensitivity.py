@@ -20,9 +20,12 @@ region kind (``albot2d.evaluation.updates``; the paper's Fig. 14), pooled over t
 
 Runs are independent, so ``workers > 1`` spreads them over a process pool; results are
 collected in (preset, seed, direction) order, so they do not depend on the number of
-workers. Rerun it after any mapper change, e.g.::
+workers. ``PAPER_FIG8`` (``--paper-fig8``) is the paper's own Table 1 setting instead: the
+Fig. 6 world and its Fig. 8 clockwise and anticlockwise journeys, a stop every 4 m. Rerun
+it after any mapper change, e.g.::
 
     python -m albot2d.evaluation.sensitivity --seeds 20 --workers 2
+    python -m albot2d.evaluation.sensitivity --seeds 20 --paper-fig8 --presets pioneer3dx
 """
 
 from __future__ import annotations
@@ -44,17 +47,26 @@ from albot2d.evaluation.updates import (
     update_counts,
 )
 
-__all__ = ["SensitivitySetup", "format_table", "homing_sensitivity", "run_one"]
+__all__ = ["PAPER_FIG8", "SensitivitySetup", "format_table", "homing_sensitivity", "run_one"]
 
 DEFAULT_PRESETS = ("pioneer3dx", "low", "typical", "high")
 DEFAULT_MAPPERS = ("albot1", "albot1[preset=start_stop]", "naive")
 DIRECTIONS = ("forward", "reverse")
+# The paper's Table 1 setting: the Fig. 6 world, its Fig. 8 journeys, a stop every 4 m.
+PAPER_FIG8: dict[str, Any] = {
+    "kind": "fig6", "routes": ("fig8_clockwise", "fig8_anticlockwise"), "stop_every_m": 4.0,
+}
 
 
 @dataclass(frozen=True)
 class SensitivitySetup:
     """What every run shares: world kind (and generator parameters), driving profile,
-    tour, directions driven, mappers, the homing bound and the Table 1 distance window."""
+    tour, directions driven, mappers, the homing bound and the Table 1 distance window.
+
+    ``routes``: instead of a planned tour driven each way round, drive each of these routes
+    named by the world (e.g. ``PAPER_FIG8``: the paper's Fig. 8 clockwise and anticlockwise
+    journeys in the ``fig6`` world); ``stop_every_m``: odometer metres between homing stops.
+    """
 
     kind: str = "office"
     world_params: dict[str, Any] = field(default_factory=dict)
@@ -66,8 +78,14 @@ class SensitivitySetup:
     bearing_bound_deg: float = 7.0
     distance_bound_m: float = 3.0
     table1_range_m: tuple[float, float] = (17.0, 35.0)
+    routes: tuple[str, ...] = ()
+    stop_every_m: float = 20.0
 
     def __post_init__(self) -> None:
+        if not self.stop_every_m > 0.0:
+            raise InputError(
+                f"SensitivitySetup.stop_every_m must be > 0, got {self.stop_every_m!r}"
+            )
         bad = [d for d in self.directions if d not in DIRECTIONS]
         if not self.directions or bad:
             raise InputError(
@@ -96,12 +114,13 @@ def run_one(
         plan_tour,
     )
     from albot2d.evaluation.scoring import homing_section
-    from albot2d.evaluation.trace import drive_mappers
+    from albot2d.evaluation.trace import HomingParams, drive_mappers
     from albot2d.mapping.registry import resolve_mappers
     from albot2d.sim.driving import get_profile
 
-    if direction not in DIRECTIONS:
-        raise InputError(f"run_one: direction must be one of {', '.join(DIRECTIONS)}")
+    journeys = setup.routes or DIRECTIONS
+    if direction not in journeys:
+        raise InputError(f"run_one: direction must be one of {', '.join(journeys)}")
     spec = RunSpec(
         seed=seed, kind=setup.kind, world_params=setup.world_params, profile=setup.profile,
         noise=preset, tour_kind=setup.tour_kind, tour_length_m=setup.tour_length_m,
@@ -109,13 +128,19 @@ def run_one(
     )  # fmt: skip
     factories = resolve_mappers(list(spec.mappers))
     world = build_world(spec)
-    tour = plan_tour(world, spec.tour_kind, spec.tour_length_m)
+    if setup.routes:
+        from worldgen.routes import route_start, route_tour
+
+        tour = route_tour(world, direction)
+        world = dataclasses.replace(world, start=route_start(world, direction))
+    else:
+        tour = plan_tour(world, spec.tour_kind, spec.tour_length_m)
     if direction == "reverse":
         # A circuit starts and ends at the start: driven backwards it is the other way round.
         tour = dataclasses.replace(tour, waypoints=tour.waypoints[::-1].copy())
     frames = make_simulator(world, spec).drive(tour, get_profile(spec.profile))
     mappers = {name: factory() for name, factory in factories.items()}
-    trace = drive_mappers(frames, mappers)
+    trace = drive_mappers(frames, mappers, homing=HomingParams(stop_every_m=setup.stop_every_m))
     assert trace.true_poses is not None  # simulated runs always have the truth
     xy = trace.true_poses[:, :2]
     out: dict[str, Any] = {}
@@ -192,7 +217,8 @@ def homing_sensitivity(
         raise InputError("homing_sensitivity: give at least one seed and one preset")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InputError(f"homing_sensitivity: workers must be a positive integer, got {workers!r}")
-    jobs = [(seed, preset, d) for preset in presets for seed in seeds for d in setup.directions]
+    journeys = setup.routes or setup.directions
+    jobs = [(seed, preset, d) for preset in presets for seed in seeds for d in journeys]
     if workers == 1:
         runs = [run_one(seed, preset, setup, d) for seed, preset, d in jobs]
     else:
@@ -226,7 +252,7 @@ def format_table(result: dict[str, Any]) -> str:
     lo, hi = s["table1_range_m"]
     lines = [
         f"{s['kind']} {s['profile']} {s['tour_kind']} ≥{s['tour_length_m']:g} m, "
-        f"{len(s['seeds'])} seeds × {'/'.join(s['directions'])}; bound ±"
+        f"{len(s['seeds'])} seeds × {'/'.join(s['routes'] or s['directions'])}; bound ±"
         f"{s['bearing_bound_deg']:g}° and ±{s['distance_bound_m']:g} m; "
         f"Table 1 stops: {lo:g}–{hi:g} m from the start",
         f"{'preset':<11} {'mapper':<26} {'all stops':>12} {'Table 1 stops':>14} "
@@ -268,13 +294,18 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--presets", nargs="+", default=list(DEFAULT_PRESETS))
     ap.add_argument("--mappers", nargs="+", default=list(DEFAULT_MAPPERS))
     ap.add_argument("--directions", nargs="+", default=list(DIRECTIONS))
+    ap.add_argument("--paper-fig8", action="store_true",
+                    help="the paper's Table 1 setting: Fig. 6 world, Fig. 8 journeys")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--json", metavar="FILE", help="also write the full result here")
     args = ap.parse_args(argv)
     if args.seeds < 1:
         ap.error(f"--seeds must be a positive integer, got {args.seeds}")
     try:
-        setup = SensitivitySetup(mappers=tuple(args.mappers), directions=tuple(args.directions))
+        extra = PAPER_FIG8 if args.paper_fig8 else {}
+        setup = SensitivitySetup(
+            mappers=tuple(args.mappers), directions=tuple(args.directions), **extra
+        )
         result = homing_sensitivity(
             range(args.seeds), tuple(args.presets), setup, workers=args.workers
         )
