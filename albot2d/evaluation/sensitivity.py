@@ -250,8 +250,9 @@ def format_table(result: dict[str, Any]) -> str:
     the Table 1 stops within the bound, the worst errors, then moves per update."""
     s = result["setup"]
     lo, hi = s["table1_range_m"]
+    tour = "routes" if s["routes"] else f"{s['tour_kind']} ≥{s['tour_length_m']:g} m"
     lines = [
-        f"{s['kind']} {s['profile']} {s['tour_kind']} ≥{s['tour_length_m']:g} m, "
+        f"{s['kind']} {s['profile']} {tour}, stops every {s['stop_every_m']:g} m, "
         f"{len(s['seeds'])} seeds × {'/'.join(s['routes'] or s['directions'])}; bound ±"
         f"{s['bearing_bound_deg']:g}° and ±{s['distance_bound_m']:g} m; "
         f"Table 1 stops: {lo:g}–{hi:g} m from the start",
