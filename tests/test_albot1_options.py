@@ -107,7 +107,11 @@ def test_presets_select_consistent_sets_and_refuse_unknown_names() -> None:
     assert original.triangulation.choose == "fitness"
     assert original.global_map.enlarge == "radial"
     assert Albot1Params.preset("original", min_tracked=4).min_tracked == 4
-    with pytest.raises(InputError, match="valid: paper, original"):
+    # start-stop: the paper plus the heading of views whose surfaces give no position
+    assert Albot1Params.preset("start_stop") == Albot1Params(heading_fallback_surfaces=1)
+    made = mapper_factory("albot1[preset=start_stop]")()
+    assert made.params.heading_fallback_surfaces == 1  # type: ignore[attr-defined]
+    with pytest.raises(InputError, match="valid: paper, original, start_stop"):
         Albot1Params.preset("orignal")
 
 
@@ -144,3 +148,29 @@ def test_albot1_variants_by_name() -> None:
     for bad in ("albot1[colour=red]", "albot1[deletion=none]", "albot1[min_tracked=x]"):
         with pytest.raises(InputError):
             mapper_factory(bad)()
+
+
+def test_surface_heading_fallback_corrects_only_the_heading() -> None:
+    """Tracked walls whose real ends were seen at grazing angles (``uncertain``: no precise
+    position): by default the view is placed by path integration; with
+    ``heading_fallback_surfaces=1`` its heading comes from the walls' directions and its
+    position stays path integration's."""
+    walls = np.array([[3.0, -2.0, 3.0, 2.0], [1.0, 2.0, 2.5, 2.0], [1.0, -2.0, 2.5, -2.0]])
+    occ = np.zeros((len(walls), 2), bool)
+    uncertain = np.ones((len(walls), 2), bool)
+    view = Surfaces(walls, occ, np.full((len(walls), 2), -1), uncertain)
+    truth = Pose(0.3, 0.1, math.radians(4.0))
+    moved = view.transformed(truth.inverse().as_array())
+    moved = Surfaces(moved.segments, occ, moved.beams, uncertain)
+    odometric = Pose(0.32, 0.05, math.radians(1.0))
+    for on in (False, True):
+        m = Albot1(Albot1Params(heading_fallback_surfaces=int(on)))
+        tracked = start_tracking(view, TrackingParams(min_view_angle_deg=0.0))
+        tracked = tracked.__class__(tracked.ids, tracked.local, moved)
+        pose, method = m._triangulate_or_move_using_pi(tracked, odometric, 1)
+        assert method == "path_integration"
+        assert (pose.x, pose.y) == (odometric.x, odometric.y)
+        expected = truth.theta if on else odometric.theta
+        assert pose.theta == pytest.approx(expected, abs=1e-9)
+    with pytest.raises(InputError, match="heading_fallback_surfaces"):
+        Albot1Params(heading_fallback_surfaces=-1)

@@ -10,7 +10,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from albot2d.geometry import Pose, wrap_angle
-from albot2d.mapping.triangulation import TriangulationParams, pose_affordances, triangulate
+from albot2d.mapping.triangulation import (
+    TriangulationParams,
+    heading_from_directions,
+    pose_affordances,
+    triangulate,
+)
 from albot2d.perception.surfaces import Surfaces
 
 # Walls of a room seen from its middle, in the local map's frame (scan order irrelevant here).
@@ -130,3 +135,44 @@ def test_gate_parameters_are_validated(field: str) -> None:
 
     with pytest.raises(InputError, match=field):
         TriangulationParams(**{field: -1.0})
+
+
+def test_heading_from_directions_needs_no_corner() -> None:
+    """Walls whose ends are all occluded afford no position, but their directions give the
+    heading; path integration's position is not touched."""
+    occ = [[True, True]] * 3
+    local = Surfaces.from_segments(ROOM[:3], occluded=occ)
+    truth = Pose(0.4, -0.3, math.radians(12.0))
+    current = observe(local, truth)
+    current = Surfaces(current.segments, np.ones((3, 2), bool), current.beams)
+    pi = Pose(0.45, -0.25, math.radians(10.0))
+    assert triangulate(local, current, pi) is None
+    heading = heading_from_directions(local, current, pi)
+    assert heading is not None and heading == pytest.approx(truth.theta, abs=1e-9)
+
+
+def test_heading_from_directions_drops_what_contradicts_path_integration() -> None:
+    local = Surfaces.from_segments(ROOM[:2], occluded=[[True, True]] * 2)
+    truth = Pose(0.0, 0.0, math.radians(30.0))
+    current = observe(local, truth)
+    # 30° from path integration: beyond the 5°-per-step gate after one step, inside after 7
+    pi = Pose(0.0, 0.0, 0.0)
+    assert heading_from_directions(local, current, pi, steps=1) is None
+    assert heading_from_directions(local, current, pi, steps=7) == pytest.approx(truth.theta)
+    empty = Surfaces.from_segments(np.zeros((0, 4)))
+    assert heading_from_directions(empty, empty, pi) is None
+
+
+def test_heading_from_directions_counts_agreeing_surfaces() -> None:
+    """A wall mis-measured by 2° is left out of the consensus; asking for more agreeing
+    walls than the three good ones gives no heading."""
+    local = Surfaces.from_segments(ROOM, occluded=[[True, True]] * 4)
+    truth = Pose(0.2, 0.1, math.radians(-8.0))
+    segs = observe(local, truth).segments.copy()
+    rot = Pose(0.0, 0.0, math.radians(2.0)).as_array()
+    segs[3] = Surfaces.from_segments(segs[3:4]).transformed(rot).segments[0]
+    current = Surfaces.from_segments(segs, occluded=[[True, True]] * 4)
+    pi = Pose(0.2, 0.1, math.radians(-7.0))
+    three = heading_from_directions(local, current, pi, min_agreeing=3)
+    assert three == pytest.approx(truth.theta, abs=1e-9)
+    assert heading_from_directions(local, current, pi, min_agreeing=4) is None

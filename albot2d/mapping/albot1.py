@@ -37,7 +37,11 @@ from albot2d.geometry import Pose, compose_arrays, transform_segments, wrap_angl
 from albot2d.mapping.global_map import GlobalMap, GlobalMapParams, MapSnapshot, UpdateReport
 from albot2d.mapping.protocol import MapperCounts, StageTimer
 from albot2d.mapping.route_map import LocalMap, Method, RouteMap
-from albot2d.mapping.triangulation import TriangulationParams, triangulate
+from albot2d.mapping.triangulation import (
+    TriangulationParams,
+    heading_from_directions,
+    triangulate,
+)
 from albot2d.perception import (
     ExtractionParams,
     TrackedSurfaces,
@@ -92,12 +96,21 @@ class Albot1Params:
       local map too (the authors' start–stop programs), keeping the odometric pose when the
       result is more than ``odometry_fallback_m`` / ``odometry_fallback_deg`` away from it;
       off (the paper): views between updates are placed by path integration.
+    - ``heading_fallback_surfaces``: a view whose tracked surfaces afford no position (none
+      has an end precisely located in both views, e.g. side walls whose ends were seen at
+      grazing angles) takes its position from path integration and, when at least this
+      many tracked surfaces agree on it, its heading from their directions (a direction
+      needs no corner: ``triangulation.heading_from_directions``); 0: path integration's
+      heading too (the paper's "move using PI").
 
     ``Albot1Params.preset("paper")`` (the defaults) and ``preset("original")`` (the
     authors' C++ code where it differs from the paper: key-endpoint matching with a fitness
     floor, no 3° viewing-angle test, update at < 3, heuristic 2 by fitness with the chosen
     surface's own heading, every view localised with the odometry fallback, and the code's
-    global-map deletion rule) select consistent sets; keyword overrides apply on top.
+    global-map deletion rule) select consistent sets; ``preset("start_stop")`` is the paper
+    with ``heading_fallback_surfaces=1``, the reading for start–stop driving (moves of
+    ~3 m, whose odometric heading is less precise than one tracked wall's direction);
+    keyword overrides apply on top.
     """
 
     extraction: ExtractionParams = field(default_factory=ExtractionParams)
@@ -106,6 +119,7 @@ class Albot1Params:
     global_map: GlobalMapParams = field(default_factory=GlobalMapParams)
     min_tracked: int = 4
     localise_every_view: bool = False
+    heading_fallback_surfaces: int = 0
     odometry_fallback_m: float = 0.40
     odometry_fallback_deg: float = 5.0
 
@@ -117,10 +131,17 @@ class Albot1Params:
                 "Albot1Params.localise_every_view must be true or false, "
                 f"got {self.localise_every_view!r}"
             )
+        value = self.heading_fallback_surfaces
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise InputError(
+                "Albot1Params.heading_fallback_surfaces must be an integer >= 0, "
+                f"got {value!r}"
+            )
 
     @classmethod
     def preset(cls, name: str, **overrides: Any) -> Albot1Params:
-        """``"paper"`` or ``"original"`` (see the class doc), with field overrides."""
+        """``"paper"``, ``"original"`` or ``"start_stop"`` (see the class doc), with field
+        overrides."""
         if name == "paper":
             base = cls()
         elif name == "original":
@@ -134,8 +155,12 @@ class Albot1Params:
                 min_tracked=3,
                 localise_every_view=True,
             )
+        elif name == "start_stop":
+            base = cls(heading_fallback_surfaces=1)
         else:
-            raise InputError(f"unknown Albot1 preset {name!r}; valid: paper, original")
+            raise InputError(
+                f"unknown Albot1 preset {name!r}; valid: paper, original, start_stop"
+            )
         return dataclasses.replace(base, **overrides)
 
 
@@ -182,6 +207,7 @@ class Albot1:
         self._frame_maps: list[int] = []
         self._frame_offsets: list[NDArray[np.float64]] = []
         self._views = self._triangulations = self._path_integrations = 0
+        self._surface_headings = 0  # path integrations whose heading came from surfaces
         self.steps: list[StepRecord] = []
         self.update_log: list[UpdateSummary] = []
 
@@ -339,6 +365,15 @@ class Albot1:
             )  # fmt: skip
             if pose is not None:
                 return pose, "triangulation"
+            if self.params.heading_fallback_surfaces > 0:
+                heading = heading_from_directions(
+                    tracked.local, tracked.current, pi_pose, self.params.triangulation,
+                    steps=steps, gate=self._pi_gate,
+                    min_agreeing=self.params.heading_fallback_surfaces,
+                )  # fmt: skip
+                if heading is not None:
+                    self._surface_headings += 1
+                    return Pose(pi_pose.x, pi_pose.y, heading), "path_integration"
         return pi_pose, "path_integration"
 
     @property

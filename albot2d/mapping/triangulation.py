@@ -48,7 +48,10 @@ from albot2d.perception.surfaces import Surfaces
 from albot2d.perception.tracking import TrackingParams
 from albot2d.validation import check_non_negative
 
-__all__ = ["Affordances", "TriangulationParams", "pose_affordances", "triangulate"]
+__all__ = [
+    "Affordances", "TriangulationParams", "heading_from_directions", "pose_affordances",
+    "triangulate",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -169,21 +172,22 @@ def _weighted_heading_offset(
     chosen_heading: float,
     consensus_rad: float,
     pi_gate_rad: float,
-) -> float:
+) -> tuple[float, int] | None:
     """Correction to ``chosen_heading`` from every tracked surface's direction.
 
     A direction needs no corner, so surfaces without a usable endpoint (long walls seen
     at a grazing angle: the most precise directions of all) count too. Directions that
     contradict path integration beyond the gate are left out; the rest are averaged with
     inverse-variance weights, then once more without those farther than the consensus
-    from that mean.
+    from that mean. Returns the correction and how many directions agreed with it, or
+    ``None`` when every direction contradicts path integration.
     """
     dtheta = wrap_angle(segment_angles(local.segments) - segment_angles(current.segments))
     flipped = np.abs(wrap_angle(dtheta - path_integration.theta)) > np.pi / 2
     dtheta = np.where(flipped, wrap_angle(dtheta + np.pi), dtheta)
     ok = np.abs(wrap_angle(dtheta - path_integration.theta)) <= pi_gate_rad
     if not ok.any():
-        return 0.0
+        return None
     idx = np.flatnonzero(ok)
     dev = np.asarray(wrap_angle(dtheta[idx] - chosen_heading))
     w = 1.0 / (1.0 / _fit_weight(local, idx) + 1.0 / _fit_weight(current, idx))
@@ -191,7 +195,7 @@ def _weighted_heading_offset(
     agree = np.abs(dev - offset) <= consensus_rad
     if agree.any():
         offset = float(np.average(dev[agree], weights=w[agree]))
-    return offset
+    return offset, int(agree.sum())
 
 
 def _fit_weight(surfaces: Surfaces, index: NDArray[np.int64]) -> NDArray[np.float64]:
@@ -281,10 +285,47 @@ def triangulate(
         dev = np.asarray(wrap_angle(poses[kept, 2] - poses[best, 2]))
         offset = float(dev[np.abs(dev) <= consensus].mean())
     else:
-        offset = _weighted_heading_offset(
+        fused = _weighted_heading_offset(
             local, current, path_integration, float(poses[best, 2]), consensus,
-            k * np.radians(gate_deg),
+            k * float(np.radians(gate_deg)),
         )
+        offset = 0.0 if fused is None else fused[0]
     heading = float(wrap_angle(poses[best, 2] + offset))
     x, y = _position_for(heading, aff.local_points[best], aff.current_points[best])
     return Pose(float(x), float(y), heading)
+
+
+def heading_from_directions(
+    local: Surfaces,
+    current: Surfaces,
+    path_integration: Pose,
+    params: TriangulationParams = TriangulationParams(),
+    *,
+    steps: int = 1,
+    gate: tuple[float, float] | None = None,
+    min_agreeing: int = 1,
+) -> float | None:
+    """The view's heading in the local map from the tracked surfaces' directions alone, or
+    ``None`` when fewer than ``min_agreeing`` of them agree (within the PI gate, then within
+    ``heading_consensus_deg`` of their mean).
+
+    For views whose tracked surfaces afford no position (no end precisely located in both
+    observations): a direction needs no corner. The same inverse-variance mean, PI gate
+    and consensus as ``heading="weighted"``, centred on the path-integration heading.
+    """
+    if len(local) != len(current):
+        raise ValueError(f"local has {len(local)} surfaces but current has {len(current)}")
+    if len(local) == 0:
+        return None
+    if gate is None:
+        defaults = TrackingParams()
+        gate = (defaults.match_distance_m, defaults.match_angle_deg)
+    gate_deg = params.max_pi_deviation_deg if params.max_pi_deviation_deg is not None else gate[1]
+    k = max(int(steps), 1)
+    fused = _weighted_heading_offset(
+        local, current, path_integration, path_integration.theta,
+        float(np.radians(params.heading_consensus_deg)), k * float(np.radians(gate_deg)),
+    )
+    if fused is None or fused[1] < max(int(min_agreeing), 1):
+        return None
+    return float(wrap_angle(path_integration.theta + fused[0]))

@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -268,11 +268,11 @@ def _endpoint_distances(
 #: and the settings are the ones it covers (``_compiled_settings``).
 MATCH_BACKENDS = ("auto", "numpy", "numba")
 
-_numba_match: Callable[..., tuple] | None = None  # type: ignore[type-arg]
+_numba_match: Callable[..., tuple[Any, ...]] | None = None
 _numba_missing = False
 
 
-def _compiled_match() -> Callable[..., tuple] | None:  # type: ignore[type-arg]
+def _compiled_match() -> Callable[..., tuple[Any, ...]] | None:
     """The compiled matching kernel, loaded on first use (None without numba)."""
     global _numba_match, _numba_missing
     if _numba_match is None and not _numba_missing:
@@ -320,7 +320,7 @@ def match_surfaces(
         kernel = _compiled_match() if _compiled_settings(params) else None
         if kernel is not None:
             p, v = predicted.segments, view.segments
-            return kernel(  # type: ignore[no-any-return]
+            return kernel(
                 p, predicted.occluded, v, view.occluded, cand,
                 np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]),
                 np.arctan2(v[:, 3] - v[:, 1], v[:, 2] - v[:, 0]),
