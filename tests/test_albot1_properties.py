@@ -23,12 +23,13 @@ from albot2d.sim.simulator import Simulator
 from tests.albot1_checks import UpdateRecorder, check_local_map_rule
 from tests.strategies import examples
 from worldgen.strategies import worlds
+from worldgen.tours import make_tour
 
 SMALL_WORLDS = worlds(kinds=("rooms", "corridors", "office", "open"), max_size_m=20.0)
 
 
 def run(world, seed: int, *, laser_noise: LaserNoise, odometry: str, length_m: float = 15.0):  # type: ignore[no-untyped-def]
-    tour = world.tour(make_rng(seed), kind="loop", min_length_m=length_m)
+    tour = make_tour(world, make_rng(seed), kind="loop", min_length_m=length_m)
     frames = list(
         Simulator(world, seed=seed, laser_noise=laser_noise, odometry=NOISE_PRESETS[odometry])
         .drive(tour, profile="dataset1")
@@ -101,7 +102,7 @@ def test_heading_error_below_raw_odometry_on_average_over_seeds() -> None:
     ours, odometry = [], []
     for seed in range(3):
         world = worldgen.generate("office", seed=seed, width_m=30.0, height_m=24.0)
-        tour = world.tour(make_rng(seed), kind="loop", min_length_m=40.0)
+        tour = make_tour(world, make_rng(seed), kind="loop", min_length_m=40.0)
         frames = list(
             Simulator(world, seed=seed, odometry=NOISE_PRESETS["high"]).drive(tour, "dataset1")
         )

@@ -29,6 +29,7 @@ from albot2d.sim.robot import RobotParams
 from albot2d.sim.simulator import Simulator
 from worldgen.generate import generate
 from worldgen.strategies import worlds
+from worldgen.tours import make_tour
 
 # The ci profile's 25 examples → 5 here; the fuzz profile's 5000 → 1000.
 EXAMPLES = max(2, settings().max_examples // 5)
@@ -37,7 +38,7 @@ SMALL_WORLDS = worlds(kinds=("rooms", "corridors", "office", "open"), max_size_m
 
 def simulate(world, seed: int, *, noise: str = "typical", laser: LaserNoise | None = None,  # type: ignore[no-untyped-def]
              profile: str = "dataset3", length_m: float = 20.0):
-    tour = world.tour(make_rng(seed), kind="loop", min_length_m=length_m)
+    tour = make_tour(world, make_rng(seed), kind="loop", min_length_m=length_m)
     sim = Simulator(world, seed=seed, odometry=NOISE_PRESETS[noise],
                     laser_noise=laser if laser is not None else LaserNoise())
     return list(sim.drive(tour, profile=profile))

@@ -251,19 +251,3 @@ class World:
     @property
     def height_m(self) -> float:
         return self.bounds[3] - self.bounds[1]
-
-    def tour(
-        self,
-        rng: np.random.Generator | int | np.random.SeedSequence,
-        *,
-        kind: TourKind = "loop",
-        min_length_m: float = 50.0,
-    ) -> Tour:
-        """Plan waypoints along the roadmap from the start; see ``worldgen.tours``.
-
-        ``rng`` is a Generator or an int seed. The tour the command line drives on this
-        world is ``worldgen.plan_tour(world, ...)`` (it derives its own stream).
-        """
-        from worldgen.tours import make_tour
-
-        return make_tour(self, rng, kind=kind, min_length_m=min_length_m)

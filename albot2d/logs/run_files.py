@@ -32,7 +32,7 @@ from albot2d.errors import InputError
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
 from albot2d.logs.carmen_writer import LOG_PRECISION, FloatFormat, format_float
-from albot2d.logs.frames import read_frames, write_carmen
+from albot2d.logs.log_frames import read_frames, write_carmen
 from albot2d.logs.relations import (
     Relations,
     RelationsOptions,
