@@ -19,7 +19,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from albot2d.atomic import atomic_path
+from albot2d.atomic import atomic_paths
 from albot2d.cli.options import positive_int, positive_number, world_params
 from albot2d.errors import InputError
 
@@ -202,14 +202,11 @@ def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, by
     from albot2d.evaluation.report import REPORT_NAME, report_json
 
     text = report_json(report).encode("utf-8")
-    with contextlib.ExitStack() as stack:
-        # ExitStack renames in reverse order: the report (entered first) appears last.
-        temps = {REPORT_NAME: stack.enter_context(atomic_path(out / REPORT_NAME))}
-        for name in figures:
-            temps[name] = stack.enter_context(atomic_path(out / name))
-        temps[REPORT_NAME].write_bytes(text)
+    # the report (given first) is renamed into place last
+    with atomic_paths([out / REPORT_NAME, *(out / name for name in figures)]) as temps:
+        temps[out / REPORT_NAME].write_bytes(text)
         for name, data in figures.items():
-            temps[name].write_bytes(data)
+            temps[out / name].write_bytes(data)
 
 
 def finish(
