@@ -67,3 +67,18 @@ def test_typed_scores_are_the_report_sections() -> None:
     assert HomingSummary.of((unknown,)).to_dict() == {
         "stops": 1, "bearing_abs_max_deg": None, "bearing_abs_mean_deg": None,
         "distance_abs_max_m": None, "distance_abs_mean_m": None}
+
+
+def test_the_help_texts_defaults_are_the_dataclasses_defaults() -> None:
+    """The CLI names RunSpec's/CampaignParams' defaults for --help without importing them."""
+    from albot2d.cli import common, fuzz_cmd
+    from albot2d.evaluation.campaign import CampaignParams
+
+    spec = RunSpec()
+    assert spec.kind == common.DEFAULT_KIND and spec.profile == common.DEFAULT_PROFILE
+    assert spec.noise == common.DEFAULT_NOISE and spec.laser_noise == common.DEFAULT_LASER_NOISE
+    assert spec.tour_kind == common.DEFAULT_TOUR_KIND
+    assert spec.tour_length_m == common.DEFAULT_TOUR_LENGTH_M
+    campaign = CampaignParams(episodes=1)
+    for name in ("profile", "noise", "laser_noise", "mapper", "tour_kind"):
+        assert fuzz_cmd.DEFAULTS[name] == getattr(campaign, name), name

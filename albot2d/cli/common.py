@@ -41,6 +41,9 @@ __all__ = [
     "write_outputs",
 ]
 
+# RunSpec's defaults, named here only for --help (importing the evaluation layer to read
+# them would slow every command's start by over a second); tests/test_setup.py checks that
+# they match. An option not given is left to RunSpec.
 DEFAULT_KIND = "office"
 DEFAULT_PROFILE = "dataset1"
 DEFAULT_NOISE = "typical"
@@ -68,32 +71,38 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     drive.add_argument("--noise", help=f"odometry noise preset: none, low, typical, high "
                        f"(default {DEFAULT_NOISE})")
     drive.add_argument("--laser-noise", help=f"sick_lms200 or zero (default {DEFAULT_LASER_NOISE})")
-    drive.add_argument("--tour-kind", help="loop, out_and_back, backtracking (default loop)")
+    drive.add_argument("--tour-kind", help="loop, out_and_back, backtracking, circuit "
+                       f"(default {DEFAULT_TOUR_KIND})")
     drive.add_argument("--tour-length", metavar="METRES",
                        help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})")
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
 
 
 def spec_from_args(args: argparse.Namespace) -> Any:
-    """The RunSpec of ``run``'s (and ``simulate``'s) options, with the shared defaults."""
-    from albot2d.evaluation import DEFAULT_MAPPERS, RunSpec
+    """The RunSpec of ``run``'s (and ``simulate``'s) options; options not given take
+    RunSpec's defaults."""
+    from albot2d.evaluation.setup import RunSpec
 
     params = world_params(args)
     if args.world is not None and (args.kind is not None or params):
         raise InputError("give --world, or --kind with its parameters, not both")
-    return RunSpec(
-        seed=positive_int(args.seed, "--seed", allow_zero=True) or 0,
-        kind=None if args.world is not None else (args.kind or DEFAULT_KIND),
-        world_file=args.world,
-        world_params=params,
-        profile=args.profile or DEFAULT_PROFILE,
-        noise=args.noise or DEFAULT_NOISE,
-        laser_noise=args.laser_noise or DEFAULT_LASER_NOISE,
-        tour_kind=args.tour_kind or DEFAULT_TOUR_KIND,
-        tour_length_m=positive_number(args.tour_length, "--tour-length") or DEFAULT_TOUR_LENGTH_M,
-        mappers=tuple(getattr(args, "mapper", None) or DEFAULT_MAPPERS),
-        max_frames=positive_int(args.max_frames, "--max-frames"),
-    )
+    given: dict[str, Any] = {
+        "seed": positive_int(args.seed, "--seed", allow_zero=True),
+        "world_params": params,
+        "profile": args.profile or None,
+        "noise": args.noise or None,
+        "laser_noise": args.laser_noise or None,
+        "tour_kind": args.tour_kind or None,
+        "tour_length_m": positive_number(args.tour_length, "--tour-length"),
+        "mappers": tuple(getattr(args, "mapper", None) or ()) or None,
+        "max_frames": positive_int(args.max_frames, "--max-frames"),
+    }
+    if args.world is not None:
+        given |= {"kind": None, "world_file": args.world}
+    elif args.kind:
+        given["kind"] = args.kind
+    # "kind": None (a world file) is kept; every other option not given is left out
+    return RunSpec(**{k: v for k, v in given.items() if v is not None or k == "kind"})
 
 
 def add_json_option(

@@ -39,6 +39,7 @@ from albot2d.errors import InputError
 
 __all__ = ["register", "reproduce_failure", "reproducer_document", "run"]
 
+# CampaignParams' defaults, named here only for --help (tests/test_setup.py checks them).
 DEFAULTS = {"profile": "dataset3", "noise": "typical", "laser_noise": "sick_lms200",
             "mapper": "albot1", "tour_kind": "loop", "backend": "local"}
 
@@ -100,7 +101,8 @@ def _params(args: argparse.Namespace) -> Any:
     if args.kinds:
         values["kinds"] = tuple(args.kinds)
     for name in ("profile", "noise", "laser_noise", "mapper", "tour_kind"):
-        values[name] = getattr(args, name) or DEFAULTS[name]
+        if getattr(args, name):  # not given: CampaignParams' default
+            values[name] = getattr(args, name)
     size = _range(args.world_size, "--world-size")
     if size is not None:
         values["world_size_min_m"], values["world_size_max_m"] = size
