@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.arrays import readonly
 from albot2d.geometry import Pose, transform_points
 
 __all__ = ["Frame", "Scan", "beam_angles"]
@@ -33,12 +34,6 @@ def beam_angles(n_beams: int, fov_rad: float = math.pi, *, inclusive: bool = Tru
     return -0.5 * fov_rad + step * np.arange(n_beams, dtype=np.float64)
 
 
-def _readonly(arr: np.ndarray, dtype: type) -> np.ndarray:
-    out: np.ndarray = np.array(arr, dtype=dtype, copy=True)
-    out.flags.writeable = False
-    return out
-
-
 @dataclass(frozen=True, eq=False)
 class Scan:
     """One laser sweep, beams ordered right to left (counter-clockwise).
@@ -57,9 +52,9 @@ class Scan:
     laser_pose: Pose = field(default_factory=Pose)
 
     def __post_init__(self) -> None:
-        ranges = _readonly(self.ranges, np.float64)
-        angles = _readonly(self.angles, np.float64)
-        valid = _readonly(self.valid, np.bool_)
+        ranges = readonly(self.ranges, np.float64)
+        angles = readonly(self.angles, np.float64)
+        valid = readonly(self.valid, np.bool_)
         if not (ranges.ndim == angles.ndim == valid.ndim == 1):
             raise ValueError("Scan.ranges, angles and valid must be 1-D arrays")
         if not (len(ranges) == len(angles) == len(valid)):
@@ -118,7 +113,7 @@ class Frame:
 
     def __post_init__(self) -> None:
         if self.obstacle_poses is not None:
-            poses = _readonly(self.obstacle_poses, np.float64).reshape(-1, 3)
+            poses = readonly(self.obstacle_poses, np.float64).reshape(-1, 3)
             object.__setattr__(self, "obstacle_poses", poses)
 
     def __repr__(self) -> str:

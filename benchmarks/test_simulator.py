@@ -21,6 +21,7 @@ from albot2d.sim.robot import KinematicRobot
 from albot2d.sim.simulator import Simulator
 from worldgen.generate import generate
 from worldgen.space import build_space
+from worldgen.tours import make_tour
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +32,7 @@ def office():
 
 @pytest.fixture(scope="module")
 def long_tour(office):
-    return office.tour(make_rng(1), kind="loop", min_length_m=400.0)
+    return make_tour(office, make_rng(1), kind="loop", min_length_m=400.0)
 
 
 def test_simulator_step(benchmark, office, long_tour) -> None:
@@ -67,7 +68,7 @@ def test_simulator_with_albot1_steps_per_second(benchmark, office) -> None:
     """Simulator + Albot1 (extraction included) per step: the unit of a mapping run."""
     from albot2d.mapping import Albot1
 
-    tour = office.tour(make_rng(1), kind="loop", min_length_m=60.0)
+    tour = make_tour(office, make_rng(1), kind="loop", min_length_m=60.0)
     sim = Simulator(office, seed=3, odometry=NOISE_PRESETS["typical"])
     frames = list(itertools.islice(sim.drive(tour, "dataset1"), 5))
     Albot1().observe(frames[0])  # compile (or load the cache) first
@@ -87,7 +88,7 @@ def test_simulator_with_albot1_steps_per_second(benchmark, office) -> None:
 @pytest.mark.parametrize("with_obstacles", [False, True])
 def test_dataset1_frames_per_second(benchmark, office, with_obstacles: bool) -> None:
     world = generate("office", seed=11, dynamic_obstacles=6) if with_obstacles else office
-    tour = world.tour(make_rng(1), kind="loop", min_length_m=100.0)
+    tour = make_tour(world, make_rng(1), kind="loop", min_length_m=100.0)
     sim = Simulator(world, seed=3, odometry=NOISE_PRESETS["typical"])
     count = benchmark.pedantic(lambda: sum(1 for _ in sim.drive(tour, "dataset1")), rounds=3,
                                iterations=1)

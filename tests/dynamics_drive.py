@@ -23,6 +23,7 @@ from albot2d.geometry import Pose
 from albot2d.sim.laser import LaserNoise
 from albot2d.sim.simulator import Simulator
 from worldgen.generate import generate
+from worldgen.tours import make_tour
 from worldgen.world import DynamicObstacle, Tour, World
 
 __all__ = ["DriveStats", "drive_with_moving_obstacles", "with_route_boxes"]
@@ -81,7 +82,7 @@ def drive_with_moving_obstacles(
         world = generate(
             kind, seed=world_seed, width_m=size, height_m=size, dynamic_obstacles=obstacles
         )
-        tour = world.tour(np.random.default_rng(world_seed), kind="loop", min_length_m=tour_m)
+        tour = make_tour(world, np.random.default_rng(world_seed), kind="loop", min_length_m=tour_m)
         world = with_route_boxes(world, tour, route_boxes, np.random.default_rng(world_seed))
         checker = ClearanceChecker.for_world(
             world, moving_tolerance_m=tolerance_m, raise_at_once=False

@@ -26,6 +26,7 @@ from albot2d.sim.odometry import NOISE_PRESETS, noise_preset
 from albot2d.sim.simulator import Simulator
 from worldgen import plan_tour
 from worldgen.generate import generate
+from worldgen.tours import make_tour
 from worldgen.world import World
 
 __all__ = [
@@ -50,7 +51,7 @@ def simulate(
     length_m: float = 20.0,
 ) -> list[Frame]:
     """The frames of a loop tour of at least ``length_m`` through ``world``."""
-    tour = world.tour(make_rng(seed), kind="loop", min_length_m=length_m)
+    tour = make_tour(world, make_rng(seed), kind="loop", min_length_m=length_m)
     sim = Simulator(
         world,
         seed=seed,

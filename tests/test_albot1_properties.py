@@ -24,6 +24,7 @@ from tests.albot1_checks import check_local_map_rule
 from tests.runs import run_albot1, simulate
 from tests.strategies import examples
 from worldgen.strategies import worlds
+from worldgen.tours import make_tour
 
 SMALL_WORLDS = worlds(kinds=("rooms", "corridors", "office", "open"), max_size_m=20.0)
 
@@ -95,7 +96,7 @@ def test_heading_error_below_raw_odometry_on_average_over_seeds() -> None:
     ours, odometry = [], []
     for seed in range(3):
         world = worldgen.generate("office", seed=seed, width_m=30.0, height_m=24.0)
-        tour = world.tour(make_rng(seed), kind="loop", min_length_m=40.0)
+        tour = make_tour(world, make_rng(seed), kind="loop", min_length_m=40.0)
         frames = list(
             Simulator(world, seed=seed, odometry=NOISE_PRESETS["high"]).drive(tour, "dataset1")
         )

@@ -137,7 +137,7 @@ def test_render_paths_png_handles_drift_and_empty_paths() -> None:
 def test_simulate_logs_exactly_the_frames_run_maps(tmp_path: Path) -> None:
     """Same options, same defaults (office world, typical noise): the same frames."""
     from albot2d.cli import build_parser
-    from albot2d.cli.run_cmd import spec_from_args
+    from albot2d.cli.common import spec_from_args
     from albot2d.evaluation import run_experiment
 
     options = ["--seed", "3", "--tour-length", "20", "--max-frames", "60"]

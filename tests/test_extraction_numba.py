@@ -23,6 +23,7 @@ from albot2d.geometry import Pose
 from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
 from tests.perception_helpers import box, scan_of
 from tests.strategies import examples
+from worldgen.tours import make_tour
 
 pytest.importorskip("numba")
 
@@ -89,7 +90,7 @@ def test_numba_gives_the_numpy_surfaces_on_simulated_office_scans(n_beams: int) 
     world = generate("office", seed=3)
     sim = Simulator(world, seed=5, laser=LaserParams(n_beams=n_beams),
                     laser_noise=LaserNoise.sick_lms200())  # fmt: skip
-    tour = world.tour(np.random.default_rng(0), kind="loop", min_length_m=30.0)
+    tour = make_tour(world, np.random.default_rng(0), kind="loop", min_length_m=30.0)
     total = 0
     for _, frame in zip(range(120), sim.drive(tour), strict=False):
         numpy_view, numba_view = both(frame.scan)

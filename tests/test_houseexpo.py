@@ -15,6 +15,7 @@ from albot2d.errors import InputError
 from albot2d.seeding import make_rng
 from worldgen.houseexpo import from_houseexpo, read_houseexpo
 from worldgen.io import world_from_json, world_to_json
+from worldgen.tours import make_tour
 
 # The five plans documented in ../shared/data/SOURCES.md section 4.
 PLANS = [
@@ -92,7 +93,7 @@ def test_real_plan_survives_a_json_round_trip(shared_data: Path) -> None:
 def test_a_tour_can_be_planned_on_a_real_plan(shared_data: Path) -> None:
     pytest.importorskip("worldgen.tours", reason="tour planner not built yet")
     world = from_houseexpo(shared_data / "floorplans" / f"{PLANS[3]}.json")
-    tour = world.tour(make_rng(0), kind="loop", min_length_m=20.0)
+    tour = make_tour(world, make_rng(0), kind="loop", min_length_m=20.0)
     assert tour.length_m >= 20.0
     assert tour.waypoints[0] == pytest.approx(world.start.position)
 

@@ -21,6 +21,7 @@ from albot2d.perception import ExtractionParams
 from albot2d.seeding import make_rng
 from albot2d.sim.simulator import Simulator
 from worldgen.generate import generate
+from worldgen.tours import make_tour
 
 
 class RawScans:
@@ -64,7 +65,7 @@ class CountingNaive(NaiveIntegration):
 
 def frames(n: int) -> list[Frame]:
     world = generate("rooms", seed=4, width_m=15.0, height_m=15.0)
-    tour = world.tour(make_rng(1), kind="loop", min_length_m=20.0)
+    tour = make_tour(world, make_rng(1), kind="loop", min_length_m=20.0)
     return list(zip(range(n), Simulator(world, seed=2).drive(tour, "dataset3"), strict=False))
 
 

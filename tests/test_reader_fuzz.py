@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 
 from albot2d.errors import InputError
 from albot2d.logs.anomalies import ordered_frames
-from albot2d.logs.frames import read_frames
+from albot2d.logs.log_frames import read_frames
 from albot2d.logs.relations import read_relations
 from albot2d.sim.raycast_grid import SegmentGrid
 from albot2d.validation import COORDINATE_LIMIT_M

@@ -29,6 +29,7 @@ from albot2d.sim.robot import KinematicRobot
 from albot2d.sim.simulator import Simulator
 from tests.strategies import examples
 from worldgen.space import build_space
+from worldgen.tours import make_tour
 from worldgen.world import DynamicObstacle, Roadmap, Tour, World
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -247,7 +248,7 @@ def test_follows_a_generated_loop_tour_back_to_its_start(kind: str, seed: int) -
     from worldgen.generate import generate
 
     world = generate(kind, seed=seed)
-    tour = world.tour(make_rng(0), kind="loop", min_length_m=30.0)
+    tour = make_tour(world, make_rng(0), kind="loop", min_length_m=30.0)
     sim = Simulator(world, seed=1, laser_noise=LaserNoise.zero())
     frames = list(sim.drive(tour, "dataset1"))
     assert not any(f.collided for f in frames)

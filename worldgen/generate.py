@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from albot2d.errors import InputError
+from albot2d.plainjson import to_plain
 from albot2d.seeding import make_rng
 from albot2d.validation import params_from_mapping
 from worldgen.assemble import make_world
@@ -42,23 +43,6 @@ from worldgen.world import World
 __all__ = ["KINDS", "generate", "make_params"]
 
 KINDS: tuple[str, ...] = tuple(PARAMS_BY_KIND)
-
-
-def _jsonable(value: Any) -> Any:
-    """Features as plain lists, floats, ints and strings (another module saves them as JSON)."""
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, bool | np.bool_):
-        return bool(value)
-    if isinstance(value, int | np.integer):
-        return int(value)
-    if isinstance(value, float | np.floating):
-        return float(value)
-    return value
 
 
 def make_params(kind: str, **params: Any) -> CommonParams:
@@ -98,7 +82,7 @@ def generate(
         kind=kind,
         seed=int(seed),
         params=dataclasses.asdict(p),
-        features=_jsonable(features),
+        features=to_plain(features, where="features", into="a world's features"),
         robot_radius_m=p.robot_radius_m,
         clearance_margin_m=p.clearance_margin_m,
         rng=rng,

@@ -37,7 +37,7 @@ import functools
 import itertools
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, get_args
 
 import networkx as nx
 import numpy as np
@@ -45,14 +45,14 @@ import shapely
 
 from albot2d.errors import InputError
 from albot2d.seeding import WORLD_STREAMS, SeedLike, make_rng, stream_rng
-from worldgen.world import Tour
+from worldgen.world import Tour, TourKind
 
 if TYPE_CHECKING:
     from worldgen.world import World
 
 __all__ = ["TOUR_KINDS", "make_tour", "plan_tour"]
 
-TOUR_KINDS = ("loop", "out_and_back", "backtracking", "circuit")
+TOUR_KINDS: tuple[str, ...] = get_args(TourKind)  # the one list: world.TourKind
 _MIN_ROADMAP_M = 2.0  # less roadmap than this cannot make a tour
 _PLACE_MIN_M = 3.0  # a new place is at least this far (along the roadmap) from the route
 _FAR_CHOICES = 5  # pick among this many farthest places, for variety

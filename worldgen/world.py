@@ -18,6 +18,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from albot2d.arrays import readonly
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, as_segments, polygon_ring_segments
 
@@ -40,12 +41,6 @@ FloatArray = NDArray[np.float64]
 TourKind = Literal["loop", "out_and_back", "backtracking", "circuit"]
 
 
-def _frozen(arr: np.ndarray) -> np.ndarray:
-    arr = np.array(arr, copy=True)
-    arr.flags.writeable = False
-    return arr
-
-
 @dataclass(frozen=True, eq=False)
 class Roadmap:
     """An undirected graph of collision-free straight edges between free-space nodes.
@@ -64,8 +59,8 @@ class Roadmap:
     def __post_init__(self) -> None:
         nodes = np.asarray(self.nodes, dtype=np.float64).reshape(-1, 2)
         edges = np.asarray(self.edges, dtype=np.int64).reshape(-1, 2)
-        object.__setattr__(self, "nodes", _frozen(nodes))
-        object.__setattr__(self, "edges", _frozen(edges))
+        object.__setattr__(self, "nodes", readonly(nodes))
+        object.__setattr__(self, "edges", readonly(edges))
 
     @functools.cached_property
     def graph(self) -> nx.Graph:
@@ -98,7 +93,7 @@ class Tour:
 
     def __post_init__(self) -> None:
         wp = np.asarray(self.waypoints, dtype=np.float64).reshape(-1, 2)
-        object.__setattr__(self, "waypoints", _frozen(wp))
+        object.__setattr__(self, "waypoints", readonly(wp))
 
     @property
     def length_m(self) -> float:
@@ -162,8 +157,8 @@ class DynamicObstacle:
         if not 0.0 < mass <= MAX_OBSTACLE_MASS_KG:
             raise InputError(f"DynamicObstacle.mass_kg must be in (0, {MAX_OBSTACLE_MASS_KG:g}] "
                              f"kg (MAX_OBSTACLE_MASS_KG), got {mass!r}")
-        object.__setattr__(self, "shape", _frozen(shape))
-        object.__setattr__(self, "path", _frozen(path))
+        object.__setattr__(self, "shape", readonly(shape))
+        object.__setattr__(self, "path", readonly(path))
 
 
 def _head(points: FloatArray, count: int = 4) -> str:
@@ -228,7 +223,7 @@ class World:
         )
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "walls", _frozen(as_segments(self.walls)))
+        object.__setattr__(self, "walls", readonly(as_segments(self.walls)))
         object.__setattr__(self, "clutter", tuple(self.clutter))
         object.__setattr__(self, "dynamic_obstacles", tuple(self.dynamic_obstacles))
         object.__setattr__(self, "bounds", tuple(float(b) for b in self.bounds))
@@ -237,12 +232,12 @@ class World:
     def clutter_segments(self) -> FloatArray:
         """Outlines of all clutter polygons as one ``(M, 4)`` segment array."""
         parts = [polygon_ring_segments(np.asarray(p.exterior.coords)) for p in self.clutter]
-        return _frozen(np.vstack(parts) if parts else np.zeros((0, 4)))
+        return readonly(np.vstack(parts) if parts else np.zeros((0, 4)))
 
     @functools.cached_property
     def obstacle_segments(self) -> FloatArray:
         """Every static surface a laser can hit: walls followed by clutter outlines."""
-        return _frozen(np.vstack([self.walls, self.clutter_segments]))
+        return readonly(np.vstack([self.walls, self.clutter_segments]))
 
     @property
     def width_m(self) -> float:
@@ -251,19 +246,3 @@ class World:
     @property
     def height_m(self) -> float:
         return self.bounds[3] - self.bounds[1]
-
-    def tour(
-        self,
-        rng: np.random.Generator | int | np.random.SeedSequence,
-        *,
-        kind: TourKind = "loop",
-        min_length_m: float = 50.0,
-    ) -> Tour:
-        """Plan waypoints along the roadmap from the start; see ``worldgen.tours``.
-
-        ``rng`` is a Generator or an int seed. The tour the command line drives on this
-        world is ``worldgen.plan_tour(world, ...)`` (it derives its own stream).
-        """
-        from worldgen.tours import make_tour
-
-        return make_tour(self, rng, kind=kind, min_length_m=min_length_m)

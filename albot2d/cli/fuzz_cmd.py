@@ -33,12 +33,13 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.atomic import atomic_write_bytes
+from albot2d.cli.common import add_json_option
 from albot2d.cli.options import positive_int, positive_number, seed_value
-from albot2d.cli.run_cmd import add_json_option
 from albot2d.errors import InputError
 
 __all__ = ["register", "reproduce_failure", "reproducer_document", "run"]
 
+# CampaignParams' defaults, named here only for --help (tests/test_setup.py checks them).
 DEFAULTS = {"profile": "dataset3", "noise": "typical", "laser_noise": "sick_lms200",
             "mapper": "albot1", "tour_kind": "loop", "backend": "local"}
 
@@ -100,7 +101,8 @@ def _params(args: argparse.Namespace) -> Any:
     if args.kinds:
         values["kinds"] = tuple(args.kinds)
     for name in ("profile", "noise", "laser_noise", "mapper", "tour_kind"):
-        values[name] = getattr(args, name) or DEFAULTS[name]
+        if getattr(args, name):  # not given: CampaignParams' default
+            values[name] = getattr(args, name)
     size = _range(args.world_size, "--world-size")
     if size is not None:
         values["world_size_min_m"], values["world_size_max_m"] = size
@@ -160,7 +162,7 @@ def _note(line: str) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from albot2d.cli.run_cmd import prepare_out_dir
+    from albot2d.cli.common import prepare_out_dir
     from albot2d.evaluation.backends import make_backend
     from albot2d.evaluation.campaign import CampaignInterrupted, run_campaign
     from albot2d.evaluation.campaign_summary import format_summary
@@ -247,9 +249,8 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     """``albot2d run --reproduce REPRODUCER``: run the failing episode again with every
     invariant check, write its report and figures to ``--out`` (unless it crashes), say
     whether the run and the failure came out the same; exit 1 when it still fails."""
-    from albot2d.cli import run_cmd
+    from albot2d.cli import common
     from albot2d.evaluation.episode import reproduce_episode, reproducer_spec
-    from albot2d.evaluation.report import without_timings
 
     where = args.reproduce
     recorded = doc["reproducer"].get("episode")
@@ -266,7 +267,7 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     from albot2d.evaluation.setup import check_spec
 
     check_spec(spec.run_spec())
-    out, created = run_cmd.prepare_out_dir(args.out)
+    out, created = common.prepare_out_dir(args.out)
     result = None
     try:
         if (recorded.get("error") or {}).get("type") == "WorkerDiedError":
@@ -274,24 +275,20 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
             if record is None:
                 print(f"reproduce: the episode killed its process again (exit code {code}); "
                       f"recorded: {_failure_lines(recorded)[0]}")
-                run_cmd._remove_if_empty(out, created)
+                common.remove_if_empty(out, created)
                 return 1
         outcome, result = reproduce_episode(doc, where=where)
         if result is not None:
-            run_cmd.finish(out, created, "run", lambda: result, args.no_figures)
+            common.finish(out, created, "run", lambda: result, args.no_figures)
         else:
-            run_cmd._remove_if_empty(out, created)
+            common.remove_if_empty(out, created)
     except BaseException:
-        run_cmd._remove_if_empty(out, created)
+        common.remove_if_empty(out, created)
         raise
     record = outcome.record
     if result is not None:
-        run_cmd.print_tables(result, out)
-        ignore = ("figures", "exports", "albot2d_version", "reproducer")
-        diff = run_cmd._differences(
-            {k: v for k, v in without_timings(doc).items() if k not in ignore},
-            {k: v for k, v in without_timings(result.report).items() if k not in ignore},
-        )
+        common.print_tables(result, out)
+        diff = common.report_differences(doc, result.report)
         if recorded["status"] != "crash":
             verdict = "identical to" if not diff else f"differs at {', '.join(diff[:5])} from"
             print(f"reproduce: run {verdict} {where} (apart from wall-clock timings)")

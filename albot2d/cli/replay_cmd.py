@@ -24,16 +24,16 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from albot2d.cli.run_cmd import (
+from albot2d.cli.common import (
     add_json_option,
     add_scoring_options,
     finish,
-    positive_int,
     prepare_out_dir,
     print_tables,
     progress_bar,
     scoring_params,
 )
+from albot2d.cli.options import positive_int
 from albot2d.errors import InputError
 
 __all__ = ["DATA_ENV", "find_log", "register", "run"]

@@ -16,40 +16,26 @@ so a failure leaves no report and no figures.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import os
-import sys
-import tempfile
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from albot2d.atomic import atomic_path
-from albot2d.cli.options import positive_int, positive_number, world_params
+from albot2d.cli.common import (
+    add_json_option,
+    add_run_options,
+    add_scoring_options,
+    finish,
+    prepare_out_dir,
+    print_tables,
+    progress_bar,
+    report_differences,
+    scoring_params,
+    spec_from_args,
+)
 from albot2d.errors import InputError
 
-__all__ = [
-    "DEFAULT_KIND",
-    "DEFAULT_NOISE",
-    "add_json_option",
-    "add_run_options",
-    "add_scoring_options",
-    "finish",
-    "positive_int",
-    "positive_number",
-    "prepare_out_dir",
-    "register",
-    "run",
-    "scoring_params",
-    "spec_from_args",
-]
+__all__ = ["register", "run"]
 
-DEFAULT_KIND = "office"
-DEFAULT_PROFILE = "dataset1"
-DEFAULT_NOISE = "typical"
-DEFAULT_LASER_NOISE = "sick_lms200"
-DEFAULT_TOUR_KIND = "loop"
-DEFAULT_TOUR_LENGTH_M = 100.0
 # Options that describe the run itself; --reproduce takes them from the report instead.
 _RUN_OPTIONS = ("world", "kind", "seed", "width", "height", "param", "profile", "mapper",
                 "noise", "laser_noise", "tour_kind", "tour_length", "max_frames", "stop_every",
@@ -81,149 +67,6 @@ def register(subparsers: Any) -> None:
     p.set_defaults(handler=run)
 
 
-def add_run_options(p: argparse.ArgumentParser) -> None:
-    """World and driving options, shared by ``run`` and ``simulate`` (same defaults)."""
-    world = p.add_argument_group("world (default: --kind office --seed 0)")
-    world.add_argument("--world", metavar="world.json", help="a world file (albot2d world)")
-    world.add_argument("--kind", help="generate a world: corridors, rooms, open, office, mixed")
-    world.add_argument("--seed", metavar="N", help="world and run seed (default 0)")
-    world.add_argument("--width", metavar="W", help="generated world's width in metres")
-    world.add_argument("--height", metavar="H", help="generated world's height in metres")
-    world.add_argument("--param", action="append", metavar="NAME=VALUE",
-                       help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)")
-    drive = p.add_argument_group("driving")
-    drive.add_argument("--profile", help=f"dataset1, dataset2, dataset3, start_stop "
-                       f"(default {DEFAULT_PROFILE})")
-    drive.add_argument("--noise", help=f"odometry noise preset: none, low, typical, high "
-                       f"(default {DEFAULT_NOISE})")
-    drive.add_argument("--laser-noise", help=f"sick_lms200 or zero (default {DEFAULT_LASER_NOISE})")
-    drive.add_argument("--tour-kind", help="loop, out_and_back, backtracking (default loop)")
-    drive.add_argument("--tour-length", metavar="METRES",
-                       help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})")
-    drive.add_argument("--max-frames", metavar="N", help="stop after N views")
-
-
-def add_json_option(
-    p: argparse.ArgumentParser, help: str = "print report.json on stdout instead of the tables"
-) -> None:
-    p.add_argument("--json", action="store_true", help=help)
-
-
-def add_scoring_options(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("scoring")
-    g.add_argument("--stop-every", metavar="METRES",
-                   help="homing: stop every this many odometer metres (default 20)")
-    g.add_argument("--min-start-distance", metavar="METRES",
-                   help="homing: skip stops nearer the start than this (default 3)")
-    g.add_argument("--last-k-views", metavar="K",
-                   help="map completeness over the walls seen in the last K views (default 10)")
-    g.add_argument("--snapshots", metavar="N",
-                   help="moments of the map history to draw and report (default 4)")
-
-
-def scoring_params(args: argparse.Namespace, base: Any = None) -> Any:
-    """EvaluationParams from the scoring options (unset ones from ``base`` or defaults)."""
-    import dataclasses
-
-    from albot2d.evaluation import EvaluationParams
-
-    base = base or EvaluationParams()
-    homing = base.homing
-    every = positive_number(args.stop_every, "--stop-every")
-    near = positive_number(args.min_start_distance, "--min-start-distance", allow_zero=True)
-    if every is not None:
-        homing = dataclasses.replace(homing, stop_every_m=every)
-    if near is not None:
-        homing = dataclasses.replace(homing, min_start_distance_m=near)
-    quality = base.map_quality
-    k = positive_int(args.last_k_views, "--last-k-views")
-    if k is not None:
-        quality = dataclasses.replace(quality, last_k_views=k)
-    snapshots = positive_int(args.snapshots, "--snapshots") or base.snapshots
-    return dataclasses.replace(base, homing=homing, map_quality=quality, snapshots=snapshots)
-
-
-def spec_from_args(args: argparse.Namespace) -> Any:
-    """The RunSpec of ``run``'s (and ``simulate``'s) options, with the shared defaults."""
-    from albot2d.evaluation import DEFAULT_MAPPERS, RunSpec
-
-    params = world_params(args)
-    if args.world is not None and (args.kind is not None or params):
-        raise InputError("give --world, or --kind with its parameters, not both")
-    return RunSpec(
-        seed=positive_int(args.seed, "--seed", allow_zero=True) or 0,
-        kind=None if args.world is not None else (args.kind or DEFAULT_KIND),
-        world_file=args.world,
-        world_params=params,
-        profile=args.profile or DEFAULT_PROFILE,
-        noise=args.noise or DEFAULT_NOISE,
-        laser_noise=args.laser_noise or DEFAULT_LASER_NOISE,
-        tour_kind=args.tour_kind or DEFAULT_TOUR_KIND,
-        tour_length_m=positive_number(args.tour_length, "--tour-length") or DEFAULT_TOUR_LENGTH_M,
-        mappers=tuple(getattr(args, "mapper", None) or DEFAULT_MAPPERS),
-        max_frames=positive_int(args.max_frames, "--max-frames"),
-    )
-
-
-# -- output -----------------------------------------------------------------------------
-def prepare_out_dir(text: str | None) -> tuple[Path, bool]:
-    """Create ``--out`` if needed and check it is writable; returns (dir, created)."""
-    if not text:
-        raise InputError("give --out DIR, the directory for report.json and the figures")
-    out = Path(text)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out} exists and is not a directory")
-    created = not out.exists()
-    out.mkdir(parents=True, exist_ok=True)
-    try:
-        fd, probe = tempfile.mkstemp(prefix=".albot2d-probe.", dir=out)
-    except OSError as exc:
-        _remove_if_empty(out, created)
-        raise OSError(exc.errno, f"cannot write there ({exc.strerror})", str(out)) from None
-    os.close(fd)
-    os.unlink(probe)
-    return out, created
-
-
-def _remove_if_empty(out: Path, created: bool) -> None:
-    if created:
-        with contextlib.suppress(OSError):
-            out.rmdir()  # only succeeds when nothing was left in it
-
-
-def _render(result: Any, no_figures: bool, command: str, animate: bool = False) -> dict[str, bytes]:
-    if no_figures:
-        return {}
-    try:
-        from albot2d.viz.run_figures import render_experiment_figures
-
-        figures = render_experiment_figures(result)
-        if animate:
-            from albot2d.viz.anim import render_map_animation
-
-            animation = render_map_animation(result)
-            if not animation:
-                print(f"albot2d {command}: note: no animation (no mapper keeps a map history; "
-                      "give --mapper albot1)", file=sys.stderr)
-            figures.update(animation)
-        return figures
-    except ImportError as exc:
-        print(f"albot2d {command}: note: no figures ({exc}); pip install 'albot2d[viz]'",
-              file=sys.stderr)
-        return {}
-
-
-def _step_figure(result: Any, no_figures: bool) -> dict[str, bytes]:
-    if no_figures:
-        return {}
-    try:
-        from albot2d.viz.steps import render_step_times_png
-
-        return {"steps.png": render_step_times_png(result.trace.step_times)}
-    except ImportError:
-        return {}  # _render already said that matplotlib is missing
-
-
 def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]:
     """``compute`` run under cProfile, its pstats written to ``path`` (``--cprofile``)."""
     if path is None:
@@ -241,93 +84,9 @@ def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]
     return profiled
 
 
-def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, bytes]) -> None:
-    """Write the files (figures, exports) and report.json atomically; report.json is
-    renamed into place last."""
-    from albot2d.evaluation.report import REPORT_NAME, report_json
-
-    text = report_json(report).encode("utf-8")
-    with contextlib.ExitStack() as stack:
-        # ExitStack renames in reverse order: the report (entered first) appears last.
-        temps = {REPORT_NAME: stack.enter_context(atomic_path(out / REPORT_NAME))}
-        for name in figures:
-            temps[name] = stack.enter_context(atomic_path(out / name))
-        temps[REPORT_NAME].write_bytes(text)
-        for name, data in figures.items():
-            temps[name].write_bytes(data)
-
-
-def finish(
-    out: Path, created: bool, command: str, compute: Callable[[], Any], no_figures: bool,
-    stage: Callable[[str], None] | None = None, animate: bool = False,
-) -> Any:
-    """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
-    maps, write everything; on any failure remove the output directory again if this
-    command created it."""
-    from albot2d.evaluation.export import export_files
-
-    try:
-        result = compute()
-        if stage is not None and not no_figures:
-            stage("figures")
-        figures = _render(result, no_figures, command, animate)
-        figures.update(_step_figure(result, no_figures))
-        exports = export_files(result)
-        result.report["figures"] = sorted(figures)
-        result.report["exports"] = sorted(exports)
-        # steps.csv: one row per view (stage times, counters), for profiling a run.
-        files = {**figures, **exports,
-                 "steps.csv": result.trace.step_times.to_csv().encode("utf-8")}
-        write_outputs(out, result.report, files)
-    except BaseException:
-        _remove_if_empty(out, created)
-        raise
-    return result
-
-
-def progress_bar(total: float | None, unit: str, desc: str) -> Any:
-    from tqdm import tqdm
-
-    return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, leave=False,
-                disable=not sys.stderr.isatty(), dynamic_ncols=True)
-
-
-def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
-    """The result tables on stdout, or (``--json``) the report itself."""
-    from albot2d.evaluation.report import (
-        REPORT_NAME,
-        format_homing_table,
-        format_summary_table,
-        report_json,
-    )
-
-    report = result.report
-    if as_json:
-        print(report_json(report))
-        return
-    print(f"{result.title}  ({report['wall_time_s']:.1f} s)")
-    print(format_summary_table(result.scores))
-    print(format_homing_table(result.scores))
-    files = report["figures"] + report.get("exports", [])
-    print(f"-> {out / REPORT_NAME} + {len(files)} files ({', '.join(files)})"
-          if len(files) <= 4 else f"-> {out / REPORT_NAME} + {len(files)} files")
-
-
-def _differences(a: Any, b: Any, path: str = "") -> list[str]:
-    if isinstance(a, dict) and isinstance(b, dict):
-        out: list[str] = []
-        for key in sorted(set(a) | set(b)):
-            out += _differences(a.get(key), b.get(key), f"{path}.{key}" if path else key)
-        return out
-    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
-        return [d for i, (x, y) in enumerate(zip(a, b, strict=True))
-                for d in _differences(x, y, f"{path}[{i}]")]
-    return [] if a == b else [path]
-
-
 def run(args: argparse.Namespace) -> int:
     from albot2d.evaluation import RunSpec, evaluation_params_from_report, run_experiment
-    from albot2d.evaluation.report import read_report, without_timings
+    from albot2d.evaluation.report import read_report
     from albot2d.evaluation.setup import check_spec
 
     recorded = None
@@ -388,13 +147,7 @@ def run(args: argparse.Namespace) -> int:
             bar.close()
     print_tables(result, out, args.json)
     if recorded is not None:
-        # A fuzzing reproducer is a report plus a "reproducer" section (the episode, the
-        # world JSON, what failed): only the report part is compared.
-        ignore = ("figures", "exports", "albot2d_version", "reproducer")
-        diff = _differences(
-            {k: v for k, v in without_timings(recorded).items() if k not in ignore},
-            {k: v for k, v in without_timings(result.report).items() if k not in ignore},
-        )
+        diff = report_differences(recorded, result.report)
         if diff:
             shown = ", ".join(diff[:5]) + (f" and {len(diff) - 5} more" if len(diff) > 5 else "")
             print(f"reproduce: differs from {args.reproduce} at {shown}")

@@ -8,11 +8,10 @@ output file at all. Prints a one-line summary.
 from __future__ import annotations
 
 import argparse
-import contextlib
 from pathlib import Path
 from typing import Any
 
-from albot2d.atomic import atomic_path
+from albot2d.atomic import atomic_paths
 from albot2d.cli.options import parse_param, positive_number, seed_value, world_params
 from albot2d.errors import InputError
 from worldgen.tours import TOUR_KINDS
@@ -98,13 +97,7 @@ def _plan_tour(world: Any, options: tuple[str, float] | None) -> Any:
 
 def _write_together(outputs: dict[Path, bytes]) -> None:
     """Write every file atomically; if any write fails, none of them appears."""
-    with contextlib.ExitStack() as stack:
-        temps = {}
-        for path in outputs:
-            try:
-                temps[path] = stack.enter_context(atomic_path(path))
-            except OSError as exc:  # name the requested file, not the temporary one
-                raise OSError(exc.errno, exc.strerror, str(path)) from exc
+    with atomic_paths(outputs) as temps:
         for path, tmp in temps.items():
             tmp.write_bytes(outputs[path])
 

@@ -31,7 +31,7 @@ from albot2d.evaluation.scoring import EvaluationParams, score_run
 from albot2d.evaluation.trace import drive_mappers
 from albot2d.frames import Frame
 from albot2d.logs.anomalies import ordered_frames
-from albot2d.logs.frames import read_frames
+from albot2d.logs.log_frames import read_frames
 from albot2d.logs.relations import Relations, read_relations
 from albot2d.mapping.registry import resolve_mappers
 

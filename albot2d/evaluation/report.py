@@ -10,18 +10,15 @@ Missing values (anything needing the truth on a real log, NaN) are ``null``.
 
 from __future__ import annotations
 
-import dataclasses
 import json
-import math
 import os
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from albot2d import __version__
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
+from albot2d.plainjson import to_plain
 from albot2d.validation import parse_json
 
 if TYPE_CHECKING:
@@ -51,26 +48,8 @@ NONDETERMINISTIC_KEYS = ("wall_time_s", "timing_ms")
 
 
 def plain(value: Any) -> Any:
-    """``value`` as JSON types: dataclasses, numpy values, tuples converted; NaN/inf → None."""
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        value = dataclasses.asdict(value)
-    if isinstance(value, Mapping):
-        return {str(k): plain(v) for k, v in value.items()}
-    if isinstance(value, np.ndarray):
-        return plain(value.tolist())
-    if isinstance(value, list | tuple):
-        return [plain(v) for v in value]
-    if isinstance(value, bool | np.bool_):
-        return bool(value)
-    if isinstance(value, int | np.integer):
-        return int(value)
-    if isinstance(value, float | np.floating):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, os.PathLike):
-        return os.fspath(value)
-    if value is None or isinstance(value, str):
-        return value
-    raise TypeError(f"cannot store a {type(value).__name__} in report.json")
+    """``value`` as JSON types (``plainjson.to_plain``); NaN/inf → None (``null``)."""
+    return to_plain(value, where="report", into="report.json", nan_to_none=True)
 
 
 def make_report(command: str, **sections: Any) -> dict[str, Any]:

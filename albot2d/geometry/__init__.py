@@ -2,6 +2,7 @@
 
 from albot2d.geometry.pose import (
     Pose,
+    add_angle,
     between_arrays,
     compose_arrays,
     invert_arrays,
@@ -21,6 +22,7 @@ from albot2d.geometry.segments import (
 
 __all__ = [
     "Pose",
+    "add_angle",
     "as_segments",
     "between_arrays",
     "compose_arrays",

@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "Pose",
+    "add_angle",
     "between_arrays",
     "compose_arrays",
     "invert_arrays",
@@ -43,6 +44,15 @@ def wrap_angle(angle: ArrayLike) -> FloatArray | float:
     if np.ndim(wrapped) == 0:
         return float(wrapped)
     return wrapped
+
+
+def add_angle(a: float, b: float) -> float:
+    """``a + b`` wrapped to [-pi, pi) for scalars; exact (no wrap rounding) when the sum is
+    already in range, so small increments do not pick up rounding from the wrap."""
+    total = a + b
+    if -math.pi <= total < math.pi:
+        return total
+    return (total + math.pi) % (2.0 * math.pi) - math.pi
 
 
 @dataclass(frozen=True, slots=True)

@@ -24,7 +24,7 @@ from albot2d.logs.carmen_writer import (
     format_record,
     write_records,
 )
-from albot2d.logs.frames import (
+from albot2d.logs.log_frames import (
     DEFAULT_EVEN_BEAM_CONVENTION,
     DEFAULT_FOV_DEG,
     DEFAULT_NO_RETURN_THRESHOLD_M,

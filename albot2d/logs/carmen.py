@@ -28,6 +28,7 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.arrays import readonly
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
 from albot2d.logs.textio import open_text
@@ -68,11 +69,6 @@ _ROBOTLASER_TAIL = (
     "laser_x", "laser_y", "laser_theta", "robot_x", "robot_y", "robot_theta", "tv", "rv",
     "forward_safety_dist", "side_safety_dist", "turn_axis", *_STAMP_NAMES,
 )  # fmt: skip
-
-
-def _readonly(values: FloatArray) -> FloatArray:
-    values.flags.writeable = False
-    return values
 
 
 @dataclass(frozen=True, eq=False, slots=True)
@@ -248,7 +244,7 @@ def _floats(tokens: list[str], start: int, count: int, name: str) -> FloatArray:
     """``count`` numbers from ``start``; non-finite values are allowed (they mark no-returns)."""
     chunk = tokens[start : start + count]
     try:
-        return _readonly(np.array(chunk, dtype=np.float64))
+        return readonly(np.array(chunk, dtype=np.float64), copy=False)
     except ValueError:
         for k, text in enumerate(chunk):
             try:

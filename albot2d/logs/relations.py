@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from albot2d.arrays import readonly
 from albot2d.errors import InputError
 from albot2d.geometry import between_arrays
 from albot2d.logs.carmen import TIMESTAMP_LIMIT_S
@@ -41,10 +42,7 @@ _LIMITS = (TIMESTAMP_LIMIT_S, TIMESTAMP_LIMIT_S, *(COORDINATE_LIMIT_M,) * 6)
 
 def _frozen(values: ArrayLike, shape_tail: tuple[int, ...]) -> FloatArray:
     arr = np.array(values, dtype=np.float64, copy=True)
-    if arr.size == 0:
-        arr = arr.reshape((0, *shape_tail))
-    arr.flags.writeable = False
-    return arr
+    return readonly(arr, shape=(0, *shape_tail) if arr.size == 0 else None, copy=False)
 
 
 @dataclass(frozen=True, eq=False)

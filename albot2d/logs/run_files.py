@@ -27,12 +27,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from albot2d import __version__
-from albot2d.atomic import atomic_path
+from albot2d.atomic import atomic_paths
 from albot2d.errors import InputError
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
 from albot2d.logs.carmen_writer import LOG_PRECISION, FloatFormat, format_float
-from albot2d.logs.frames import read_frames, write_carmen
+from albot2d.logs.log_frames import read_frames, write_carmen
 from albot2d.logs.relations import (
     Relations,
     RelationsOptions,
@@ -41,6 +41,7 @@ from albot2d.logs.relations import (
     write_relations,
 )
 from albot2d.logs.textio import atomic_text_output, read_number_table
+from albot2d.plainjson import to_plain
 
 __all__ = [
     "LOG_NAME",
@@ -119,7 +120,7 @@ def write_run(
     created = not directory.exists()
     directory.mkdir(parents=True, exist_ok=True)
     options = relations_options or RelationsOptions()
-    plain_params = _jsonable(dict(params or {}), "params")
+    plain_params = to_plain(dict(params or {}), where="params", into="run.json")
     stamps: list[float] = []
     truth: list[tuple[float, float, float]] = []
     collided: list[int] = []
@@ -135,12 +136,10 @@ def write_run(
             yield frame
 
     try:
-        with contextlib.ExitStack() as stack:
-            # Entered first, renamed last: run.json appears only when everything else is there.
-            manifest_tmp = stack.enter_context(atomic_path(directory / MANIFEST_NAME))
-            log_tmp = stack.enter_context(atomic_path(directory / LOG_NAME))
-            truth_tmp = stack.enter_context(atomic_path(directory / TRUTH_NAME))
-            relations_tmp = stack.enter_context(atomic_path(directory / RELATIONS_NAME))
+        names = (MANIFEST_NAME, LOG_NAME, TRUTH_NAME, RELATIONS_NAME)
+        # Given first, renamed last: run.json appears only when everything else is there.
+        with atomic_paths(directory / name for name in names) as temps:
+            manifest_tmp, log_tmp, truth_tmp, relations_tmp = temps.values()
             n_frames = write_carmen(log_tmp, recorded(), params=params, float_format=float_format)
             t = _rounded(stamps, float_format.timestamp_decimals)
             poses = np.array(truth, dtype=np.float64).reshape(-1, 3)
@@ -216,20 +215,3 @@ def read_run(run_dir: str | os.PathLike[str]) -> Run:
         params=manifest.get("params", {}),
         manifest=manifest,
     )
-
-
-def _jsonable(value: Any, where: str) -> Any:
-    """``value`` as plain JSON types (dataclasses, numpy, tuples, paths converted)."""
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        value = dataclasses.asdict(value)
-    if isinstance(value, Mapping):
-        return {str(k): _jsonable(v, f"{where}[{k!r}]") for k, v in value.items()}
-    if isinstance(value, np.ndarray | np.generic):
-        return value.tolist()
-    if isinstance(value, list | tuple):
-        return [_jsonable(v, f"{where}[{i}]") for i, v in enumerate(value)]
-    if isinstance(value, os.PathLike):
-        return os.fspath(value)
-    if value is None or isinstance(value, str | int | float | bool):
-        return value
-    raise InputError(f"{where}: cannot store a {type(value).__name__} in run.json")

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from albot2d.arrays import readonly
 from albot2d.geometry import (
     as_segments,
     segment_angles,
@@ -24,12 +25,6 @@ from albot2d.geometry import (
 __all__ = ["Surface", "Surfaces"]
 
 FloatArray = NDArray[np.float64]
-
-
-def _readonly(arr: ArrayLike, dtype: type, shape: tuple[int, ...]) -> np.ndarray:
-    out: np.ndarray = np.array(arr, dtype=dtype, copy=True).reshape(shape)
-    out.flags.writeable = False
-    return out
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,10 +69,10 @@ class Surfaces:
         segs = as_segments(self.segments)
         n = len(segs)
         uncertain = np.zeros((n, 2), bool) if self.uncertain is None else self.uncertain
-        object.__setattr__(self, "segments", _readonly(segs, np.float64, (n, 4)))
-        object.__setattr__(self, "occluded", _readonly(self.occluded, np.bool_, (n, 2)))
-        object.__setattr__(self, "beams", _readonly(self.beams, np.int64, (n, 2)))
-        object.__setattr__(self, "uncertain", _readonly(uncertain, np.bool_, (n, 2)))
+        object.__setattr__(self, "segments", readonly(segs, np.float64, (n, 4)))
+        object.__setattr__(self, "occluded", readonly(self.occluded, np.bool_, (n, 2)))
+        object.__setattr__(self, "beams", readonly(self.beams, np.int64, (n, 2)))
+        object.__setattr__(self, "uncertain", readonly(uncertain, np.bool_, (n, 2)))
 
     @property
     def localisable(self) -> NDArray[np.bool_]:

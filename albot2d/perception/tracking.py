@@ -29,6 +29,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from albot2d.arrays import readonly
 from albot2d.errors import InputError
 from albot2d.geometry import (
     Pose,
@@ -130,9 +131,7 @@ def trackable_mask(surfaces: Surfaces, params: TrackingParams | None = None) -> 
 
 
 def _readonly_ids(ids: ArrayLike) -> IntArray:
-    out = np.array(ids, dtype=np.int64, copy=True).reshape(-1)
-    out.flags.writeable = False
-    return out
+    return readonly(ids, np.int64, (-1,))
 
 
 @dataclass(frozen=True, eq=False)

@@ -29,7 +29,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 
 from albot2d.errors import InputError
-from albot2d.geometry import Pose
+from albot2d.geometry import Pose, add_angle
 from albot2d.validation import check_finite, check_non_negative
 
 __all__ = [
@@ -172,14 +172,6 @@ def noise_preset(name: str) -> OdometryNoise:
         ) from None
 
 
-def _add_angle(a: float, b: float) -> float:
-    """a + b wrapped to [-pi, pi); exact (no wrap rounding) when already in range."""
-    total = a + b
-    if -math.pi <= total < math.pi:
-        return total
-    return (total + math.pi) % (2.0 * math.pi) - math.pi
-
-
 def _infer_kind(increment: Pose) -> StepKind:
     if increment.x == 0.0 and increment.y == 0.0 and increment.theta != 0.0:
         return "turn"
@@ -195,9 +187,9 @@ def _decompose(increment: Pose) -> tuple[float, float, float]:
         return 0.0, 0.0, increment.theta
     rot1 = math.atan2(increment.y, increment.x)
     if abs(rot1) > 0.5 * math.pi:
-        rot1 = _add_angle(rot1, math.pi)
+        rot1 = add_angle(rot1, math.pi)
         trans = -trans
-    return rot1, trans, _add_angle(increment.theta, -rot1)
+    return rot1, trans, add_angle(increment.theta, -rot1)
 
 
 def perturb_increment(increment: Pose, noise: OdometryNoise, rng: np.random.Generator | None,
@@ -234,7 +226,7 @@ def perturb_increment(increment: Pose, noise: OdometryNoise, rng: np.random.Gene
     if induced_rad:
         turn = rot1 + rot2
         rot2 += math.copysign(induced_rad, turn) if noise.induced_along_motion else induced_rad
-    return Pose(trans * math.cos(rot1), trans * math.sin(rot1), _add_angle(rot1, rot2))
+    return Pose(trans * math.cos(rot1), trans * math.sin(rot1), add_angle(rot1, rot2))
 
 
 def _induce_exact(increment: Pose, noise: OdometryNoise, induced_m: float,
@@ -252,7 +244,7 @@ def _induce_exact(increment: Pose, noise: OdometryNoise, induced_m: float,
     if induced_rad:
         if noise.induced_along_motion and increment.theta < 0.0:
             induced_rad = -induced_rad
-        return Pose(increment.x, increment.y, _add_angle(increment.theta, induced_rad))
+        return Pose(increment.x, increment.y, add_angle(increment.theta, induced_rad))
     return increment
 
 

@@ -14,6 +14,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from albot2d.arrays import readonly
 from albot2d.errors import InputError
 from albot2d.geometry import as_segments
 from albot2d.validation import check_coordinates
@@ -36,11 +37,6 @@ _MAX_SLICED_ROWS = 64
 #: A query returns one view of the table instead of copying its row runs when that adds at
 #: most this many pieces per grid row (about the cost of copying one run).
 _SPAN_SLACK_PER_ROW = 16
-
-
-def _readonly(arr: np.ndarray) -> np.ndarray:
-    arr.flags.writeable = False
-    return arr
 
 
 def clean_segments(segments: ArrayLike, what: str = "segments") -> FloatArray:
@@ -123,7 +119,7 @@ class SegmentGrid:
 
     def __init__(self, segments: ArrayLike, cell_size_m: float | None = None) -> None:
         segs = clean_segments(segments)
-        self.segments: FloatArray = _readonly(segs)
+        self.segments: FloatArray = readonly(segs, copy=False)
         if len(segs):
             xmin = float(min(segs[:, 0].min(), segs[:, 2].min()))
             ymin = float(min(segs[:, 1].min(), segs[:, 3].min()))
@@ -150,9 +146,10 @@ class SegmentGrid:
         cell_id = np.clip(iy, 0, self._ny - 1) * self._nx + np.clip(ix, 0, self._nx - 1)
         order = np.argsort(cell_id, kind="stable")
         self.n_pieces = len(pieces)
-        self._table = _readonly(piece_table(pieces[order]))  # (3, n_pieces)
+        self._table = readonly(piece_table(pieces[order]), copy=False)  # (3, n_pieces)
         counts = np.bincount(cell_id, minlength=self._nx * self._ny)
-        self._cell_start = _readonly(np.concatenate([[0], np.cumsum(counts)]).astype(np.intp))
+        starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+        self._cell_start = readonly(starts, copy=False)
 
     @property
     def table(self) -> np.ndarray:
@@ -167,7 +164,7 @@ class SegmentGrid:
     @property
     def layout(self) -> FloatArray:
         """``[x0, y0, cell_size_m, nx, ny]``: cell (ix, iy) spans x0 + ix * cell onwards."""
-        return _readonly(np.array([self._x0, self._y0, self.cell_size_m, self._nx, self._ny]))
+        return readonly([self._x0, self._y0, self.cell_size_m, self._nx, self._ny], np.float64)
 
     def runs(
         self, xmin: float, ymin: float, xmax: float, ymax: float

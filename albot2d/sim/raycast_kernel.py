@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from albot2d.arrays import readonly
 from albot2d.errors import InputError
 
 __all__ = ["BeamFan", "beam_directions", "cast_pieces"]
@@ -23,11 +24,6 @@ __all__ = ["BeamFan", "beam_directions", "cast_pieces"]
 FloatArray = NDArray[np.float64]
 
 _TWO_PI = 2.0 * math.pi
-
-
-def _readonly(arr: np.ndarray) -> np.ndarray:
-    arr.flags.writeable = False
-    return arr
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,12 +59,13 @@ class BeamFan:
         sorted_angles = a if order is None else a[order]
         directions = np.exp(1j * sorted_angles)
         return cls(
-            angles=_readonly(a.copy()),
+            angles=readonly(a.copy(), copy=False),
             order=order,
             mid_rad=mid,
             half_span_rad=half,
-            ext_rel=_readonly(np.concatenate([centred - _TWO_PI, centred, centred + _TWO_PI])),
-            ext_dir=_readonly(np.concatenate([directions, directions, directions])),
+            ext_rel=readonly(np.concatenate([centred - _TWO_PI, centred, centred + _TWO_PI]),
+                             copy=False),
+            ext_dir=readonly(np.concatenate([directions, directions, directions]), copy=False),
         )
 
     def jittered(self, offsets: FloatArray) -> BeamFan:
@@ -83,12 +80,12 @@ class BeamFan:
             if widest < math.pi and (ext_rel[1:] >= ext_rel[:-1]).all():
                 ext_dir = (self.ext_dir.reshape(3, n) * np.exp(1j * offsets)).ravel()
                 return BeamFan(
-                    angles=_readonly(self.angles + offsets),
+                    angles=readonly(self.angles + offsets, copy=False),
                     order=None,
                     mid_rad=self.mid_rad,
                     half_span_rad=widest,
-                    ext_rel=_readonly(ext_rel),
-                    ext_dir=_readonly(ext_dir),
+                    ext_rel=readonly(ext_rel, copy=False),
+                    ext_dir=readonly(ext_dir, copy=False),
                 )
         return BeamFan.from_angles(self.angles + offsets)
 

@@ -80,14 +80,6 @@ def _check_finite(name: str, value: float) -> float:
     return float(value)
 
 
-def _add_angle(a: float, b: float) -> float:
-    """a + b wrapped to [-pi, pi); exact (no wrap rounding) when already in range."""
-    total = a + b
-    if -math.pi <= total < math.pi:
-        return total
-    return (total + math.pi) % (2.0 * math.pi) - math.pi
-
-
 def _scaled(increment: Pose, fraction: float) -> Pose:
     return Pose(increment.x * fraction, increment.y * fraction, increment.theta * fraction)
 

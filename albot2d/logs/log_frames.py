@@ -43,6 +43,7 @@ from albot2d.frames import Frame, Scan
 from albot2d.geometry import Pose
 from albot2d.logs.carmen import CarmenReader, LaserRecord, OdomRecord, ParamRecord, Record
 from albot2d.logs.carmen_writer import LOG_PRECISION, FloatFormat, format_float, write_records
+from albot2d.plainjson import to_plain
 from albot2d.validation import COORDINATE_LIMIT_M
 
 __all__ = [
@@ -392,21 +393,10 @@ def _flatten_params(params: Mapping[str, Any], prefix: str = "") -> dict[str, st
             text = value
         else:
             try:
-                text = json.dumps(_plain(value), separators=(",", ":"), allow_nan=True)
-            except TypeError:
+                text = json.dumps(to_plain(value), separators=(",", ":"), allow_nan=True)
+            except (TypeError, InputError):
                 raise InputError(f"params[{name!r}]: cannot write {type(value).__name__}") from None
         # Compact JSON has whitespace only inside strings, where a \\u escape means the same.
         text = "".join(f"\\u{ord(ch):04x}" if ch.isspace() else ch for ch in text)
         out[f"{_USER_PARAM_PREFIX}{name}"] = text
     return out
-
-
-def _plain(value: Any) -> Any:
-    """numpy scalars/arrays and tuples → plain JSON-able Python values."""
-    if isinstance(value, np.ndarray | np.generic):
-        return value.tolist()
-    if isinstance(value, tuple | list):
-        return [_plain(v) for v in value]
-    if isinstance(value, os.PathLike):
-        return os.fspath(value)
-    return value

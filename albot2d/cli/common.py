@@ -1,0 +1,302 @@
+"""Helpers the subcommands share: the world and driving options of ``run``/``simulate`` →
+``RunSpec``, scoring and ``--json`` options, the output directory,
+drawing and writing a run's files, progress bars, the printed tables, report comparison.
+
+``run``, ``replay`` and ``fuzz`` (its ``--reproduce``) write a run the same way: ``finish``
+computes the result, draws the figures, exports trajectories and maps and writes
+everything atomically with report.json last, removing the output directory again on
+failure if the command created it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import sys
+import tempfile
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from albot2d.atomic import atomic_paths
+from albot2d.cli.options import positive_int, positive_number, world_params
+from albot2d.errors import InputError
+
+__all__ = [
+    "DEFAULT_KIND",
+    "DEFAULT_NOISE",
+    "add_json_option",
+    "add_run_options",
+    "add_scoring_options",
+    "differences",
+    "finish",
+    "prepare_out_dir",
+    "print_tables",
+    "progress_bar",
+    "remove_if_empty",
+    "report_differences",
+    "scoring_params",
+    "spec_from_args",
+    "write_outputs",
+]
+
+# RunSpec's defaults, named here only for --help (importing the evaluation layer to read
+# them would slow every command's start by over a second); tests/test_setup.py checks that
+# they match. An option not given is left to RunSpec.
+DEFAULT_KIND = "office"
+DEFAULT_PROFILE = "dataset1"
+DEFAULT_NOISE = "typical"
+DEFAULT_LASER_NOISE = "sick_lms200"
+DEFAULT_TOUR_KIND = "loop"
+DEFAULT_TOUR_LENGTH_M = 100.0
+# Fields two reports of the same run may differ in: file lists, the version, and a fuzzing
+# reproducer's own section (wall-clock timings are dropped by ``without_timings``).
+_NOT_COMPARED = ("figures", "exports", "albot2d_version", "reproducer")
+
+
+def add_run_options(p: argparse.ArgumentParser) -> None:
+    """World and driving options, shared by ``run`` and ``simulate`` (same defaults)."""
+    world = p.add_argument_group("world (default: --kind office --seed 0)")
+    world.add_argument("--world", metavar="world.json", help="a world file (albot2d world)")
+    world.add_argument("--kind", help="generate a world: corridors, rooms, open, office, mixed")
+    world.add_argument("--seed", metavar="N", help="world and run seed (default 0)")
+    world.add_argument("--width", metavar="W", help="generated world's width in metres")
+    world.add_argument("--height", metavar="H", help="generated world's height in metres")
+    world.add_argument("--param", action="append", metavar="NAME=VALUE",
+                       help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)")
+    drive = p.add_argument_group("driving")
+    drive.add_argument("--profile", help=f"dataset1, dataset2, dataset3, start_stop "
+                       f"(default {DEFAULT_PROFILE})")
+    drive.add_argument("--noise", help=f"odometry noise preset: none, low, typical, high "
+                       f"(default {DEFAULT_NOISE})")
+    drive.add_argument("--laser-noise", help=f"sick_lms200 or zero (default {DEFAULT_LASER_NOISE})")
+    drive.add_argument("--tour-kind", help="loop, out_and_back, backtracking, circuit "
+                       f"(default {DEFAULT_TOUR_KIND})")
+    drive.add_argument("--tour-length", metavar="METRES",
+                       help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})")
+    drive.add_argument("--max-frames", metavar="N", help="stop after N views")
+
+
+def spec_from_args(args: argparse.Namespace) -> Any:
+    """The RunSpec of ``run``'s (and ``simulate``'s) options; options not given take
+    RunSpec's defaults."""
+    from albot2d.evaluation.setup import RunSpec
+
+    params = world_params(args)
+    if args.world is not None and (args.kind is not None or params):
+        raise InputError("give --world, or --kind with its parameters, not both")
+    given: dict[str, Any] = {
+        "seed": positive_int(args.seed, "--seed", allow_zero=True),
+        "world_params": params,
+        "profile": args.profile or None,
+        "noise": args.noise or None,
+        "laser_noise": args.laser_noise or None,
+        "tour_kind": args.tour_kind or None,
+        "tour_length_m": positive_number(args.tour_length, "--tour-length"),
+        "mappers": tuple(getattr(args, "mapper", None) or ()) or None,
+        "max_frames": positive_int(args.max_frames, "--max-frames"),
+    }
+    if args.world is not None:
+        given |= {"kind": None, "world_file": args.world}
+    elif args.kind:
+        given["kind"] = args.kind
+    # "kind": None (a world file) is kept; every other option not given is left out
+    return RunSpec(**{k: v for k, v in given.items() if v is not None or k == "kind"})
+
+
+def add_json_option(
+    p: argparse.ArgumentParser, help: str = "print report.json on stdout instead of the tables"
+) -> None:
+    p.add_argument("--json", action="store_true", help=help)
+
+
+def add_scoring_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("scoring")
+    g.add_argument("--stop-every", metavar="METRES",
+                   help="homing: stop every this many odometer metres (default 20)")
+    g.add_argument("--min-start-distance", metavar="METRES",
+                   help="homing: skip stops nearer the start than this (default 3)")
+    g.add_argument("--last-k-views", metavar="K",
+                   help="map completeness over the walls seen in the last K views (default 10)")
+    g.add_argument("--snapshots", metavar="N",
+                   help="moments of the map history to draw and report (default 4)")
+
+
+def scoring_params(args: argparse.Namespace, base: Any = None) -> Any:
+    """EvaluationParams from the scoring options (unset ones from ``base`` or defaults)."""
+    import dataclasses
+
+    from albot2d.evaluation import EvaluationParams
+
+    base = base or EvaluationParams()
+    homing = base.homing
+    every = positive_number(args.stop_every, "--stop-every")
+    near = positive_number(args.min_start_distance, "--min-start-distance", allow_zero=True)
+    if every is not None:
+        homing = dataclasses.replace(homing, stop_every_m=every)
+    if near is not None:
+        homing = dataclasses.replace(homing, min_start_distance_m=near)
+    quality = base.map_quality
+    k = positive_int(args.last_k_views, "--last-k-views")
+    if k is not None:
+        quality = dataclasses.replace(quality, last_k_views=k)
+    snapshots = positive_int(args.snapshots, "--snapshots") or base.snapshots
+    return dataclasses.replace(base, homing=homing, map_quality=quality, snapshots=snapshots)
+
+
+# -- output -----------------------------------------------------------------------------
+def prepare_out_dir(text: str | None) -> tuple[Path, bool]:
+    """Create ``--out`` if needed and check it is writable; returns (dir, created)."""
+    if not text:
+        raise InputError("give --out DIR, the directory for report.json and the figures")
+    out = Path(text)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} exists and is not a directory")
+    created = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".albot2d-probe.", dir=out)
+    except OSError as exc:
+        remove_if_empty(out, created)
+        raise OSError(exc.errno, f"cannot write there ({exc.strerror})", str(out)) from None
+    os.close(fd)
+    os.unlink(probe)
+    return out, created
+
+
+def remove_if_empty(out: Path, created: bool) -> None:
+    """Remove ``out`` again if this command created it and nothing was left in it."""
+    if created:
+        with contextlib.suppress(OSError):
+            out.rmdir()  # only succeeds when nothing was left in it
+
+
+def _render(result: Any, no_figures: bool, command: str, animate: bool = False) -> dict[str, bytes]:
+    if no_figures:
+        return {}
+    try:
+        from albot2d.viz.run_figures import render_experiment_figures
+
+        figures = render_experiment_figures(result)
+        if animate:
+            from albot2d.viz.anim import render_map_animation
+
+            animation = render_map_animation(result)
+            if not animation:
+                print(f"albot2d {command}: note: no animation (no mapper keeps a map history; "
+                      "give --mapper albot1)", file=sys.stderr)
+            figures.update(animation)
+        return figures
+    except ImportError as exc:
+        if not (exc.name or "").startswith("matplotlib"):
+            raise  # our own import broke: a bug to see, not a missing extra
+        print(f"albot2d {command}: note: no figures ({exc}); pip install 'albot2d[viz]'",
+              file=sys.stderr)
+        return {}
+
+
+def _step_figure(result: Any, no_figures: bool) -> dict[str, bytes]:
+    if no_figures:
+        return {}
+    try:
+        from albot2d.viz.steps import render_step_times_png
+
+        return {"steps.png": render_step_times_png(result.trace.step_times)}
+    except ImportError as exc:
+        if not (exc.name or "").startswith("matplotlib"):
+            raise
+        return {}  # _render already said that matplotlib is missing
+
+
+def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, bytes]) -> None:
+    """Write the files (figures, exports) and report.json atomically; report.json is
+    renamed into place last."""
+    from albot2d.evaluation.report import REPORT_NAME, report_json
+
+    text = report_json(report).encode("utf-8")
+    # the report (given first) is renamed into place last
+    with atomic_paths([out / REPORT_NAME, *(out / name for name in figures)]) as temps:
+        temps[out / REPORT_NAME].write_bytes(text)
+        for name, data in figures.items():
+            temps[out / name].write_bytes(data)
+
+
+def finish(
+    out: Path, created: bool, command: str, compute: Callable[[], Any], no_figures: bool,
+    stage: Callable[[str], None] | None = None, animate: bool = False,
+) -> Any:
+    """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
+    maps, write everything; on any failure remove the output directory again if this
+    command created it."""
+    from albot2d.evaluation.export import export_files
+
+    try:
+        result = compute()
+        if stage is not None and not no_figures:
+            stage("figures")
+        figures = _render(result, no_figures, command, animate)
+        figures.update(_step_figure(result, no_figures))
+        exports = export_files(result)
+        result.report["figures"] = sorted(figures)
+        result.report["exports"] = sorted(exports)
+        # steps.csv: one row per view (stage times, counters), for profiling a run.
+        files = {**figures, **exports,
+                 "steps.csv": result.trace.step_times.to_csv().encode("utf-8")}
+        write_outputs(out, result.report, files)
+    except BaseException:
+        remove_if_empty(out, created)
+        raise
+    return result
+
+
+def progress_bar(total: float | None, unit: str, desc: str) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, leave=False,
+                disable=not sys.stderr.isatty(), dynamic_ncols=True)
+
+
+def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
+    """The result tables on stdout, or (``--json``) the report itself."""
+    from albot2d.evaluation.report import (
+        REPORT_NAME,
+        format_homing_table,
+        format_summary_table,
+        report_json,
+    )
+
+    report = result.report
+    if as_json:
+        print(report_json(report))
+        return
+    print(f"{result.title}  ({report['wall_time_s']:.1f} s)")
+    print(format_summary_table(result.scores))
+    print(format_homing_table(result.scores))
+    files = report["figures"] + report.get("exports", [])
+    print(f"-> {out / REPORT_NAME} + {len(files)} files ({', '.join(files)})"
+          if len(files) <= 4 else f"-> {out / REPORT_NAME} + {len(files)} files")
+
+
+def differences(a: Any, b: Any, path: str = "") -> list[str]:
+    """Dotted paths (``mappers.albot1.rpe``) where two JSON values differ."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        out: list[str] = []
+        for key in sorted(set(a) | set(b)):
+            out += differences(a.get(key), b.get(key), f"{path}.{key}" if path else key)
+        return out
+    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        return [d for i, (x, y) in enumerate(zip(a, b, strict=True))
+                for d in differences(x, y, f"{path}[{i}]")]
+    return [] if a == b else [path]
+
+
+def report_differences(recorded: Mapping[str, Any], report: Mapping[str, Any]) -> list[str]:
+    """Where ``report`` differs from the ``recorded`` one (a report.json or a fuzzing
+    reproducer), apart from wall-clock timings, file lists and the version."""
+    from albot2d.evaluation.report import without_timings
+
+    return differences(
+        {k: v for k, v in without_timings(dict(recorded)).items() if k not in _NOT_COMPARED},
+        {k: v for k, v in without_timings(dict(report)).items() if k not in _NOT_COMPARED},
+    )
