@@ -9,9 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from albot2d.errors import InputError
-from albot2d.geometry import Pose
+from albot2d.evaluation import invariants as inv
+from albot2d.geometry import Pose, transform_segments
+from albot2d.mapping import Albot1
 from albot2d.mapping.deletion import seen_side_mask, visible_share
 from albot2d.mapping.global_map import GlobalMap, GlobalMapParams
 
@@ -116,3 +120,37 @@ def test_bad_visibility_parameters_are_refused() -> None:
         GlobalMapParams(seen_side="back")  # type: ignore[arg-type]
     with pytest.raises(InputError, match="visible_samples"):
         GlobalMapParams(visible_samples=0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from([0.0, 0.5, 1.0]),
+       st.sampled_from(["front", "any"]))
+def test_the_invariant_recomputed_from_the_definitions_agrees_with_the_map(
+    seed: int, min_share: float, side: str
+) -> None:
+    """Random old surfaces around a robot, a random view in scan order: after the update,
+    the invariant (its own P, facing, seen side and sight lines, via shapely) finds nothing
+    the map should have deleted; and a map that skipped the deletion is caught."""
+    rng = np.random.default_rng(seed)
+    robot = Pose(*rng.uniform(-1, 1, 2), rng.uniform(-np.pi, np.pi))
+    bearings = np.sort(rng.uniform(-1.5, 1.5, 2 * int(rng.integers(1, 6))))
+    ranges = rng.uniform(1.0, 6.0, len(bearings))
+    local = np.column_stack([ranges * np.cos(bearings), ranges * np.sin(bearings)])
+    view = transform_segments(robot.as_array(), local.reshape(-1, 4))
+    params = GlobalMapParams.preset("visible", min_visible_share=min_share, seen_side=side)
+    mapper = Albot1()
+    mapper.map = GlobalMap(params)
+    for m in range(3):
+        a = rng.uniform(-7, 7, (8, 2))
+        old = np.hstack([a, a + rng.uniform(-2, 2, (8, 2))])
+        mapper.map.insert(old, m)
+    report = mapper.map.add_view(view, 3, robot)
+    inv.check_update_deleted_facing_overlap(mapper, report, robot, view)
+    if report.deleted_current + report.deleted_older:
+        skipped = Albot1()
+        skipped.map = GlobalMap(params)
+        for m, segs in enumerate(np.split(mapper.map._segments[:24], 3)):
+            skipped.map.insert(segs, m)
+        skipped.map.insert(view, 3)  # added without deleting anything
+        with pytest.raises(inv.InvariantError, match="update_deletes_facing_overlap"):
+            inv.check_update_deleted_facing_overlap(skipped, report, robot, view)

@@ -283,16 +283,22 @@ def _view_polygon(view: FloatArray, robot: Pose, enlarge_m: float, mode: str,
 
 def _visible_share(segs: FloatArray, view: FloatArray, robot: Pose, beyond_m: float,
                    samples: int) -> FloatArray:
-    """The share of the surfaces' sample points seen from the viewpoint: the sight line to
-    the point meets a view surface, the nearest meeting at most ``beyond_m`` short of it."""
+    """The share of the surfaces' sample points seen from the viewpoint: the sight line
+    through the point meets a view surface, the nearest meeting at most ``beyond_m`` short
+    of the point (or beyond it)."""
     frac = (np.arange(samples) + 0.5) / samples
     pts = (segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2]))
     pts = pts.reshape(-1, 2)
     o = np.array([robot.x, robot.y])
-    sight = shapely.linestrings(np.stack([np.broadcast_to(o, pts.shape), pts], axis=1))
+    dist = np.linalg.norm(pts - o, axis=1)
+    # The sight line goes on past the point (a point in front of the view's surfaces is in
+    # the free space the laser crossed): as far as the farthest view point, and more.
+    reach = float(np.linalg.norm(view.reshape(-1, 2) - o, axis=1).max()) + 1.0
+    far = o + (pts - o) * ((reach + dist) / np.maximum(dist, 1e-12))[:, None]
+    sight = shapely.linestrings(np.stack([np.broadcast_to(o, pts.shape), far], axis=1))
     meets = shapely.intersection(sight, shapely.multilinestrings(view.reshape(-1, 2, 2)))
     near = shapely.distance(shapely.points(o), meets)  # NaN where the sight line meets none
-    seen = ~shapely.is_empty(meets) & (np.linalg.norm(pts - o, axis=1) - near <= beyond_m)
+    seen = ~shapely.is_empty(meets) & (dist - near <= beyond_m)
     return seen.reshape(len(segs), samples).mean(axis=1)
 
 
