@@ -75,11 +75,16 @@ class Tiny:
 
 
 class BrokenRoute(NaiveIntegration):
-    """View-based in name only: its second local map has no pose in the first."""
+    """View-based (the ViewBasedMapper protocol), but its second local map has no pose in
+    the first."""
 
     def __init__(self):
         super().__init__()
         self.route = RouteMap()
+        self.update_log = []
+
+    def route_map(self):
+        return self.route
 
     def observe(self, frame):
         super().observe(frame)

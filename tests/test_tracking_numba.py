@@ -57,12 +57,13 @@ def test_numba_matching_equals_numpy_on_random_views(seed: int) -> None:
 
 
 def test_numba_matching_equals_numpy_over_a_simulated_run() -> None:
-    from albot2d.evaluation.experiment import RunSpec, build_world, make_simulator, plan_tour
+    from albot2d.evaluation.setup import RunSpec, build_world, make_simulator
     from albot2d.sim.driving import get_profile
+    from worldgen import plan_tour
 
     spec = RunSpec(kind="office", seed=2)
     world = build_world(spec)
-    tour = plan_tour(world, spec.tour_kind, 40.0)
+    tour = plan_tour(world, kind=spec.tour_kind, length_m=40.0)
     frames = itertools.islice(make_simulator(world, spec).drive(tour, get_profile("dataset1")),
                               400)  # fmt: skip
     tracked, prev, matched = None, None, 0
