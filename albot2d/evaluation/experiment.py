@@ -210,13 +210,16 @@ def run_experiment(
     on_frame: Callable[[Frame, float], None] | None = None,
     on_stage: Callable[[str], None] | None = None,
     on_mappers: Callable[[Mapping[str, Mapper]], None] | None = None,
+    score: bool = True,
 ) -> ExperimentResult:
     """Simulate ``spec`` and score every mapper; see the module docstring.
 
     ``on_start(world, tour)`` is called once the tour is planned, ``on_frame(frame,
     travelled_m)`` after each frame and ``on_stage("scoring")`` after the last one
     (progress display); ``on_mappers(mappers)`` once the mappers are made, before the
-    first frame (to attach invariant checks).
+    first frame (to attach invariant checks). ``score=False`` leaves the scoring out (the
+    report's ``mappers`` and ``odometry`` are empty, no relations are made): for callers
+    that read only a few numbers off the trace and the mappers (``albot2d experiments``).
     """
     from albot2d.sim.driving import get_profile
 
@@ -246,11 +249,16 @@ def run_experiment(
     assert trace.true_poses is not None  # the simulator always knows the truth
     if on_stage is not None:
         on_stage("scoring")
-    relations = relations_from_truth(trace.timestamps, trace.true_poses, options=params.relations)
-    scores = score_mappers(trace, relations, world.obstacle_segments, params)
-    for name, mapper in trace.mappers.items():
-        # Fig. 14: instructions and moves per global-map update, by region kind.
-        scores[name]["updates_by_region"] = updates_section(world, trace, mapper)
+    relations: Relations | None = None
+    scores: dict[str, dict[str, Any]] = {}
+    if score:
+        relations = relations_from_truth(
+            trace.timestamps, trace.true_poses, options=params.relations
+        )
+        scores = score_mappers(trace, relations, world.obstacle_segments, params)
+        for name, mapper in trace.mappers.items():
+            # Fig. 14: instructions and moves per global-map update, by region kind.
+            scores[name]["updates_by_region"] = updates_section(world, trace, mapper)
     world_info = {
         "kind": world.kind, "seed": world.seed, "params": dict(spec.world_params),
         "source": spec.world_file, "width_m": world.width_m, "height_m": world.height_m,
@@ -262,8 +270,8 @@ def run_experiment(
         "travelled_m": float(trace.travelled_m[-1]),
         "true_travelled_m": float(np.hypot(*np.diff(trace.true_poses[:, :2], axis=0).T).sum()),
         "collided_frames": int(trace.collided.sum()),
-        "relations": len(relations),
-        "relations_source": "truth",
+        "relations": None if relations is None else len(relations),
+        "relations_source": "truth" if score else None,
     }
     report = make_report(
         "run",
@@ -278,7 +286,7 @@ def run_experiment(
             "simulator": sim.params(),
         },
         run=run_info,
-        odometry=odometry_section(trace, relations, params),
+        odometry=odometry_section(trace, relations, params) if score else {},
         mappers=scores,
         # Per-view stage times: mean, p50, p95 and max ms (the rows are in steps.csv).
         timing_ms=trace.step_times.summary_ms(),
