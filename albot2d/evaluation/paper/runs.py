@@ -1,14 +1,16 @@
 """The simulated runs the paper's experiments are computed from, one job per (run, seed).
 
-Every run goes through the one setup path, ``run_experiment(RunSpec(...))``; a job returns
-a small JSON-ready summary (counts, homing stops, map quality, update flags) and, for the
-seed whose maps are drawn, the map snapshots the figures need. Snapshots are taken while
+Every run goes through the one setup path, ``run_experiment(RunSpec(...), score=False)``,
+and is scored here only for what the experiments read; a job returns a small JSON-ready
+summary (counts, homing stops, the map accuracies asked for, update flags, why each
+path integration happened) and, for the seed whose maps are drawn, the map snapshots the
+figures need. Snapshots are taken while
 the run goes (``on_frame``) when the robot's *true* distance along the route first reaches
 a named waypoint, so "the map at E5" is the map when the robot got to E5.
 
 Albot_x (the paper's SLAM robot) is the ``slam`` mapper when it can be made here (the
-``slam`` extra), otherwise it is left out and the experiments say so; ``naive`` is the
-paper's "Albot_x without correcting sensor errors" of Fig. 16.
+``slam`` extra), otherwise ``naive`` stands in and the experiments say so; ``naive`` is
+the paper's "Albot_x without correcting sensor errors" of Fig. 16.
 """
 
 from __future__ import annotations
