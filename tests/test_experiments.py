@@ -7,7 +7,7 @@ import pytest
 from albot2d.cli.experiments_cmd import parse_seeds
 from albot2d.errors import InputError
 from albot2d.evaluation.paper import counts, plan_jobs, table1
-from albot2d.evaluation.paper.process_exp import FIG16, method_sequences
+from albot2d.evaluation.paper.process_exp import FIG15, FIG16, method_sequences, room_exit_rows
 from albot2d.evaluation.paper.stats import over_seeds, verdict_of
 
 
@@ -117,3 +117,69 @@ def test_seed_ranges_and_bad_input():
         ("fig8_anticlockwise", 0), ("fig8_anticlockwise", 1),
         ("fig8_clockwise", 0), ("fig8_clockwise", 1),
     ]  # fmt: skip
+
+
+def _room_update(methods: list[str], tracked: list[int]) -> dict:
+    """A fig15 route along x: RD at 2 m, R at 5 m, back at RD at 8 m (true distance); a
+    view every metre (two at R: the arrival, then the turn)."""
+    xs = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 5.0, 4.0, 3.0, 2.0, 1.0, 0.0]
+    assert len(methods) == len(tracked) == len(xs)
+    return {"true_xy": [[x, 0.0] for x in xs], "methods": methods, "tracked": tracked,
+            "waypoint_along_m": {"S": [0.0], "RD": [2.0, 8.0], "R": [5.0], "E1": [10.0]},
+            "flags": [bool(m) for m in methods], "regions": ["corridor"] * len(xs)}  # fmt: skip
+
+
+def test_fig15_counts_the_methods_from_the_room_to_the_corridor():
+    u = _room_update(
+        ["start", "", "triangulation", "", "", "", "triangulation", "path_integration",
+         "path_integration", "", "triangulation", ""],
+        [0, 5, 3, 4, 4, 4, 2, 0, 0, 4, 3, 4],
+    )  # fmt: skip
+    # from the arrival at R (row 5) to back at RD (row 9), and two more rows
+    assert room_exit_rows(u) == [5, 6, 7, 8, 9, 10, 11]
+    plain = _room_update(["start"] + ["triangulation"] * 11, [0] + [3] * 11)
+    jobs = {"fig15_room": [u, plain], "fig6_start_stop": [u, plain]}
+    jobs = {k: [{"updates": x} for x in v] for k, v in jobs.items()}
+    r = FIG15.compute(jobs, [0, 1])
+    exit_ = r["ours"]["room_exit"]
+    assert exit_["path_integrations"]["per_seed"] == {"0": 2.0, "1": 0.0}
+    assert exit_["triangulations"]["per_seed"] == {"0": 2.0, "1": 7.0}
+    assert exit_["views_with_no_tracked_surface"]["per_seed"] == {"0": 2.0, "1": 0.0}
+    assert exit_["share_of_seeds_triangulation_then_2plus_pi"] == 0.5
+    assert r["verdict"] == "reproduced"  # half of the seeds
+    jobs["fig15_room"][0] = {"updates": plain}
+    assert FIG15.compute(jobs, [0, 1])["verdict"] == "not reproduced"
+
+
+def test_path_integration_causes_are_split_and_cut_at_the_mark():
+    causes = {"frames": [3, 7, 9, 20], "tracked": [0, 2, 0, 0],
+              "turning": [True, False, False, True],
+              "regions": ["corridor", "corridor", "hall", "corridor"],
+              "update_frames": [0, 3, 5, 7, 9, 20],
+              "update_methods": ["start", "path_integration", "triangulation",
+                                 "path_integration", "path_integration",
+                                 "path_integration"]}  # fmt: skip
+    job = {"path_integration_causes": causes, "marks": {"E7": {"frame": 10}}}
+    c = counts._pi_causes([job], "E7", [0])
+    values = {k: v["per_seed"]["0"] for k, v in c.items()}
+    assert values == {"total": 3, "no_tracked_surface": 2, "tracked_but_no_pose": 1,
+                      "after_a_turn": 1, "in_corridor": 2, "in_hall": 1, "in_room": 0,
+                      "runs": 2, "updates": 5}  # fmt: skip
+
+
+def test_run_experiment_without_scoring_drives_the_same_run():
+    import numpy as np
+
+    from albot2d.evaluation.experiment import RunSpec, run_experiment
+
+    spec = RunSpec(kind="fig6", seed=1, route="fig15", profile="start_stop", noise="pioneer3dx",
+                   mappers=("albot1", "naive"), max_frames=8)  # fmt: skip
+    full, light = run_experiment(spec), run_experiment(spec, score=False)
+    assert np.array_equal(full.trace.true_poses, light.trace.true_poses)
+    assert np.array_equal(full.trace.odom_poses, light.trace.odom_poses)
+    assert light.report["mappers"] == {}
+    assert all(v is None for v in light.report["odometry"].values())  # nothing scored
+    assert light.report["run"]["relations"] is None and full.report["run"]["relations"] > 0
+    assert light.report["run"]["frames"] == full.report["run"]["frames"] == 8
+    counts = full.report["mappers"]["albot1"]["counts"]
+    assert light.trace.mappers["albot1"].counts().local_maps == counts["local_maps"]

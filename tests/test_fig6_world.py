@@ -23,7 +23,7 @@ def test_every_seed_is_a_different_building_of_the_same_shape(worlds):
     assert len(digests) == 3
     for w in worlds:
         f = w.features
-        assert set(f["waypoints"]) == {"S", "X", *(f"E{k}" for k in range(1, 9))}
+        assert set(f["waypoints"]) == {"S", "X", "RD", "R", *(f"E{k}" for k in range(1, 9))}
         assert f["waypoints"]["S"] == f["waypoints"]["X"]
         ring = np.array(f["corridor_ring"])
         xl, xr = ring[:, 0].min(), ring[:, 0].max()
@@ -44,6 +44,7 @@ def test_routes_are_clear_and_of_the_papers_length(worlds):
     for w in worlds:
         clear = w.free_space.buffer(-w.robot_radius_m)
         for name in FIG6_ROUTES:
+            assert name in w.features["routes"], name
             tour = route_tour(w, name)
             assert clear.covers(shapely.LineString(tour.waypoints)), name
         length = route_tour(w, "fig6").length_m
@@ -92,3 +93,39 @@ def test_runspec_route_starts_at_s_and_drives_the_route():
         world.features["ring_length_m"]
     )
     assert result.report["params"]["spec"]["route"] == "fig8_clockwise"
+
+
+def test_fig15_route_goes_into_a_room_and_out_again(worlds):
+    for w in worlds:
+        p = w.features["waypoints"]
+        route = w.features["routes"]["fig15"]
+        assert route[:4] == ["S", "RD", "R", "RD"] and route[4] in ("E1", "E7")
+        # RD on the left corridor's centre line, R off it (through a door, in a room)
+        assert p["RD"][0] == p["S"][0] and p["R"][1] == p["RD"][1]
+        assert abs(p["R"][0] - p["RD"][0]) > 2.0
+        assert not any(shapely.box(*c).contains(shapely.Point(p["R"]))
+                       for c in _corridor_cells(w))  # fmt: skip
+        rooms = [shapely.Polygon(r) for r in _room_polygons(w)]
+        assert rooms and any(r.contains(shapely.Point(p["R"])) for r in rooms)
+        # the whole route, door included, is clear for the robot
+        clear = w.free_space.buffer(-w.robot_radius_m)
+        assert clear.covers(shapely.LineString(route_tour(w, "fig15").waypoints))
+
+
+def _corridor_cells(w):
+    ring = np.array(w.features["corridor_ring"])
+    half = 0.5 * w.features["corridor_width_m"]
+    xl, xr = ring[:, 0].min(), ring[:, 0].max()
+    yb, yt = ring[:, 1].min(), ring[:, 1].max()
+    return [(xl - half, yb - half, xl + half, yt + half),
+            (xr - half, yb - half, xr + half, yt + half),
+            (xl - half, yb - half, xr + half, yb + half),
+            (xl - half, yt - half, xr + half, yt + half)]  # fmt: skip
+
+
+def _room_polygons(w):
+    """The free-space pieces left when the corridor cells are cut away: rooms and hall."""
+    rest = w.free_space.difference(shapely.union_all([shapely.box(*c).buffer(0.3)
+                                                      for c in _corridor_cells(w)]))  # fmt: skip
+    parts = getattr(rest, "geoms", [rest])
+    return [np.asarray(g.exterior.coords) for g in parts if g.area > 4.0]

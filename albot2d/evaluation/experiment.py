@@ -23,7 +23,7 @@ import numpy as np
 from albot2d.errors import InputError
 from albot2d.evaluation.map_quality import MapQualityParams
 from albot2d.evaluation.report import make_report
-from albot2d.evaluation.results import RunScores
+from albot2d.evaluation.results import OdometryScores, RunScores
 from albot2d.evaluation.scoring import EvaluationParams, score_run
 from albot2d.evaluation.setup import DEFAULT_MAPPERS, RunSpec, build_run
 from albot2d.evaluation.trace import HomingParams, Trace, drive_mappers
@@ -77,7 +77,7 @@ class ExperimentResult:
     tour: Tour | None
     relations: Relations | None
     title: str
-    scores: RunScores
+    scores: RunScores  # empty (no mappers, odometry unscored) with run_experiment(score=False)
 
     def __repr__(self) -> str:
         return f"ExperimentResult({self.title!r}, {self.trace!r}, report keys {list(self.report)})"
@@ -98,13 +98,16 @@ def run_experiment(
     on_frame: Callable[[Frame, float], None] | None = None,
     on_stage: Callable[[str], None] | None = None,
     on_mappers: Callable[[Mapping[str, Mapper]], None] | None = None,
+    score: bool = True,
 ) -> ExperimentResult:
     """Simulate ``spec`` and score every mapper; see the module docstring.
 
     ``on_start(world, tour)`` is called once the tour is planned, ``on_frame(frame,
     travelled_m)`` after each frame and ``on_stage("scoring")`` after the last one
     (progress display); ``on_mappers(mappers)`` once the mappers are made, before the
-    first frame (to attach invariant checks).
+    first frame (to attach invariant checks). ``score=False`` leaves the scoring out (the
+    report's ``mappers`` and ``odometry`` are empty, no relations are made): for callers
+    that read only a few numbers off the trace and the mappers (``albot2d experiments``).
     """
     params = params or EvaluationParams()
     t0 = time.perf_counter()
@@ -123,8 +126,13 @@ def run_experiment(
     assert trace.true_poses is not None  # the simulator always knows the truth
     if on_stage is not None:
         on_stage("scoring")
-    relations = relations_from_truth(trace.timestamps, trace.true_poses, options=params.relations)
-    scores = score_run(trace, relations, params, world)
+    relations: Relations | None = None
+    scores = RunScores(OdometryScores(None, None, None))  # score=False: nothing scored
+    if score:
+        relations = relations_from_truth(
+            trace.timestamps, trace.true_poses, options=params.relations
+        )
+        scores = score_run(trace, relations, params, world)
     world_info = {
         "kind": world.kind, "seed": world.seed, "params": dict(spec.world_params),
         "source": spec.world_file, "width_m": world.width_m, "height_m": world.height_m,
@@ -136,8 +144,8 @@ def run_experiment(
         "travelled_m": float(trace.travelled_m[-1]),
         "true_travelled_m": float(np.hypot(*np.diff(trace.true_poses[:, :2], axis=0).T).sum()),
         "collided_frames": int(trace.collided.sum()),
-        "relations": len(relations),
-        "relations_source": "truth",
+        "relations": None if relations is None else len(relations),
+        "relations_source": "truth" if score else None,
     }
     report = make_report(
         "run",

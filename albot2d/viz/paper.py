@@ -174,19 +174,44 @@ def plot_updates(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
 
 
 def plot_sequence(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
-    """One panel per view of a sequence: the walls around the robot and the update method."""
+    """One panel per view of a sequence and the update method there. With ``views`` and
+    ``maps`` (Fig. 15): top row the view's surfaces (robot at the origin facing +x),
+    bottom row Albot₁'s global map after it (arrow: its pose in the map); otherwise the
+    walls around the robot's true pose."""
     poses = np.asarray(data["poses"], float)
-    fig, axes = _panels(fig, len(poses), size=3.2)
-    for a, pose, row, method, tracked in zip(axes, poses, data["rows"], data["methods"],
-                                             data["tracked"], strict=False):  # fmt: skip
-        _segments(a, data["walls"], colors="0.6", linewidths=0.7)
-        a.arrow(pose[0], pose[1], 0.8 * np.cos(pose[2]), 0.8 * np.sin(pose[2]), width=0.08,
-                color=_METHOD_COLOURS.get(method, "k"))  # fmt: skip
-        a.set_xlim(pose[0] - 6, pose[0] + 6)
-        a.set_ylim(pose[1] - 6, pose[1] + 6)
-        a.set_aspect("equal")
+    n = len(poses)
+    two_rows = data.get("views") is not None and data.get("maps") is not None
+    fig, panels = _panels(fig, 2 * n if two_rows else n, ncols=n, size=3.2)
+    top, bottom = panels[:n], panels[n:]
+    for k, (a, pose, row, method, tracked) in enumerate(zip(
+        top, poses, data["rows"], data["methods"], data["tracked"], strict=False
+    )):  # fmt: skip
+        colour = _METHOD_COLOURS.get(method, "k")
         label = method.replace("_", " ") if method else "no update"
-        a.set_title(f"view {row}: {label}\n{tracked} tracked", fontsize=8)
+        if two_rows:
+            _segments(a, data["views"][k], colors="k", linewidths=1.0)
+            a.plot([0.0], [0.0], marker=">", color=colour, markersize=9)
+            a.set_xlim(-4, 8)
+            a.set_ylim(-6, 6)
+        else:
+            _segments(a, data["walls"], colors="0.6", linewidths=0.7)
+            a.arrow(pose[0], pose[1], 0.8 * np.cos(pose[2]), 0.8 * np.sin(pose[2]),
+                    width=0.08, color=colour)  # fmt: skip
+            a.set_xlim(pose[0] - 6, pose[0] + 6)
+            a.set_ylim(pose[1] - 6, pose[1] + 6)
+        a.set_aspect("equal")
+        a.set_title(f"view {row}: {label}\n{tracked} tracked", fontsize=8, color=colour)
+        a.tick_params(labelsize=6)
+    for k, a in enumerate(bottom):
+        segs = np.asarray(data["maps"][k], float).reshape(-1, 4)
+        mp = np.asarray(data["map_poses"][k], float)
+        _segments(a, segs, colors="k", linewidths=0.8)
+        a.arrow(mp[0], mp[1], 0.8 * np.cos(mp[2]), 0.8 * np.sin(mp[2]), width=0.08,
+                color=_METHOD_COLOURS.get(data["methods"][k], "k"))  # fmt: skip
+        a.set_xlim(mp[0] - 8, mp[0] + 8)
+        a.set_ylim(mp[1] - 8, mp[1] + 8)
+        a.set_aspect("equal")
+        a.set_title(f"global map after view {data['rows'][k]}", fontsize=8)
         a.tick_params(labelsize=6)
     fig.tight_layout()
     return fig

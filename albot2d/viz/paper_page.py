@@ -152,6 +152,8 @@ def render_page(data: Mapping[str, Any], figures: Mapping[str, list[dict[str, An
             f"<p class='claim'><strong>The paper:</strong> {html.escape(result['claim'])}</p>",
             f"<p>Verdict: <span class='verdict {cls}'>{html.escape(result['verdict'])}</span>"
             f"</p><p class='rule'>Rule: {html.escape(result['rule'])}.</p>",
+            *(f"<p class='note'><strong>Why:</strong> {html.escape(str(n))}</p>"
+              for n in result.get("notes", [])),
             _paper_rows(result), _table(result), _per_seed(result, seeds),
         ]  # fmt: skip
         for fig in figures.get(name, []):

@@ -16,7 +16,13 @@ waypoint names it drives through in straight centre-line legs:
   ~136 m route (E1 is passed on the way from E6 back to X; S and X are the same place);
 - ``fig8_anticlockwise`` / ``fig8_clockwise``: once round the outer ring from S and back
   to S, in the two directions of the paper's Fig. 8 (Table 1's two journeys);
-- ``fig16``: S → E1 → … → E7 (the paper's Fig. 16 route).
+- ``fig16``: S → E1 → … → E7 (the paper's Fig. 16 route);
+- ``fig15``: S → RD → R → RD → E1 or E7: down (or up) the left corridor to ``RD``, in
+  front of the door of a room off it, through the door to ``R`` inside the room, turn
+  round and out again, then on along the corridor to the next corner (the paper's Fig. 15:
+  Albot₁ leaving a room). The room is the one whose door on the left corridor is nearest
+  to 4 m from S; ``R`` is the deepest point up to the room's middle on the door's axis
+  that the robot reaches clear of walls and furniture.
 
 The letters are placed so the legs follow the paper's description (the Fig. 6 drawing
 itself is not in the text): E1 is passed again after the first lap, passing S on the way
@@ -42,6 +48,7 @@ FIG6_ROUTES: dict[str, tuple[str, ...]] = {
     "fig8_anticlockwise": ("S", "E1", "E2", "E3", "E4", "E5", "E7", "X"),
     "fig8_clockwise": ("S", "E7", "E5", "E4", "E3", "E2", "E1", "X"),
     "fig16": ("S", "E1", "E2", "E3", "E4", "E5", "E6", "E1", "E7"),
+    "fig15": ("S", "RD", "R", "RD"),  # + the corner ahead (E1 or E7), per building
 }
 _HALL_PILLAR_SPACING_M = 5.0
 _HALL_PILLAR_SIZE_M = 0.4
@@ -190,6 +197,14 @@ def layout_fig6(rect: np.ndarray, p: Fig6Params, rng: np.random.Generator) -> La
         [cxm, cyt, cxl, cyt], [cxl, cyt, cxl, sy], [cxl, sy, cxl, cyb], [cxm, cyb, cxm, cyt],
     ])  # fmt: skip
     ring = [[cxl, cyb], [cxr, cyb], [cxr, cyt], [cxl, cyt], [cxl, cyb]]
+    room_points = _room_visit(room_cells, door_rects, floor, clutter, points, cell, xa, p)
+    routes = {k: list(v) for k, v in FIG6_ROUTES.items()}
+    if room_points is None:  # no door on the left corridor (never seen): no fig15 route
+        del routes["fig15"]
+    else:
+        points |= room_points
+        ahead = "E1" if room_points["RD"][1] < sy else "E7"
+        routes["fig15"].append(ahead)
     layout = Layout(floor=floor, clutter=clutter, doorways=[], links=[links])
     layout.features.update(
         rooms=len(room_cells),
@@ -200,6 +215,55 @@ def layout_fig6(rect: np.ndarray, p: Fig6Params, rng: np.random.Generator) -> La
         cross_corridor=[[cxm, cyb], [cxm, cyt]],
         open_areas=[hall_in.tolist()],
         waypoints={k: [float(v[0]), float(v[1])] for k, v in points.items()},
-        routes={k: list(v) for k, v in FIG6_ROUTES.items()},
+        routes=routes,
     )
     return layout
+
+
+_ROOM_DOOR_FROM_S_M = 4.0  # the fig15 route's room: its door nearest this far from S
+_ROOM_DEPTH_STEP_M = 0.1
+
+
+def _room_visit(
+    rooms: np.ndarray,
+    doors: np.ndarray,
+    floor: list[shapely.Geometry],
+    clutter: list[shapely.Polygon],
+    points: dict[str, tuple[float, float]],
+    cell: float,
+    xa: float,
+    p: Fig6Params,
+) -> dict[str, tuple[float, float]] | None:
+    """``RD`` (the left corridor's centre line in front of a room's door) and ``R`` (inside
+    that room on the door's axis) for the fig15 route; None when no door opens on the
+    left corridor. Uses no randomness, so the building is the same with or without it."""
+    cxl, sy = points["S"]
+    yb, yt = points["E1"][1], points["E7"][1]
+    margin = cell  # keep off the corners: the corridor must run on past the door
+    choices = []
+    for room, d in zip(rooms, doors, strict=True):
+        cx, cy = 0.5 * (d[0] + d[2]), 0.5 * (d[1] + d[3])
+        vertical_wall = d[2] - d[0] < d[3] - d[1]
+        if not vertical_wall or not yb + margin < cy < yt - margin:
+            continue
+        if abs(cx - xa) < p.wall_thickness_m:
+            inward = -1.0  # a room left of the left corridor
+        elif abs(cx - (xa + cell)) < p.wall_thickness_m:
+            inward = 1.0  # a room between the left and the cross corridor
+        else:
+            continue
+        middle = abs(0.5 * (room[0] + room[2]) - cx)
+        choices.append((abs(abs(cy - sy) - _ROOM_DOOR_FROM_S_M), float(cx), float(cy), inward,
+                        float(middle)))
+    if not choices:
+        return None
+    free = shapely.difference(shapely.union_all(floor), shapely.union_all(clutter))
+    clear = free.buffer(-(p.robot_radius_m + p.clearance_margin_m))
+    for _, cx, cy, inward, depth in sorted(choices):
+        rd = (float(cxl), cy)
+        while depth > 0.5:
+            r = (cx + inward * depth, cy)
+            if clear.covers(shapely.LineString([rd, r])):
+                return {"RD": rd, "R": (float(r[0]), cy)}
+            depth -= _ROOM_DEPTH_STEP_M
+    return None

@@ -1,14 +1,16 @@
 """The simulated runs the paper's experiments are computed from, one job per (run, seed).
 
-Every run goes through the one setup path, ``run_experiment(RunSpec(...))``; a job returns
-a small JSON-ready summary (counts, homing stops, map quality, update flags) and, for the
-seed whose maps are drawn, the map snapshots the figures need. Snapshots are taken while
+Every run goes through the one setup path, ``run_experiment(RunSpec(...), score=False)``,
+and is scored here only for what the experiments read; a job returns a small JSON-ready
+summary (counts, homing stops, the map accuracies asked for, update flags, why each
+path integration happened) and, for the seed whose maps are drawn, the map snapshots the
+figures need. Snapshots are taken while
 the run goes (``on_frame``) when the robot's *true* distance along the route first reaches
 a named waypoint, so "the map at E5" is the map when the robot got to E5.
 
 Albot_x (the paper's SLAM robot) is the ``slam`` mapper when it can be made here (the
-``slam`` extra), otherwise it is left out and the experiments say so; ``naive`` is the
-paper's "Albot_x without correcting sensor errors" of Fig. 16.
+``slam`` extra), otherwise ``naive`` stands in and the experiments say so; ``naive`` is
+the paper's "Albot_x without correcting sensor errors" of Fig. 16.
 """
 
 from __future__ import annotations
@@ -41,10 +43,14 @@ QUICK_MAX_FRAMES = 150
 
 @dataclass(frozen=True)
 class PaperRun:
-    """One kind of run: world, route or tour, driving profile, and what to snapshot.
+    """One kind of run: world, route or tour, driving profile, and what to keep of it.
 
-    ``marks`` names the moments at which every mapper's map is kept (for figures): a
-    waypoint name (its first passage; ``NAME#2`` the second) or ``half`` / ``end``.
+    ``mappers``: the mappers beside Albot₁ (``"x"`` is Albot_x: the ``slam`` mapper, or
+    ``naive`` where slam cannot be made). ``marks`` names the moments at which every
+    mapper's map is kept (for figures): a waypoint name (its first passage; ``NAME#2`` the
+    second) or ``half`` / ``end``. ``quality``: mark → the mappers whose map accuracy is
+    scored there (the only map scoring done, as the experiments read nothing else);
+    ``egocentric_end``: Albot₁'s egocentric map quality at the end is scored.
     """
 
     name: str
@@ -54,30 +60,38 @@ class PaperRun:
     tour_kind: str = "loop"
     tour_length_m: float = 100.0
     world_params: Mapping[str, Any] = field(default_factory=dict)
-    with_albot_x: bool = False
+    mappers: tuple[str, ...] = ()
     stop_every_m: float = 20.0
     marks: tuple[str, ...] = ()
+    quality: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    egocentric_end: bool = False
     steps: bool = False  # keep Albot1's per-view step records (Figs. 14, 15)
+    views: bool = False  # keep every view and Albot1's map after it, for the figure seed
     quick_cut: bool = True  # shortened in --quick mode
 
 
 RUNS: dict[str, PaperRun] = {
     r.name: r
     for r in (
-        PaperRun("fig6_dataset1", "fig6", "dataset1", route="fig6", with_albot_x=True,
-                 marks=("E5", "E1#2", "E7", "end"), quick_cut=True),
-        PaperRun("fig6_dataset2", "fig6", "dataset2", route="fig6", marks=("E7", "end"),
-                 quick_cut=True),
-        PaperRun("fig6_dataset3", "fig6", "dataset3", route="fig6", with_albot_x=True,
-                 marks=("E5", "end")),
+        PaperRun("fig6_dataset1", "fig6", "dataset1", route="fig6", mappers=("naive", "x"),
+                 marks=("E5", "E1#2", "E7", "end"),
+                 quality={"E5": ("albot1", "x"), "E7": ("albot1", "naive")}),
+        # Fig. 16 and the path-integration count read dataset 2 at E7 only: its route ends there
+        PaperRun("fig6_dataset2", "fig6", "dataset2", route="fig16", mappers=("naive",),
+                 marks=("E7",), quality={"E7": ("albot1", "naive")}),
+        PaperRun("fig6_dataset3", "fig6", "dataset3", route="fig6", mappers=("x",),
+                 marks=("E5", "end"), egocentric_end=True),
         PaperRun("fig6_start_stop", "fig6", "start_stop", route="fig6", marks=("E5",),
                  steps=True),
         PaperRun("fig8_anticlockwise", "fig6", "start_stop", route="fig8_anticlockwise",
                  stop_every_m=4.0),
         PaperRun("fig8_clockwise", "fig6", "start_stop", route="fig8_clockwise",
                  stop_every_m=4.0),
+        PaperRun("fig15_room", "fig6", "start_stop", route="fig15", steps=True,
+                 views=True),
         PaperRun("fig11_open", "open", "dataset3", tour_kind="loop", tour_length_m=130.0,
-                 with_albot_x=True, marks=("half", "end")),
+                 mappers=("x",), marks=("half", "end"),
+                 quality={"half": ("albot1",), "end": ("albot1", "x")}, egocentric_end=True),
     )
 }  # fmt: skip
 
@@ -138,16 +152,38 @@ def _snapshot(
     }
 
 
+def run_mappers(run: PaperRun, albot_x: bool) -> tuple[str, ...]:
+    """The mappers a run drives: Albot₁ first, then ``run.mappers`` with Albot_x named."""
+    x = ALBOT_X if albot_x else "naive"
+    names = ["albot1"] + [x if m == "x" else m for m in run.mappers]
+    return tuple(dict.fromkeys(names))
+
+
 def run_job(
     run_name: str, seed: int, *, quick: bool, albot_x: bool, keep_figures: bool
 ) -> dict[str, Any]:
-    """Run ``RUNS[run_name]`` on ``seed``; the summary the experiments read."""
+    """Run ``RUNS[run_name]`` on ``seed``; the summary the experiments read.
+
+    The run goes through ``run_experiment`` without its scoring (``score=False``): the
+    experiments read only counts, homing, the end-pose error, revisits and a few map
+    accuracies, which are computed here and nothing else.
+    """
     from albot2d.evaluation.experiment import RunSpec, run_experiment
-    from albot2d.evaluation.scoring import EvaluationParams
+    from albot2d.evaluation.scoring import (
+        REVISIT_GAP_MAPS,
+        EvaluationParams,
+        counts_section,
+        egocentric_at,
+        end_pose_error,
+        homing_section,
+        homing_summary,
+        revisits_section,
+        trajectory_of,
+    )
     from albot2d.evaluation.trace import HomingParams
 
     run = RUNS[run_name]
-    mappers = ("albot1", "naive", "truth") + ((ALBOT_X,) if albot_x and run.with_albot_x else ())
+    mappers = run_mappers(run, albot_x)
     spec = RunSpec(
         seed=seed, kind=run.kind, world_params=dict(run.world_params), profile=run.profile,
         noise=PAPER_NOISE, tour_kind=run.tour_kind, tour_length_m=run.tour_length_m,
@@ -161,11 +197,11 @@ def run_job(
         "targets": {},
         "travelled": 0.0,
         "last": None,
-        "frames": [],
+        "views": [],
     }
+    keep_views = keep_figures and run.views
 
     def on_start(world: Any, tour: Any) -> None:
-        state["world"], state["tour"] = world, tour
         state["targets"] = _mark_targets(world, run, tour.length_m)
 
     def on_mappers(made: Mapping[str, Any]) -> None:
@@ -176,6 +212,8 @@ def run_job(
         if state["last"] is not None:
             state["travelled"] += math.hypot(*(pose[:2] - state["last"][:2]))
         state["last"] = pose
+        if keep_views:
+            state["views"].append(_view_record(state["mappers"]["albot1"], frame))
         for mark, target in state["targets"].items():
             if mark not in state["snaps"] and state["travelled"] >= target - 0.05:
                 state["snaps"][mark] = _snapshot(
@@ -183,7 +221,7 @@ def run_job(
                 )
 
     result = run_experiment(
-        spec, params, on_start=on_start, on_frame=on_frame, on_mappers=on_mappers
+        spec, params, on_start=on_start, on_frame=on_frame, on_mappers=on_mappers, score=False
     )
     trace = result.trace
     truth, world = trace.true_poses, result.world
@@ -191,30 +229,47 @@ def run_job(
     end = _snapshot(
         state["mappers"], truth[-1], state["travelled"], int(trace.frame_indices[-1])
     )
+    last_waypoint = _last_waypoint(world, run)
     for mark in run.marks:
-        # a --quick run is cut short: the marks it never reached are taken at its end
-        if mark == "end" or (quick and spec.max_frames and mark not in state["snaps"]):
+        # The end; a --quick run cut short: the marks it never reached are taken at its
+        # end; a route ending at the mark's waypoint may stop a few cm short of it.
+        if mark not in state["snaps"] and (
+            mark == "end" or (quick and spec.max_frames) or mark == last_waypoint
+        ):
             state["snaps"][mark] = end
     report = result.report
+    made = state["mappers"]
+    albot1 = made["albot1"]
+    results: dict[str, dict[str, Any]] = {}
+    for name in mappers:
+        poses = trajectory_of(name, made[name], trace.n_frames)
+        end_error = end_pose_error(trace, poses)
+        results[name] = {"counts": counts_section(trace, made[name]).to_dict(),
+                         "end_pose_error": None if end_error is None else end_error.to_dict()}
+    homing = homing_section(trace, "albot1")
+    revisits = revisits_section(albot1, REVISIT_GAP_MAPS)
+    results["albot1"] |= {
+        "homing": [stop.to_dict() for stop in homing],
+        "homing_summary": homing_summary(homing).to_dict(),
+        "revisits": None if revisits is None else revisits.to_dict(),
+    }
+    if run.egocentric_end:
+        ego = egocentric_at(trace, trace.final, "albot1", world.obstacle_segments)
+        results["albot1"]["map"] = {"egocentric": None if ego is None else ego.to_dict()}
     summary: dict[str, Any] = {
         "run": run_name, "seed": seed, "quick": quick, "mappers": list(mappers),
         "frames": report["run"]["frames"], "travelled_m": report["run"]["travelled_m"],
         "true_travelled_m": report["run"]["true_travelled_m"],
         "tour_length_m": result.tour.length_m if result.tour is not None else None,
         "world_sha256": report["world"]["sha256"],
-        "mapper_results": {
-            name: {k: report["mappers"][name][k] for k in
-                   ("counts", "homing", "homing_summary", "map", "end_pose_error", "revisits")
-                   if k in report["mappers"][name]}
-            for name in mappers
-        },
+        "mapper_results": results,
         "marks": {mark: {"true_travelled_m": s["true_travelled_m"], "frame": s["frame"],
+                         "true_path_sha256": _path_digest(trace, s["frame"]),
                          "counts": {n: {k: m[k] for k in ("views", "local_maps",
                                                           "path_integrations")}
                                     for n, m in s["maps"].items()}}
                   for mark, s in state["snaps"].items()},
     }  # fmt: skip
-    albot1 = state["mappers"]["albot1"]
     if run.steps:
         from albot2d.evaluation.updates import albot1_update_flags, region_labels
 
@@ -227,14 +282,22 @@ def run_job(
             "tracked": _tracked_per_row(albot1.steps, trace.frame_indices),
             "true_xy": truth[:, :2].tolist(),
         }
+        if run.route is not None:
+            from worldgen.routes import waypoint_arclength_m
+
+            summary["updates"]["waypoint_along_m"] = waypoint_arclength_m(world, run.route)
+    summary["path_integration_causes"] = path_integration_causes(albot1, trace, world)
     if "E1#2" in state["snaps"] and "E7" in state["snaps"]:
         from albot2d.evaluation.paper.figdata import deleted_surfaces
 
         summary["fig10_deleted"] = len(
             deleted_surfaces(state["snaps"]["E1#2"], state["snaps"]["E7"])
         )
+    x = ALBOT_X if albot_x else "naive"
+    wanted = {mark: tuple(x if m == "x" else m for m in names)
+              for mark, names in run.quality.items()}  # fmt: skip
     summary["map_quality_at_marks"] = _quality_at_marks(
-        state["snaps"], world, truth[0]
+        state["snaps"], wanted, world, truth[0]
     )
     if keep_figures:
         summary["figures"] = {
@@ -244,8 +307,62 @@ def run_job(
             "snaps": state["snaps"],
             "waypoints": dict(world.features.get("waypoints", {})),
             "updates": summary.get("updates"),
+            "views": state["views"] if keep_views else None,
         }
     return summary
+
+
+def _view_record(albot1: Any, frame: Any) -> dict[str, Any]:
+    """The view Albot₁ saw at ``frame`` (surfaces, robot frame) and its global map just
+    after it (map frame), for the Fig. 15 panels."""
+    from albot2d.perception.extraction import extract_surfaces
+
+    view = extract_surfaces(frame.scan, albot1.perception())
+    return {
+        "surfaces": np.asarray(view.segments, float).copy(),
+        "global_map": np.asarray(albot1.global_map().segments, float).copy(),
+        "pose_in_map": albot1.pose().as_array(),
+    }
+
+
+def path_integration_causes(albot1: Any, trace: Any, world: Any) -> dict[str, Any]:
+    """Every local map Albot₁ placed by path integration: its frame, how many tracked
+    surfaces were left (0: none to triangulate from; > 0: the triangulation afforded no
+    pose within the gates), whether that view ended a turn, and the region kind there."""
+    from albot2d.evaluation.updates import region_labels
+    from albot2d.geometry import wrap_angle
+
+    rows = {int(f): k for k, f in enumerate(np.asarray(trace.frame_indices).tolist())}
+    pis = [m for m in albot1.route if m.method == "path_integration" and m.frame_index in rows]
+    k = np.array([rows[m.frame_index] for m in pis], dtype=np.int64)
+    odom = np.asarray(trace.odom_poses)
+    prev = np.maximum(k - 1, 0)
+    dturn = np.degrees(np.abs(wrap_angle(odom[k, 2] - odom[prev, 2])))
+    dmove = np.hypot(*(odom[k, :2] - odom[prev, :2]).T)
+    regions = region_labels(world, trace.true_poses[k, :2]) if len(k) else np.array([])
+    updates = [m for m in albot1.route if m.frame_index in rows]
+    return {
+        "frames": [int(m.frame_index) for m in pis],
+        "tracked": [int(m.tracked) for m in pis],
+        "turning": [bool(t > 0.5 and d < 0.02) for t, d in zip(dturn, dmove, strict=True)],
+        "regions": [str(r) for r in regions],
+        "update_frames": [int(m.frame_index) for m in updates],
+        "update_methods": [str(m.method) for m in updates],
+    }
+
+
+def _path_digest(trace: Any, frame: int) -> str:
+    """SHA-256 of the true poses up to ``frame``: whether two runs drove the same path."""
+    import hashlib
+
+    rows = np.flatnonzero(np.asarray(trace.frame_indices) <= frame)
+    return hashlib.sha256(np.ascontiguousarray(trace.true_poses[rows]).tobytes()).hexdigest()
+
+
+def _last_waypoint(world: Any, run: PaperRun) -> str | None:
+    if run.route is None:
+        return None
+    return str(world.features.get("routes", {}).get(run.route, [None])[-1])
 
 
 def _methods_per_row(steps: Any, frame_indices: np.ndarray) -> list[str]:
@@ -270,16 +387,26 @@ def _tracked_per_row(steps: Any, frame_indices: np.ndarray) -> list[int]:
 
 
 def _quality_at_marks(
-    snaps: Mapping[str, Any], world: Any, true_start: np.ndarray
+    snaps: Mapping[str, Any],
+    wanted: Mapping[str, tuple[str, ...]],
+    world: Any,
+    true_start: np.ndarray,
 ) -> dict[str, dict[str, Any]]:
-    """Anchored map accuracy (p95, m) and surface count of every mapper at every mark."""
+    """Anchored map accuracy (p95, m) and surface count of the ``wanted`` mappers at each
+    mark (mark → mapper names)."""
     from albot2d.evaluation.map_quality import map_quality
     from albot2d.geometry import Pose
 
     out: dict[str, dict[str, Any]] = {}
-    for mark, snap in snaps.items():
+    for mark, names in wanted.items():
+        snap = snaps.get(mark)
+        if snap is None:
+            continue
         out[mark] = {}
-        for name, m in snap["maps"].items():
+        for name in names:
+            m = snap["maps"].get(name)
+            if m is None:
+                continue
             q = map_quality(
                 m["segments"], world.obstacle_segments, start_pose=Pose.from_array(true_start)
             )
