@@ -222,15 +222,17 @@ class SlamParams:
     odometry joins scan matching between keyframes (``use_wheel_odometry``), and over how
     many recent keyframes its disagreement with scan matching is measured to floor its
     sigmas (``wheel_noise_window``; the floor is ``wheel_noise_factor`` × the median
-    disagreement: 4.5 ≈ 3 robust sigmas, as wheel odometry's error is systematic as much
-    as random)."""
+    disagreement: 1.4826 × the median absolute value is the robust estimate of one sigma
+    of the disagreement, an upper bound on the wheel's own; a wheel's systematic error or
+    a log's odometry jump is left to the wheel factor's robust kernel,
+    ``PoseGraphParams.wheel_kernel``, instead of inflating every sigma)."""
 
     scan_matching: ScanMatchingParams = field(default_factory=ScanMatchingParams)
     loops: LoopClosureParams = field(default_factory=LoopClosureParams)
     graph: PoseGraphParams = field(default_factory=PoseGraphParams)
     use_wheel_odometry: bool = True
     wheel_noise_window: int = 100
-    wheel_noise_factor: float = 4.5
+    wheel_noise_factor: float = 1.4826
 
     def __post_init__(self) -> None:
         check_positive_int(self, "wheel_noise_window")
@@ -378,7 +380,7 @@ class LoopClosingSLAM:
             check = self.verify_closure(i, j, guess)
         self.checks.append(check)
         if check.accepted:
-            self.graph.add_loop(i, j, check.relative)
+            self.graph.add_loop(i, j, check.relative, check.information)
             with self.timer.stage("optimisation"):
                 self.graph.optimise()
         return check
