@@ -162,15 +162,24 @@ def _normals(
     """Unit surface normals at ``target[index]`` (the least-spread direction of the target
     points within ``radius_m``), and whether the neighbourhood is line-like enough to have
     one (≥ 3 points, spread along the line ≥ 4× across it)."""
-    normals = np.zeros((len(index), 2))
-    ok = np.zeros(len(index), dtype=bool)
-    for n, centre in enumerate(target[index]):
-        near = target[((target - centre) ** 2).sum(axis=1) <= radius_m**2]
-        if len(near) < 3:
-            continue
-        values, vectors = np.linalg.eigh(np.cov(near.T))
-        if values[1] > 0 and values[0] <= values[1] / 16:
-            normals[n], ok[n] = vectors[:, 0], True
+    # per neighbourhood: point count, first and second moments (chunked, vectorised)
+    products = np.column_stack([np.ones(len(target)), target, target[:, 0] ** 2,
+                                target[:, 0] * target[:, 1], target[:, 1] ** 2])  # fmt: skip
+    sums = np.empty((len(index), 6))
+    for start in range(0, len(index), 256):
+        centres = target[index[start : start + 256]]
+        near = ((centres[:, None, :] - target[None, :, :]) ** 2).sum(axis=2) <= radius_m**2
+        sums[start : start + 256] = near.astype(np.float64) @ products
+    count = sums[:, 0]
+    mean = sums[:, 1:3] / np.maximum(count, 1)[:, None]
+    second = sums[:, 3:] / np.maximum(count, 1)[:, None]
+    cov = np.empty((len(index), 2, 2))
+    cov[:, 0, 0] = second[:, 0] - mean[:, 0] ** 2
+    cov[:, 0, 1] = cov[:, 1, 0] = second[:, 1] - mean[:, 0] * mean[:, 1]
+    cov[:, 1, 1] = second[:, 2] - mean[:, 1] ** 2
+    values, vectors = np.linalg.eigh(cov)
+    normals = vectors[:, :, 0]
+    ok = (count >= 3) & (values[:, 1] > 0) & (values[:, 0] <= values[:, 1] / 16)
     return normals, ok
 
 
