@@ -208,6 +208,10 @@ def test_bad_loop_params_name_the_field() -> None:
         LoopClosureParams(keyframe_distance_m=0.0)
     with pytest.raises(InputError, match="loop_kernel"):
         PoseGraphParams(loop_kernel="tukey-ish")
+    with pytest.raises(InputError, match="overlap_distance_m"):
+        LoopClosureParams(overlap_distance_m=0.0)
+    with pytest.raises(InputError, match="max_correction_deg_per_m"):
+        LoopClosureParams(max_correction_deg_per_m=-0.1)
     with pytest.raises(InputError, match="wheel_kernel"):
         PoseGraphParams(wheel_kernel="tukey-ish")
     with pytest.raises(InputError, match="loop_max_sigma_ratio"):

@@ -2,9 +2,9 @@
 
 Nodes are keyframe poses (``gtsam.Pose2``); the first is anchored by a tight prior.
 Consecutive keyframes are joined by two factors: the scan-matching front end's relative
-motion and the wheel odometry's, each with a sigma growing with the motion and each under
-a robust kernel (either source slips now and then: scan matching by a degree or two in a
-corridor, a real log's odometry by more). A verified loop closure adds a between factor
+motion (under a robust kernel: scan matching now and then slips by a degree or two in a
+corridor) and the wheel odometry's, each with a sigma growing with the motion (the wheel's
+may get a robust kernel too, ``wheel_kernel``). A verified loop closure adds a between factor
 whose information matrix takes its shape from the registration's point-to-line Hessian
 (a corridor fixes the position across it, not along it) under a robust kernel too, so a
 false closure that slipped through verification is down-weighted instead of bending the
@@ -66,7 +66,7 @@ class PoseGraphParams:
     wheel_sigma_m_per_m: float = 0.05
     wheel_sigma_deg_per_m: float = 0.5
     wheel_sigma_deg_per_rad: float = 3.0
-    wheel_kernel: str = "cauchy"
+    wheel_kernel: str = "none"
     wheel_kernel_width: float = 5.0
     loop_sigma_m: float = 0.05
     loop_sigma_deg: float = 1.0

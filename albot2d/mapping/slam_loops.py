@@ -72,7 +72,8 @@ class LoopClosureParams:
       other map (the part both saw: with a 180° scanner a corridor driven the other way is
       half new surfaces, neither evidence for nor against the match); None: all points.
     - ``max_correction_m`` + ``max_correction_per_m`` × path since ``j``, and
-      ``max_correction_deg``: the largest change to the current relative estimate accepted.
+      ``max_correction_deg`` + ``max_correction_deg_per_m`` × that path: the largest change
+      to the current relative estimate accepted (heading drift grows with the path too).
     """
 
     keyframe_distance_m: float = 0.5
@@ -95,6 +96,7 @@ class LoopClosureParams:
     max_correction_m: float = 0.5
     max_correction_per_m: float = 0.01
     max_correction_deg: float = 5.0
+    max_correction_deg_per_m: float = 0.0
 
     def __post_init__(self) -> None:
         check_positive(self, "keyframe_distance_m", "keyframe_angle_deg", "search_radius_m",
@@ -104,7 +106,7 @@ class LoopClosureParams:
         if self.overlap_distance_m is not None:
             check_positive(self, "overlap_distance_m")
         check_non_negative(self, "min_separation_m", "search_radius_per_m",
-                           "max_correction_per_m")  # fmt: skip
+                           "max_correction_per_m", "max_correction_deg_per_m")  # fmt: skip
         check_positive_int(self, "max_candidates", "submap_keyframes", "max_iterations",
                            "min_inliers", "min_scan_inliers")  # fmt: skip
         check_in_range(self, "min_inlier_ratio", 0.0, 1.0)
@@ -320,10 +322,11 @@ class LoopVerifier:
         correction_m = float(np.hypot(change[0], change[1]))
         correction_deg = float(np.degrees(abs(wrap_angle(change[2]))))
         allowed_m = p.max_correction_m + p.max_correction_per_m * path_m
-        if not reason and (correction_m > allowed_m or correction_deg > p.max_correction_deg):
+        allowed_deg = p.max_correction_deg + p.max_correction_deg_per_m * path_m
+        if not reason and (correction_m > allowed_m or correction_deg > allowed_deg):
             reason = (
                 f"correction {correction_m:.2f} m / {correction_deg:.1f}° beyond the "
-                f"drift allowance {allowed_m:.2f} m / {p.max_correction_deg:.1f}°"
+                f"drift allowance {allowed_m:.2f} m / {allowed_deg:.1f}°"
             )
         # relative: keyframe j seen from keyframe i (the between factor i → j)
         relative = between_arrays(pose, np.zeros(3))
