@@ -150,11 +150,17 @@ def _nearest(
     (chunked brute force)."""
     out = np.empty(len(query))
     index = np.empty(len(query), dtype=np.int64)
+    # |q - t|² = |q|² + |t|² - 2 q·t as one matrix product per chunk (centred first, so
+    # the cancellation costs nothing at centimetre scale)
+    centre = target.mean(axis=0) if len(target) else np.zeros(2)
+    t = target - centre
+    t2 = (t**2).sum(axis=1)
     for start in range(0, len(query), 256):
-        q = query[start : start + 256]
-        d2 = ((q[:, None, :] - target[None, :, :]) ** 2).sum(axis=2)
-        index[start : start + 256] = d2.argmin(axis=1)
-        out[start : start + 256] = np.sqrt(d2.min(axis=1))
+        q = query[start : start + 256] - centre
+        d2 = (q**2).sum(axis=1)[:, None] + t2[None, :] - 2.0 * (q @ t.T)
+        nearest = d2.argmin(axis=1)
+        index[start : start + 256] = nearest
+        out[start : start + 256] = np.sqrt(np.maximum(d2[np.arange(len(q)), nearest], 0.0))
     return out, index
 
 
