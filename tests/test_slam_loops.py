@@ -77,6 +77,10 @@ def test_a_true_loop_closes_and_the_end_pose_error_drops(
     for c in (c for c in slam.checks if c.accepted):
         err = between_arrays(between_arrays(truth[rows[c.i]], truth[rows[c.j]]), c.relative)
         assert np.hypot(err[0], err[1]) < 0.25 and np.degrees(abs(err[2])) < 3.0
+        # it carries its registration's information: symmetric, positive semi-definite
+        assert c.information is not None and c.information.shape == (3, 3)
+        np.testing.assert_allclose(c.information, c.information.T)
+        assert np.linalg.eigvalsh(c.information)[0] >= -1e-9
     before = end_pose_error(frames, front_end.trajectory())
     after = end_pose_error(frames, slam.trajectory())
     assert after[0] < before[0]
