@@ -19,7 +19,7 @@ from albot2d.mapping import Mapper
 from albot2d.mapping.registry import BUILTIN_MAPPERS
 from albot2d.mapping.slam import LoopClosingSLAM, ScanMatchingSLAM
 from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams
-from albot2d.mapping.slam_loops import LoopClosureParams
+from albot2d.mapping.slam_loops import LoopClosureParams, registration_information
 from tests.runs import map_frames, office_loop
 
 MISSING = "the [slam] extra is not installed (pip install -e '.[slam]')"
@@ -66,6 +66,10 @@ def test_a_true_loop_closes_and_the_end_pose_error_drops(
     for c in (c for c in slam.checks if c.accepted):
         err = between_arrays(between_arrays(truth[rows[c.i]], truth[rows[c.j]]), c.relative)
         assert np.hypot(err[0], err[1]) < 0.25 and np.degrees(abs(err[2])) < 3.0
+        # it carries its registration's information: symmetric, positive semi-definite
+        assert c.information is not None and c.information.shape == (3, 3)
+        np.testing.assert_allclose(c.information, c.information.T)
+        assert np.linalg.eigvalsh(c.information)[0] >= -1e-9
     before = end_pose_error(frames, front_end.trajectory())
     after = end_pose_error(frames, slam.trajectory())
     assert after[0] < before[0]
@@ -87,8 +91,12 @@ def test_an_injected_false_candidate_is_rejected(
     # claim the two places are the same one: the robot was "here" at keyframe j
     check = slam.propose_closure(i, j, guess=np.zeros(3))
     assert not check.accepted and check.reason
-    # and from the current estimate (ICP must not snap onto a look-alike)
-    assert not slam.propose_closure(i, j).accepted
+    # or at j's place turned round (a 180° scanner then sees the other half of the room;
+    # ICP must not snap onto a look-alike). From the current estimate itself the two local
+    # maps may truly overlap (30 m laser, keyframes 6 m apart): not a false claim.
+    est = slam.graph.estimate
+    turned = compose_arrays(between_arrays(est[j], est[i]), np.array([0.0, 0.0, np.pi]))
+    assert not slam.propose_closure(i, j, guess=turned).accepted
     assert len(slam.graph.loops) == loops and slam.graph.optimisations == optimisations
     np.testing.assert_array_equal(slam.trajectory(), before)
     stats = slam.slam_stats()
@@ -121,6 +129,42 @@ def test_robust_kernel_limits_a_false_closure_that_got_through(extra: None) -> N
     robust_shift = np.hypot(*(robust[:, :2] - clean[:, :2]).T).max()
     plain_shift = np.hypot(*(plain[:, :2] - clean[:, :2]).T).max()
     assert robust_shift < 0.5 < plain_shift
+
+
+def _sigmas(noise: object) -> np.ndarray:
+    r = noise.R()  # type: ignore[attr-defined]
+    return np.sqrt(np.diag(np.linalg.inv(r.T @ r)))
+
+
+def test_closure_information_follows_what_the_registration_fixed(extra: None) -> None:
+    """A scan seen in a straight corridor (two parallel walls) fixes the cross-corridor
+    position and the heading, not the position along it: the closure's noise model is
+    loose along the corridor only. A corner fixes everything: the configured sigmas."""
+    x = np.linspace(-3.0, 3.0, 61)
+    walls = np.vstack([np.column_stack([x, np.full_like(x, 1.0)]),
+                       np.column_stack([x, np.full_like(x, -1.0)])])  # fmt: skip
+    up, down = np.tile([0.0, 1.0], (61, 1)), np.tile([0.0, -1.0], (61, 1))
+    corridor = registration_information(walls, np.vstack([up, down]))
+    assert corridor[0, 0] == pytest.approx(0.0) and corridor[1, 1] > 100
+    # rotating the corridor rotates the unconstrained direction with it
+    c, s = np.cos(0.5), np.sin(0.5)
+    rot = np.array([[c, -s], [s, c]])
+    turned = registration_information(walls @ rot.T, np.vstack([up, down]) @ rot.T)
+    assert np.linalg.eigvalsh(turned[:2, :2])[0] == pytest.approx(0.0, abs=1e-9)
+    params = PoseGraphParams()
+    graph = PoseGraph(params)
+    along, across, heading = _sigmas(graph.loop_noise(corridor))
+    assert along == pytest.approx(params.loop_sigma_m * params.loop_max_sigma_ratio)
+    assert across == pytest.approx(params.loop_sigma_m)
+    assert heading < np.radians(3 * params.loop_sigma_deg)
+    wall = np.column_stack([np.full_like(x, 3.0), x])  # a second wall across the end
+    corner = registration_information(np.vstack([walls, wall]),
+                                      np.vstack([up, down, np.tile([-1.0, 0.0], (61, 1))]))
+    assert max(_sigmas(graph.loop_noise(corner))[:2]) < 3 * params.loop_sigma_m
+    plain = PoseGraph(PoseGraphParams(loop_information=False))
+    np.testing.assert_allclose(_sigmas(plain.loop_noise(corridor)),
+                               [params.loop_sigma_m, params.loop_sigma_m,
+                                np.radians(params.loop_sigma_deg)])  # fmt: skip
 
 
 def test_slam_is_a_deterministic_protocol_mapper(
@@ -157,6 +201,14 @@ def test_bad_loop_params_name_the_field() -> None:
         LoopClosureParams(keyframe_distance_m=0.0)
     with pytest.raises(InputError, match="loop_kernel"):
         PoseGraphParams(loop_kernel="tukey-ish")
+    with pytest.raises(InputError, match="overlap_distance_m"):
+        LoopClosureParams(overlap_distance_m=0.0)
+    with pytest.raises(InputError, match="max_correction_deg_per_m"):
+        LoopClosureParams(max_correction_deg_per_m=-0.1)
+    with pytest.raises(InputError, match="wheel_kernel"):
+        PoseGraphParams(wheel_kernel="tukey-ish")
+    with pytest.raises(InputError, match="loop_max_sigma_ratio"):
+        PoseGraphParams(loop_max_sigma_ratio=0.0)
 
 
 def test_missing_gtsam_is_one_clean_error(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -2,11 +2,13 @@
 
 Nodes are keyframe poses (``gtsam.Pose2``); the first is anchored by a tight prior.
 Consecutive keyframes are joined by two factors: the scan-matching front end's relative
-motion and the wheel odometry's, each with a sigma growing with the motion. Scan matching
-is the more precise but now and then slips by a few degrees at a turn; under a robust
-kernel such a slip is out-voted by the odometry instead of being believed. A verified loop
-closure adds a between factor under a robust kernel too, so a false closure that slipped
-through verification is down-weighted instead of bending the whole map.
+motion (under a robust kernel: scan matching now and then slips by a degree or two in a
+corridor) and the wheel odometry's, each with a sigma growing with the motion (the wheel's
+may get a robust kernel too, ``wheel_kernel``). A verified loop closure adds a between factor
+whose information matrix takes its shape from the registration's point-to-line Hessian
+(a corridor fixes the position across it, not along it) under a robust kernel too, so a
+false closure that slipped through verification is down-weighted instead of bending the
+whole map.
 
 Optimisation is batch Levenberg–Marquardt from the current estimate, run when a closure
 was added and every ``optimise_every`` keyframes (between runs a new keyframe is placed by
@@ -40,8 +42,13 @@ class PoseGraphParams:
       ``odom_kernel_width`` the kernel's width in sigmas.
     - ``wheel_sigma_m`` / ``wheel_sigma_deg`` (+ ``_per_m``, and ``wheel_sigma_deg_per_rad``
       per radian turned): the same for the wheel-odometry factor (Gaussian) on a robot
-      with good odometry; the mapper raises them to what it measures (see ``slam.py``).
-    - ``loop_sigma_m`` / ``loop_sigma_deg``: sigma of a verified loop closure.
+      with good odometry; the mapper raises them to what it measures (see ``slam.py``);
+      ``wheel_kernel`` / ``wheel_kernel_width`` its robust kernel (wheel odometry slips too:
+      a wheel that spun or a log's odometry jump is then out-voted like a scan-matching slip).
+    - ``loop_sigma_m`` / ``loop_sigma_deg``: sigma of a verified loop closure in its
+      best-constrained direction; ``loop_information``: shape the closure's information
+      matrix by the registration's Hessian (off: those sigmas on every axis), a direction
+      the registration barely fixes getting up to ``loop_max_sigma_ratio`` × the sigma.
     - ``loop_kernel``: robust kernel on closures (``cauchy``, ``huber`` or ``none``) and its
       width ``loop_kernel_width`` (in sigmas).
     - ``max_iterations`` / ``relative_error_tol``: Levenberg–Marquardt stopping rules.
@@ -59,10 +66,14 @@ class PoseGraphParams:
     wheel_sigma_m_per_m: float = 0.05
     wheel_sigma_deg_per_m: float = 0.5
     wheel_sigma_deg_per_rad: float = 3.0
+    wheel_kernel: str = "none"
+    wheel_kernel_width: float = 5.0
     loop_sigma_m: float = 0.05
     loop_sigma_deg: float = 1.0
     loop_kernel: str = "cauchy"
     loop_kernel_width: float = 1.0
+    loop_information: bool = True
+    loop_max_sigma_ratio: float = 20.0
     max_iterations: int = 100
     relative_error_tol: float = 1e-6
     optimise_every: int = 10
@@ -70,12 +81,13 @@ class PoseGraphParams:
     def __post_init__(self) -> None:
         check_positive(self, "odom_sigma_m", "odom_sigma_deg", "loop_sigma_m", "loop_sigma_deg",
                        "loop_kernel_width", "odom_kernel_width", "relative_error_tol",
-                       "wheel_sigma_m", "wheel_sigma_deg")  # fmt: skip
+                       "wheel_sigma_m", "wheel_sigma_deg", "wheel_kernel_width",
+                       "loop_max_sigma_ratio")  # fmt: skip
         check_non_negative(self, "odom_sigma_m_per_m", "odom_sigma_deg_per_m",
                            "wheel_sigma_m_per_m", "wheel_sigma_deg_per_m",
                            "wheel_sigma_deg_per_rad")  # fmt: skip
         check_positive_int(self, "max_iterations", "optimise_every")
-        for name in ("loop_kernel", "odom_kernel"):
+        for name in ("loop_kernel", "odom_kernel", "wheel_kernel"):
             if getattr(self, name) not in KERNELS:
                 raise InputError(
                     f"PoseGraphParams.{name} must be one of {', '.join(KERNELS)}, "
@@ -154,20 +166,52 @@ class PoseGraph:
                     max(np.radians(p.wheel_sigma_deg + p.wheel_sigma_deg_per_m * dw
                                    + p.wheel_sigma_deg_per_rad * turn), wheel_floor[1]),
                 )  # fmt: skip
+                noise = self._robust(p.wheel_kernel, p.wheel_kernel_width, noise)
                 self._graph.add(g.BetweenFactorPose2(k - 1, k, g.Pose2(*wheel_motion), noise))
                 self._since += 1
                 self._pending |= self._since >= p.optimise_every
         self._estimate = np.vstack([self._estimate, np.asarray(initial, dtype=np.float64)])
         return k
 
-    def add_loop(self, i: int, j: int, relative: NDArray[np.float64]) -> None:
-        """A verified closure: keyframe ``j`` seen from keyframe ``i`` at ``relative``."""
+    def add_loop(
+        self,
+        i: int,
+        j: int,
+        relative: NDArray[np.float64],
+        information: NDArray[np.float64] | None = None,
+    ) -> None:
+        """A verified closure: keyframe ``j`` seen from keyframe ``i`` at ``relative``.
+
+        ``information``: the registration's Hessian (``registration_information``), used for
+        its shape when ``loop_information`` is on; see ``loop_noise``."""
         g, p = self._gtsam, self.params
-        noise = self._diagonal(p.loop_sigma_m, np.radians(p.loop_sigma_deg))
+        noise = self.loop_noise(information)
         noise = self._robust(p.loop_kernel, p.loop_kernel_width, noise)
         self._graph.add(g.BetweenFactorPose2(i, j, g.Pose2(*relative), noise))
         self.loops.append((i, j))
         self._pending = True
+
+    def loop_noise(self, information: NDArray[np.float64] | None) -> Any:
+        """A closure's Gaussian noise model. Without ``information`` (or with
+        ``loop_information`` off): ``loop_sigma_m``/``loop_sigma_deg`` on every axis. With
+        it: the Hessian in units of those sigmas, scaled so its best-constrained direction
+        has exactly those sigmas; a direction it constrains ``r`` times less (eigenvalue
+        ratio) gets ``1/√r`` times the sigma, at most ``loop_max_sigma_ratio`` times. The
+        shape says what the registration fixed (a corridor fixes the cross-corridor
+        position and the heading, not the position along it); the scale stays the
+        configured one, as a raw ICP Hessian is known to be overconfident (neighbouring
+        points' errors are correlated)."""
+        g, p = self._gtsam, self.params
+        sigmas = np.array([p.loop_sigma_m, p.loop_sigma_m, np.radians(p.loop_sigma_deg)])
+        if information is None or not p.loop_information:
+            return g.noiseModel.Diagonal.Sigmas(sigmas)
+        whitened = sigmas[:, None] * np.asarray(information, dtype=np.float64) * sigmas[None, :]
+        values, vectors = np.linalg.eigh(whitened)
+        if not (np.all(np.isfinite(values)) and values[-1] > 0):
+            return g.noiseModel.Diagonal.Sigmas(sigmas)
+        values = np.maximum(values / values[-1], p.loop_max_sigma_ratio**-2)
+        shaped = (vectors * values) @ vectors.T
+        return g.noiseModel.Gaussian.Information(shaped / sigmas[:, None] / sigmas[None, :])
 
     def optimise(self) -> bool:
         """Levenberg–Marquardt from the current estimate if closures were added since the

@@ -13,11 +13,17 @@ pose; keyframe ``i``'s own scan is then registered from that result with a tight
 the closure is about the keyframe's own pose. The result is accepted only if
 
 - enough of the query points and of the scan's (``min_inlier_ratio``, ``min_inliers``,
-  ``min_scan_inliers``) lie within ``inlier_distance_m`` of a target point, and
+  ``min_scan_inliers``) lie within ``inlier_distance_m`` of a target point, the ratio
+  taken over the points the two maps share (within ``overlap_distance_m`` of a target
+  point: a 180° scanner driven back along a corridor sees the other half of it), and
 - the correction it makes to the current estimate stays within the drift allowance
   (``max_correction_m`` + ``max_correction_per_m`` × path since ``j``,
   ``max_correction_deg``): ICP that slid along a corridor or snapped onto a look-alike
   room is rejected here.
+
+An accepted closure carries the point-to-line Hessian of the scan's registration
+(``registration_information``): the pose graph shapes the closure's information matrix by
+it, so a closure in a corridor does not pin the position along the corridor.
 """
 
 from __future__ import annotations
@@ -36,7 +42,13 @@ from albot2d.validation import (
     check_positive_int,
 )
 
-__all__ = ["ClosureCheck", "LoopClosureParams", "LoopVerifier", "voxel_downsample_2d"]
+__all__ = [
+    "ClosureCheck",
+    "LoopClosureParams",
+    "LoopVerifier",
+    "registration_information",
+    "voxel_downsample_2d",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -56,8 +68,12 @@ class LoopClosureParams:
     - ``max_correspondence_m`` / ``kernel_m``: ICP correspondence gate and robust kernel.
     - ``inlier_distance_m``, ``min_inlier_ratio``, ``min_inliers``: the fitness test of the
       local maps; ``min_scan_inliers``: of keyframe ``i``'s own scan after refinement.
+      ``overlap_distance_m``: the ratio counts only the points within this distance of the
+      other map (the part both saw: with a 180° scanner a corridor driven the other way is
+      half new surfaces, neither evidence for nor against the match); None: all points.
     - ``max_correction_m`` + ``max_correction_per_m`` × path since ``j``, and
-      ``max_correction_deg``: the largest change to the current relative estimate accepted.
+      ``max_correction_deg`` + ``max_correction_deg_per_m`` × that path: the largest change
+      to the current relative estimate accepted (heading drift grows with the path too).
     """
 
     keyframe_distance_m: float = 0.5
@@ -74,19 +90,23 @@ class LoopClosureParams:
     max_iterations: int = 100
     inlier_distance_m: float = 0.10
     min_inlier_ratio: float = 0.60
+    overlap_distance_m: float | None = 1.0
     min_inliers: int = 60
     min_scan_inliers: int = 30
     max_correction_m: float = 0.5
     max_correction_per_m: float = 0.01
     max_correction_deg: float = 5.0
+    max_correction_deg_per_m: float = 0.0
 
     def __post_init__(self) -> None:
         check_positive(self, "keyframe_distance_m", "keyframe_angle_deg", "search_radius_m",
                        "max_search_radius_m", "voxel_size_m", "max_correspondence_m",
                        "kernel_m", "inlier_distance_m", "max_correction_m",
                        "max_correction_deg")  # fmt: skip
+        if self.overlap_distance_m is not None:
+            check_positive(self, "overlap_distance_m")
         check_non_negative(self, "min_separation_m", "search_radius_per_m",
-                           "max_correction_per_m")  # fmt: skip
+                           "max_correction_per_m", "max_correction_deg_per_m")  # fmt: skip
         check_positive_int(self, "max_candidates", "submap_keyframes", "max_iterations",
                            "min_inliers", "min_scan_inliers")  # fmt: skip
         check_in_range(self, "min_inlier_ratio", 0.0, 1.0)
@@ -97,7 +117,9 @@ class ClosureCheck:
     """The verdict on one candidate: keyframe ``j`` registered into keyframe ``i``'s frame.
 
     ``relative`` is ``j``'s pose in ``i``'s frame after registration; ``reason`` is empty
-    when accepted, else says which test failed.
+    when accepted, else says which test failed; ``information`` is the registration's
+    point-to-line Hessian of keyframe ``i``'s scan (``registration_information``; None if
+    the scan registration was not reached).
     """
 
     i: int
@@ -109,6 +131,7 @@ class ClosureCheck:
     correction_deg: float
     accepted: bool
     reason: str
+    information: NDArray[np.float64] | None = None
 
 
 def voxel_downsample_2d(points: NDArray[np.float64], voxel_m: float) -> NDArray[np.float64]:
@@ -120,16 +143,65 @@ def voxel_downsample_2d(points: NDArray[np.float64], voxel_m: float) -> NDArray[
     return points[np.sort(first)]
 
 
-def _nearest_distances(
+def _nearest(
     query: NDArray[np.float64], target: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """Distance from each query point to its nearest target point (chunked brute force)."""
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Distance from each query point to its nearest target point, and that point's index
+    (chunked brute force)."""
     out = np.empty(len(query))
+    index = np.empty(len(query), dtype=np.int64)
+    # |q - t|² = |q|² + |t|² - 2 q·t as one matrix product per chunk (centred first, so
+    # the cancellation costs nothing at centimetre scale)
+    centre = target.mean(axis=0) if len(target) else np.zeros(2)
+    t = target - centre
+    t2 = (t**2).sum(axis=1)
     for start in range(0, len(query), 256):
-        q = query[start : start + 256]
-        d2 = ((q[:, None, :] - target[None, :, :]) ** 2).sum(axis=2)
-        out[start : start + 256] = np.sqrt(d2.min(axis=1))
-    return out
+        q = query[start : start + 256] - centre
+        d2 = (q**2).sum(axis=1)[:, None] + t2[None, :] - 2.0 * (q @ t.T)
+        nearest = d2.argmin(axis=1)
+        index[start : start + 256] = nearest
+        out[start : start + 256] = np.sqrt(np.maximum(d2[np.arange(len(q)), nearest], 0.0))
+    return out, index
+
+
+def _normals(
+    target: NDArray[np.float64], index: NDArray[np.int64], radius_m: float
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Unit surface normals at ``target[index]`` (the least-spread direction of the target
+    points within ``radius_m``), and whether the neighbourhood is line-like enough to have
+    one (≥ 3 points, spread along the line ≥ 4× across it)."""
+    # per neighbourhood: point count, first and second moments (chunked, vectorised)
+    products = np.column_stack([np.ones(len(target)), target, target[:, 0] ** 2,
+                                target[:, 0] * target[:, 1], target[:, 1] ** 2])  # fmt: skip
+    sums = np.empty((len(index), 6))
+    for start in range(0, len(index), 256):
+        centres = target[index[start : start + 256]]
+        near = ((centres[:, None, :] - target[None, :, :]) ** 2).sum(axis=2) <= radius_m**2
+        sums[start : start + 256] = near.astype(np.float64) @ products
+    count = sums[:, 0]
+    mean = sums[:, 1:3] / np.maximum(count, 1)[:, None]
+    second = sums[:, 3:] / np.maximum(count, 1)[:, None]
+    cov = np.empty((len(index), 2, 2))
+    cov[:, 0, 0] = second[:, 0] - mean[:, 0] ** 2
+    cov[:, 0, 1] = cov[:, 1, 0] = second[:, 1] - mean[:, 0] * mean[:, 1]
+    cov[:, 1, 1] = second[:, 2] - mean[:, 1] ** 2
+    values, vectors = np.linalg.eigh(cov)
+    normals = vectors[:, :, 0]
+    ok = (count >= 3) & (values[:, 1] > 0) & (values[:, 0] <= values[:, 1] / 16)
+    return normals, ok
+
+
+def registration_information(
+    points: NDArray[np.float64], normals: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Point-to-line Gauss–Newton Hessian ``Σ JᵀJ`` (3×3, order x, y, θ) of registered
+    ``points`` (target frame) on lines with unit ``normals``, for a perturbation of the
+    relative pose in GTSAM's Pose2 local coordinates. Along a corridor the ``x, y``
+    direction parallel to the walls has (near) zero information: the registration does
+    not constrain it."""
+    moment = normals[:, 1] * points[:, 0] - normals[:, 0] * points[:, 1]
+    jac = np.column_stack([normals, moment])
+    return jac.T @ jac
 
 
 def _se2_matrix(pose: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -172,9 +244,11 @@ class LoopVerifier:
     def _fitness(
         self, pose: NDArray[np.float64], points: NDArray[np.float64], target: NDArray[np.float64]
     ) -> tuple[int, float]:
-        distances = _nearest_distances(transform_points(pose, points), target)
+        distances, _ = _nearest(transform_points(pose, points), target)
         inliers = int(np.count_nonzero(distances <= self.params.inlier_distance_m))
-        return inliers, inliers / max(len(points), 1)
+        overlap = self.params.overlap_distance_m
+        seen = len(points) if overlap is None else np.count_nonzero(distances <= overlap)
+        return inliers, inliers / max(int(seen), 1)
 
     def check(
         self,
@@ -223,7 +297,19 @@ class LoopVerifier:
         reason = ""
         if scan_inliers < p.min_scan_inliers or scan_ratio < p.min_inlier_ratio:
             reason = f"scan fitness: inlier ratio {scan_ratio:.2f}, {scan_inliers} inliers"
-        return self._verdict(i, j, refined, estimate, ratio, inliers, path_m, reason)
+        return self._verdict(i, j, refined, estimate, ratio, inliers, path_m, reason,
+                             self._information(refined, scan, target))  # fmt: skip
+
+    def _information(
+        self, pose: NDArray[np.float64], points: NDArray[np.float64], target: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """The point-to-line Hessian of ``points`` registered at ``pose`` onto ``target``:
+        inliers only, normals from the target within 3 voxels (a wall's local line)."""
+        placed = transform_points(pose, points)
+        distances, index = _nearest(placed, target)
+        inlier = distances <= self.params.inlier_distance_m
+        normals, ok = _normals(target, index[inlier], 3 * self.params.voxel_size_m)
+        return registration_information(placed[inlier][ok], normals[ok])
 
     def _verdict(
         self,
@@ -235,18 +321,20 @@ class LoopVerifier:
         inliers: int,
         path_m: float,
         reason: str,
+        information: NDArray[np.float64] | None = None,
     ) -> ClosureCheck:
         p = self.params
         change = between_arrays(estimate, pose)
         correction_m = float(np.hypot(change[0], change[1]))
         correction_deg = float(np.degrees(abs(wrap_angle(change[2]))))
         allowed_m = p.max_correction_m + p.max_correction_per_m * path_m
-        if not reason and (correction_m > allowed_m or correction_deg > p.max_correction_deg):
+        allowed_deg = p.max_correction_deg + p.max_correction_deg_per_m * path_m
+        if not reason and (correction_m > allowed_m or correction_deg > allowed_deg):
             reason = (
                 f"correction {correction_m:.2f} m / {correction_deg:.1f}° beyond the "
-                f"drift allowance {allowed_m:.2f} m / {p.max_correction_deg:.1f}°"
+                f"drift allowance {allowed_m:.2f} m / {allowed_deg:.1f}°"
             )
         # relative: keyframe j seen from keyframe i (the between factor i → j)
         relative = between_arrays(pose, np.zeros(3))
         return ClosureCheck(i, j, relative, ratio, inliers, correction_m, correction_deg,
-                            not reason, reason)  # fmt: skip
+                            not reason, reason, information)  # fmt: skip
