@@ -26,7 +26,7 @@ class SegmentGridIndex:
         if not (math.isfinite(cell_m) and cell_m > 0):
             raise ValueError(f"cell_m must be > 0, got {cell_m!r}")
         self.cell_m = float(cell_m)
-        self._cells: dict[tuple[int, int], set[int]] = {}
+        self._cells: dict[tuple[int, int], list[int]] = {}
 
     def _cell_ranges(self, boxes: NDArray[np.float64]) -> NDArray[np.int64]:
         return np.floor(boxes / self.cell_m).astype(np.int64)
@@ -39,7 +39,7 @@ class SegmentGridIndex:
         for sid, (x0, y0, x1, y1) in zip(ids.tolist(), cells.tolist(), strict=True):
             for ix in range(x0, x1 + 1):
                 for iy in range(y0, y1 + 1):
-                    self._cells.setdefault((ix, iy), set()).add(sid)
+                    self._cells.setdefault((ix, iy), []).append(sid)
 
     def remove(self, ids: NDArray[np.int64], segments: NDArray[np.float64]) -> None:
         """Forget ``ids``, indexed with these ``segments`` (the same geometry as inserted);
@@ -51,8 +51,10 @@ class SegmentGridIndex:
             for ix in range(x0, x1 + 1):
                 for iy in range(y0, y1 + 1):
                     members = self._cells.get((ix, iy))
-                    if members is not None:
-                        members.discard(sid)
+                    if members is not None and sid in members:
+                        # Lists, not sets: a cell holds a few dozen ids (a scan is cheap)
+                        # and a naive map's 50,000 surfaces cost 1 MB, not 10.
+                        members.remove(sid)
                         if not members:
                             del self._cells[(ix, iy)]
 
