@@ -1,4 +1,4 @@
-"""The egocentric measure's fast paths give the reference results exactly."""
+"""The map-quality and egocentric measures' fast paths give the reference results exactly."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import pytest
 
 from albot2d.evaluation.egocentric import _covered, _grid_samples_within, unique_on_grid
 from albot2d.evaluation.map_quality import nearest_segment_distance, sample_segments
+from albot2d.geometry import segment_lengths
 
 
 def reference_unique_on_grid(points: np.ndarray, grid_m: float) -> np.ndarray:
@@ -56,3 +57,23 @@ def test_grid_samples_within_reach_equal_sampling_everything(reach_m: float) -> 
     everything = unique_on_grid(sample_segments(segs, 0.05), 0.05)
     expected = everything[np.hypot(everything[:, 0], everything[:, 1]) <= reach_m]
     np.testing.assert_array_equal(_grid_samples_within(segs, 0.05, 0.05, reach_m), expected)
+
+
+def reference_sample_segments(segs: np.ndarray, spacing_m: float) -> np.ndarray:
+    """The rows-by-owner formulation sample_segments replaced."""
+    counts = np.maximum(np.ceil(segment_lengths(segs) / spacing_m).astype(np.int64), 1) + 1
+    owner = np.repeat(np.arange(len(segs)), counts)
+    starts = np.cumsum(counts) - counts
+    t = (np.arange(counts.sum()) - starts[owner]) / (counts[owner] - 1)
+    a, b = segs[owner, :2], segs[owner, 2:]
+    return a + t[:, None] * (b - a)
+
+
+@pytest.mark.parametrize("spacing_m", [0.05, 0.37])
+def test_sample_segments_equals_the_gathering_formulation_bit_for_bit(spacing_m: float) -> None:
+    rng = np.random.default_rng(6)
+    segs = rng.uniform(-30.0, 30.0, (3000, 4))
+    segs[:50, 2:] = segs[:50, :2]  # zero-length surfaces: two samples on the point
+    got, expected = sample_segments(segs, spacing_m), reference_sample_segments(segs, spacing_m)
+    assert got.shape == expected.shape
+    np.testing.assert_array_equal(got.view(np.int64), expected.view(np.int64))

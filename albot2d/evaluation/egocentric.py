@@ -136,8 +136,11 @@ def egocentric_quality(
     return EgocentricQuality(p.window_m, completeness, accuracy, n)
 
 
-# Seen points per block in _covered (bounds the candidate pairs held at once).
-_BLOCK_POINTS = 1 << 13
+# Seen points per tree query and (point, surface) pairs per numpy chunk in _covered: a
+# short run's naive map stacks hundreds of surfaces on each wall, so the pairs, not the
+# points, bound the memory (~200 bytes a pair in a chunk).
+_BLOCK_POINTS = 1 << 10
+_CHUNK_PAIRS = 1 << 16
 
 
 def _covered(points: FloatArray, segs: FloatArray, tolerance_m: float) -> NDArray[np.bool_]:
@@ -153,8 +156,10 @@ def _covered(points: FloatArray, segs: FloatArray, tolerance_m: float) -> NDArra
         pts = points[b0:b0 + _BLOCK_POINTS]
         lo, hi = pts - tolerance_m, pts + tolerance_m
         which, seg = tree.query(shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]))
-        d = point_to_segment_geos(pts[which, 0], pts[which, 1], segs[seg])
-        out[b0 + which[d <= tolerance_m]] = True
+        for c0 in range(0, len(which), _CHUNK_PAIRS):
+            w, sg = which[c0:c0 + _CHUNK_PAIRS], seg[c0:c0 + _CHUNK_PAIRS]
+            d = point_to_segment_geos(pts[w, 0], pts[w, 1], segs[sg])
+            out[b0 + w[d <= tolerance_m]] = True
     return out
 
 

