@@ -102,7 +102,11 @@ def render_map_animation(
     if name is None:
         return {}
     trace = result.trace
+    from albot2d.mapping.protocol import ViewBasedMapper
+
     mapper = trace.mappers[name]
+    if not isinstance(mapper, ViewBasedMapper):  # animated_mapper() chose one with a history
+        raise TypeError(f"mapper {name!r} keeps no map history to animate")
     truth = trace.true_poses
     start = None if truth is None else truth[0]
     est = anchor_path(start, np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3))
@@ -127,7 +131,7 @@ def render_map_animation(
     if truth is None:
         ax_true.set_title("no ground truth (a real log)", fontsize=10)
     surfaces = LineCollection([], linewidths=1.6, cmap=MAP_CMAP, zorder=3)
-    surfaces.set_clim(0, max(len(getattr(mapper, "route", [])) - 1, 1))
+    surfaces.set_clim(0, max(len(mapper.route_map()) - 1, 1))
     ax_map.add_collection(surfaces)
     (est_line,) = ax_map.plot([], [], "-", color=EST_PATH_COLOR, lw=1.0, zorder=4)
     est_robot = _robot_marker(ax_map, EST_PATH_COLOR)
@@ -149,8 +153,7 @@ def render_map_animation(
 
     def draw(k: int) -> list[Any]:
         row, update = plan[k]
-        # at_update is not in the Mapper protocol: animated_mapper() chose one with a history.
-        snap = mapper.global_map(at_update=update)  # type: ignore[call-arg]
+        snap = mapper.global_map(at_update=update)
         segs = anchor_segments(start, np.asarray(snap.segments, np.float64).reshape(-1, 4))
         surfaces.set_segments(line_segments(segs))
         surfaces.set_array(np.asarray(snap.map_ids, dtype=np.float64))

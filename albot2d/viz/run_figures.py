@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.geometry import transform_segments
+from albot2d.mapping.protocol import ViewBasedMapper
 from albot2d.viz._figure import new_figure, png_bytes
 from albot2d.viz.maps import (
     PANEL_IN,
@@ -161,9 +162,12 @@ def _map_panel(ax: Axes, result: ExperimentResult, name: str, row: int | None = 
                title: str | None = None) -> LineCollection:
     trace = result.trace
     mapper = trace.mappers[name]
-    # at_update (the map's history) is not in the Mapper protocol: asked only of mappers with
-    # a route map (the history panels).
-    snap = mapper.global_map() if update is None else mapper.global_map(at_update=update)  # type: ignore[call-arg]
+    if update is None:
+        snap = mapper.global_map()
+    elif isinstance(mapper, ViewBasedMapper):  # the history panels: mappers with a route map
+        snap = mapper.global_map(at_update=update)
+    else:
+        raise TypeError(f"mapper {name!r} keeps no map history (asked for update {update})")
     end = trace.n_frames if row is None else row + 1
     est = np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3)[:end]
     start = None if trace.true_poses is None else trace.true_poses[0]
