@@ -6,7 +6,11 @@ import numpy as np
 import pytest
 
 from albot2d.evaluation.egocentric import _covered, _grid_samples_within, unique_on_grid
-from albot2d.evaluation.map_quality import nearest_segment_distance, sample_segments
+from albot2d.evaluation.map_quality import (
+    nearest_segment_distance,
+    nearest_segment_distance_bounded,
+    sample_segments,
+)
 from albot2d.geometry import segment_lengths
 
 
@@ -77,3 +81,18 @@ def test_sample_segments_equals_the_gathering_formulation_bit_for_bit(spacing_m:
     got, expected = sample_segments(segs, spacing_m), reference_sample_segments(segs, spacing_m)
     assert got.shape == expected.shape
     np.testing.assert_array_equal(got.view(np.int64), expected.view(np.int64))
+
+
+def test_bounded_nearest_distance_equals_the_tree_bit_for_bit() -> None:
+    """Near points (found within the first radius), middling ones (the second) and far
+    ones (the tree's nearest query) alike."""
+    rng = np.random.default_rng(8)
+    walls = random_map(rng, 400)
+    pts = np.vstack([sample_segments(walls, 0.05) + rng.normal(0.0, 0.2, (1, 2)),
+                     rng.uniform(-60.0, 60.0, (5000, 2))])  # fmt: skip
+    got = nearest_segment_distance_bounded(pts, walls)
+    expected = nearest_segment_distance(pts, walls)
+    np.testing.assert_array_equal(got.view(np.int64), expected.view(np.int64))
+    assert (expected > 2.0).sum() > 1000 and (expected <= 0.5).sum() > 1000
+    assert len(nearest_segment_distance_bounded(np.zeros((0, 2)), walls)) == 0
+    assert np.isinf(nearest_segment_distance_bounded(pts[:3], np.zeros((0, 4)))).all()

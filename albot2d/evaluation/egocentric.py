@@ -28,7 +28,7 @@ import shapely
 from numpy.typing import NDArray
 
 from albot2d.evaluation.map_quality import (
-    nearest_segment_distance,
+    nearest_segment_distance_bounded,
     point_to_segment_geos,
     sample_segments,
 )
@@ -132,7 +132,7 @@ def egocentric_quality(
     accuracy = None
     if len(samples):
         walls = in_robot_frame(true_pose, walls_world, reach + 1.0)
-        accuracy = float(np.percentile(nearest_segment_distance(samples, walls), 95))
+        accuracy = float(np.percentile(nearest_segment_distance_bounded(samples, walls), 95))
     return EgocentricQuality(p.window_m, completeness, accuracy, n)
 
 
