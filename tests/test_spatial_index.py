@@ -6,7 +6,7 @@ import numpy as np
 import shapely
 
 from albot2d.geometry import Pose
-from albot2d.mapping import GlobalMap
+from albot2d.mapping import GlobalMap, GlobalMapParams
 from albot2d.mapping.spatial_index import SegmentGridIndex
 
 
@@ -36,8 +36,14 @@ def test_removed_ids_leave_queries_and_live_ones_stay_found() -> None:
 
 
 def test_global_map_index_holds_exactly_the_live_surfaces_after_deletions() -> None:
+    # Both rules: 'paper' deletes more (the count below), 'visible' is the default.
+    for params in (GlobalMapParams.preset("paper"), GlobalMapParams()):
+        _check_index_after_deletions(params)
+
+
+def _check_index_after_deletions(params: GlobalMapParams) -> None:
     rng = np.random.default_rng(1)
-    g = GlobalMap()
+    g = GlobalMap(params)
     deleted = 0
     for map_id in range(60):  # views around one room: later ones delete earlier ones
         pose = Pose(*rng.uniform(-1.0, 1.0, 2), rng.uniform(-np.pi, np.pi))
@@ -49,5 +55,5 @@ def test_global_map_index_holds_exactly_the_live_surfaces_after_deletions() -> N
         deleted += report.deleted_current + report.deleted_older
     indexed = set().union(*g._index._cells.values())
     alive = set(np.flatnonzero(g._removed[: g._n] == np.iinfo(np.int64).max).tolist())
-    assert deleted > 100
+    assert deleted > 50
     assert indexed == alive and len(alive) == len(g)
