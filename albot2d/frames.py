@@ -69,8 +69,10 @@ class Scan:
     def __repr__(self) -> str:
         hits = self.ranges[self.valid]
         span = f", {hits.min():.3g}–{hits.max():.3g} m" if len(hits) else ""
-        return (f"Scan({self.n_beams} beams, {int(self.valid.sum())} valid{span}, "
-                f"max_range_m={self.max_range_m:g}, timestamp={self.timestamp:.6g})")
+        return (
+            f"Scan({self.n_beams} beams, {int(self.valid.sum())} valid{span}, "
+            f"max_range_m={self.max_range_m:g}, timestamp={self.timestamp:.6g})"
+        )
 
     @property
     def n_beams(self) -> int:
@@ -117,6 +119,8 @@ class Frame:
             object.__setattr__(self, "obstacle_poses", poses)
 
     def __repr__(self) -> str:
-        return (f"Frame(index={self.index}, timestamp={self.timestamp:.6g}, "
-                f"odom_pose={self.odom_pose!r}, true_pose={self.true_pose!r}, "
-                f"collided={self.collided}, scan={self.scan!r})")
+        return (
+            f"Frame(index={self.index}, timestamp={self.timestamp:.6g}, "
+            f"odom_pose={self.odom_pose!r}, true_pose={self.true_pose!r}, "
+            f"collided={self.collided}, scan={self.scan!r})"
+        )

@@ -72,9 +72,11 @@ def main(steps: int = 3000) -> None:
     for frame in itertools.islice(drive(), steps):
         mapper.observe(frame)
     both = time.process_time() - t0
-    print(f"simulator step {sim / steps * 1e6:.0f} µs CPU; simulator + Albot1 (extraction "
-          f"included) {both / steps * 1e6:.0f} µs = {steps / both:.0f} steps/s per core "
-          f"(first {steps} steps)")
+    print(
+        f"simulator step {sim / steps * 1e6:.0f} µs CPU; simulator + Albot1 (extraction "
+        f"included) {both / steps * 1e6:.0f} µs = {steps / both:.0f} steps/s per core "
+        f"(first {steps} steps)"
+    )
 
 
 if __name__ == "__main__":

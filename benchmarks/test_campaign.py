@@ -20,8 +20,14 @@ from albot2d.evaluation.campaign import CampaignParams, run_campaign
 
 EPISODES = 20
 PARAMS = CampaignParams(episodes=EPISODES, seed=2024)
-WARM_UP = CampaignParams(episodes=2, seed=1, kinds=("rooms",), world_size_max_m=15.0,
-                         tour_length_min_m=10.0, tour_length_max_m=10.0)
+WARM_UP = CampaignParams(
+    episodes=2,
+    seed=1,
+    kinds=("rooms",),
+    world_size_max_m=15.0,
+    tour_length_min_m=10.0,
+    tour_length_max_m=10.0,
+)
 ROUNDS = 2  # the machine is shared: the faster of two rounds is the one compared
 _seconds: dict[int, float] = {}
 
@@ -47,5 +53,7 @@ def test_campaign_throughput(benchmark: Any, workers: int) -> None:
     if workers > 1 and 1 in _seconds:
         speedup = _seconds[1] / _seconds[workers]
         benchmark.extra_info["speedup_vs_1_worker"] = speedup
-        print(f"\n{workers} workers: {speedup:.2f}× the throughput of 1 worker "
-              f"({_seconds[1]:.1f} s vs {_seconds[workers]:.1f} s for {EPISODES} episodes)")
+        print(
+            f"\n{workers} workers: {speedup:.2f}× the throughput of 1 worker "
+            f"({_seconds[1]:.1f} s vs {_seconds[workers]:.1f} s for {EPISODES} episodes)"
+        )

@@ -14,8 +14,12 @@ import pytest
 
 from albot2d.evaluation import EvaluationParams, RunSpec, run_experiment, score_mappers
 
-SPEC = RunSpec(kind="rooms", world_params={"width_m": 15.0, "height_m": 15.0},
-               profile="dataset1", tour_length_m=20.0)
+SPEC = RunSpec(
+    kind="rooms",
+    world_params={"width_m": 15.0, "height_m": 15.0},
+    profile="dataset1",
+    tour_length_m=20.0,
+)
 
 
 @pytest.fixture(scope="module")
@@ -32,8 +36,12 @@ def test_run_experiment_small(benchmark: Any) -> None:
 @pytest.mark.benchmark(group="experiment")
 def test_scoring_small(benchmark: Any, result: Any) -> None:
     world = result.world.obstacle_segments
-    scores = benchmark.pedantic(score_mappers, args=(result.trace, result.relations, world,
-                                                     EvaluationParams()), rounds=3, iterations=1)
+    scores = benchmark.pedantic(
+        score_mappers,
+        args=(result.trace, result.relations, world, EvaluationParams()),
+        rounds=3,
+        iterations=1,
+    )
     assert set(scores) == {"albot1", "naive", "truth"}
 
 
@@ -41,6 +49,5 @@ def test_scoring_small(benchmark: Any, result: Any) -> None:
 def test_figures_small(benchmark: Any, result: Any) -> None:
     from albot2d.viz.run_figures import render_experiment_figures
 
-    figures = benchmark.pedantic(render_experiment_figures, args=(result,), rounds=2,
-                                 iterations=1)
+    figures = benchmark.pedantic(render_experiment_figures, args=(result,), rounds=2, iterations=1)
     assert "maps.png" in figures

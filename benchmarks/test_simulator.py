@@ -90,8 +90,9 @@ def test_dataset1_frames_per_second(benchmark, office, with_obstacles: bool) -> 
     world = generate("office", seed=11, dynamic_obstacles=6) if with_obstacles else office
     tour = make_tour(world, make_rng(1), kind="loop", min_length_m=100.0)
     sim = Simulator(world, seed=3, odometry=NOISE_PRESETS["typical"])
-    count = benchmark.pedantic(lambda: sum(1 for _ in sim.drive(tour, "dataset1")), rounds=3,
-                               iterations=1)
+    count = benchmark.pedantic(
+        lambda: sum(1 for _ in sim.drive(tour, "dataset1")), rounds=3, iterations=1
+    )
     benchmark.extra_info["frames"] = count
     benchmark.extra_info["frames_per_s"] = count / benchmark.stats.stats.mean
     assert count > 1000

@@ -151,15 +151,22 @@ def load() -> dict[str, Any]:
 
 def differences(stored: dict[str, str], now: dict[str, str]) -> list[str]:
     """The sections whose digest changed, appeared or disappeared."""
-    return [f"{key}: {stored.get(key, 'missing')} -> {now.get(key, 'missing')}"
-            for key in sorted(set(stored) | set(now)) if stored.get(key) != now.get(key)]
+    return [
+        f"{key}: {stored.get(key, 'missing')} -> {now.get(key, 'missing')}"
+        for key in sorted(set(stored) | set(now))
+        if stored.get(key) != now.get(key)
+    ]
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m tests.digests", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--update", action="store_true",
-                        help=f"rewrite {DIGEST_FILE.name} from fresh runs")
+    parser = argparse.ArgumentParser(
+        prog="python -m tests.digests",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument(
+        "--update", action="store_true", help=f"rewrite {DIGEST_FILE.name} from fresh runs"
+    )
     parser.add_argument("cases", nargs="*", help=f"of {', '.join(CASES)} (default: all)")
     args = parser.parse_args(argv)
     cases = args.cases or list(CASES)
@@ -181,8 +188,9 @@ def main(argv: list[str] | None = None) -> int:
         stored["cases"][case] = now
     if args.update:
         stored["numba"] = numba_available()
-        DIGEST_FILE.write_text(json.dumps(stored, indent=1, sort_keys=True) + "\n",
-                               encoding="utf-8")
+        DIGEST_FILE.write_text(
+            json.dumps(stored, indent=1, sort_keys=True) + "\n", encoding="utf-8"
+        )
         print(f"wrote {DIGEST_FILE}")
         return 0
     return 1 if changed else 0

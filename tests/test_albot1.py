@@ -51,8 +51,7 @@ def drive(
 
 def corridor_poses(n: int = 200, step_m: float = 0.1) -> list[Pose]:
     return [
-        Pose(0.5 + step_m * k, 0.05 * math.sin(k / 15), 0.03 * math.cos(k / 20))
-        for k in range(n)
+        Pose(0.5 + step_m * k, 0.05 * math.sin(k / 15), 0.03 * math.cos(k / 20)) for k in range(n)
     ]
 
 
@@ -124,9 +123,7 @@ def test_featureless_stretch_uses_path_integration_then_recovers() -> None:
     assert "triangulation" in methods[last_pi:]  # back to view navigation after the gap
     # With exact odometry, path integration is exact too.
     origin = poses[0]
-    np.testing.assert_allclose(
-        m.trajectory()[-1], origin.between(poses[-1]).as_array(), atol=1e-9
-    )
+    np.testing.assert_allclose(m.trajectory()[-1], origin.between(poses[-1]).as_array(), atol=1e-9)
     check_local_map_rule(m, recorder.views, min_tracked=4)
 
 

@@ -68,8 +68,9 @@ def test_fitness_order_prefers_the_longer_candidate_over_the_nearer() -> None:
     view = Surfaces.from_segments(np.vstack([near_short, far_long]))
     params = TrackingParams(match_endpoint="key")
     by_distance = rtsv(tracked, view, Pose(), params)[1]
-    by_fitness = rtsv(tracked, view, Pose(), TrackingParams(match_endpoint="key",
-                                                            match_order="fitness"))[1]
+    by_fitness = rtsv(
+        tracked, view, Pose(), TrackingParams(match_endpoint="key", match_order="fitness")
+    )[1]
     assert by_distance.view_index.tolist() == [0]
     assert by_fitness.view_index.tolist() == [1]
 
@@ -91,8 +92,12 @@ def test_heuristic_two_by_fitness_or_nearest_to_path_integration() -> None:
     pi = Pose(0.05, 0.3, 0.0)  # path integration happens to agree with the far corner
     base = TriangulationParams(heading="selected", use_outlier_heuristic=False)
     nearest = triangulate(local, current, pi, base)
-    fittest = triangulate(local, current, pi, TriangulationParams(
-        heading="selected", use_outlier_heuristic=False, choose="fitness"))
+    fittest = triangulate(
+        local,
+        current,
+        pi,
+        TriangulationParams(heading="selected", use_outlier_heuristic=False, choose="fitness"),
+    )
     assert nearest is not None and fittest is not None
     assert nearest.y == pytest.approx(0.3, abs=1e-9)  # the far corner, nearest to PI
     assert fittest.y == pytest.approx(0.0, abs=1e-9)  # the long near wall
@@ -118,21 +123,30 @@ def test_presets_select_consistent_sets_and_refuse_unknown_names() -> None:
 def test_per_view_localisation_keeps_odometry_beyond_the_fallback() -> None:
     """A view whose triangulation is 1 m from the odometric pose keeps the odometric pose;
     within the fallback it takes the triangulated one."""
-    walls = np.array([[3.0, -2.0, 3.0, -0.5], [3.0, 0.5, 3.0, 2.0], [1.0, 2.0, 2.5, 2.0],
-                      [1.0, -2.0, 2.5, -2.0], [5.0, -3.0, 5.0, 3.0]])
+    walls = np.array(
+        [
+            [3.0, -2.0, 3.0, -0.5],
+            [3.0, 0.5, 3.0, 2.0],
+            [1.0, 2.0, 2.5, 2.0],
+            [1.0, -2.0, 2.5, -2.0],
+            [5.0, -3.0, 5.0, 3.0],
+        ]
+    )
     occ = np.zeros((len(walls), 2), bool)
     view = Surfaces.from_segments(walls, occ)
     m = Albot1(Albot1Params(localise_every_view=True))
     tracked = start_tracking(view)
     odometric = Pose(0.1, 0.0, 0.0)
     truth_view = view.transformed(Pose(0.12, 0.0, 0.0).inverse().as_array())
-    tracked_now = tracked.__class__(tracked.ids, tracked.local, truth_view.select(
-        np.arange(len(truth_view))[: len(tracked)]))
+    tracked_now = tracked.__class__(
+        tracked.ids, tracked.local, truth_view.select(np.arange(len(truth_view))[: len(tracked)])
+    )
     near = m._localise_between_updates(tracked_now, odometric, 1)
     assert near.x == pytest.approx(0.12, abs=1e-6)
     far_view = view.transformed(Pose(1.1, 0.0, 0.0).inverse().as_array())
-    tracked_far = tracked.__class__(tracked.ids, tracked.local, far_view.select(
-        np.arange(len(far_view))[: len(tracked)]))
+    tracked_far = tracked.__class__(
+        tracked.ids, tracked.local, far_view.select(np.arange(len(far_view))[: len(tracked)])
+    )
     kept = m._localise_between_updates(tracked_far, odometric, 3)
     assert kept == odometric
 

@@ -30,8 +30,9 @@ SMALL_WORLDS = worlds(kinds=("rooms", "corridors", "office", "open"), max_size_m
 
 
 def run(world, seed: int, *, laser_noise: LaserNoise, odometry: str, length_m: float = 15.0):  # type: ignore[no-untyped-def]
-    frames = simulate(world, seed, noise=odometry, laser=laser_noise, profile="dataset1",
-                      length_m=length_m)
+    frames = simulate(
+        world, seed, noise=odometry, laser=laser_noise, profile="dataset1", length_m=length_m
+    )
     albot = run_albot1(frames)
     return albot.mapper, frames, albot.updates, albot.views.views
 

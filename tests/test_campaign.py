@@ -32,8 +32,13 @@ from worldgen.generate import generate
 from worldgen.params import PARAMS_BY_KIND
 
 ROOT = Path(__file__).resolve().parents[1]
-SMALL = {"kinds": ("rooms", "corridors", "open"), "world_size_min_m": 12.0,
-         "world_size_max_m": 16.0, "tour_length_min_m": 12.0, "tour_length_max_m": 18.0}
+SMALL = {
+    "kinds": ("rooms", "corridors", "open"),
+    "world_size_min_m": 12.0,
+    "world_size_max_m": 16.0,
+    "tour_length_min_m": 12.0,
+    "tour_length_max_m": 18.0,
+}
 
 PLUGINS = '''
 import os
@@ -123,8 +128,10 @@ def plugins(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def comparable(records: list[dict]) -> list[dict]:
     """Records without wall-clock timings, in episode order."""
-    return [{k: v for k, v in r.items() if k != "timings"}
-            for r in sorted(records, key=lambda r: r["episode"])]
+    return [
+        {k: v for k, v in r.items() if k != "timings"}
+        for r in sorted(records, key=lambda r: r["episode"])
+    ]
 
 
 def jsonl(out: Path) -> list[dict]:
@@ -189,9 +196,14 @@ def test_two_local_workers_give_the_same_results(reference, tmp_path: Path) -> N
 def test_a_dask_cluster_gives_the_same_results_bit_for_bit(reference, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
     distributed = pytest.importorskip("dask.distributed")
     params, expected = reference
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  protocol="tcp://", host="127.0.0.1",
-                                  dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=False,
+        protocol="tcp://",
+        host="127.0.0.1",
+        dashboard_address=None,
+    ) as cluster:
         backend = DaskBackend(cluster.scheduler_address)
         try:
             assert backend.workers == 2
@@ -213,18 +225,28 @@ def test_resume_redoes_only_the_missing_and_the_cut_off_episodes(reference, tmp_
     with pytest.raises(InputError, match="already holds a campaign"):
         run_campaign(params, tmp_path)
     with pytest.raises(InputError, match=r"other parameters \(seed 11 there, 12 here\)"):
-        run_campaign(CampaignParams(**{**params.to_dict(), "seed": 12, "kinds": params.kinds}),
-                     tmp_path, resume=True)
+        run_campaign(
+            CampaignParams(**{**params.to_dict(), "seed": 12, "kinds": params.kinds}),
+            tmp_path,
+            resume=True,
+        )
     stale = tmp_path / ".summary.json.k1ll3d.tmp"  # an atomic write cut short by kill -9
     stale.write_text("{")
     ran: list[int] = []
     notes: list[str] = []
-    summary = run_campaign(params, tmp_path, resume=True,
-                           on_episode=lambda r: ran.append(r["episode"]), on_note=notes.append)
+    summary = run_campaign(
+        params,
+        tmp_path,
+        resume=True,
+        on_episode=lambda r: ran.append(r["episode"]),
+        on_note=notes.append,
+    )
     assert sorted(ran) == [2, 3]
     assert not stale.exists()
-    assert notes == [f"{path}: a damaged last line (39 bytes, an interrupted write) is "
-                     "dropped and its episode redone"]
+    assert notes == [
+        f"{path}: a damaged last line (39 bytes, an interrupted write) is "
+        "dropped and its episode redone"
+    ]
     assert summary["episodes"] == 4 and summary["ran"] == 2
     assert comparable(jsonl(tmp_path)) == comparable(expected)
 
@@ -241,8 +263,10 @@ def test_a_damaged_tail_is_left_out_to_be_redone(tmp_path: Path) -> None:
     whole = b'{"episode": 0, "status": "ok"}\n{"episode": 1, "status": "crash"}\n'
     for tail in (b'{"episode": 2, "sta', b"\x00" * 300, b"\x00" * 50 + b"\n" + b"\x00" * 9):
         path.write_bytes(whole + tail)
-        assert read_episodes(path) == ({0: {"episode": 0, "status": "ok"},
-                                        1: {"episode": 1, "status": "crash"}}, len(whole))
+        assert read_episodes(path) == (
+            {0: {"episode": 0, "status": "ok"}, 1: {"episode": 1, "status": "crash"}},
+            len(whole),
+        )
 
 
 def write_campaign(folder: Path, params: CampaignParams, episodes: bytes = b"") -> None:
@@ -262,19 +286,29 @@ def test_resume_refuses_a_folder_without_a_campaign(tmp_path: Path) -> None:
     assert folder_state(tmp_path) == {"notes.txt": b"mine"}
 
 
-@pytest.mark.parametrize(("content", "message"), [
-    (b"not json", "not a campaign file written by albot2d"),
-    (b"[1, 2]", "format is not 'albot2d-campaign'"),
-    (b'{"format": "albot2d-report", "format_version": 1}', "format is not 'albot2d-campaign'"),
-    (b'{"format": "albot2d-campaign", "format_version": 7, "params": {}}', "format_version 7"),
-    (b'{"format": "albot2d-campaign", "format_version": 1}', "no params"),
-    (b'{"format": "albot2d-campaign", "format_version": 1, "params": {"episodes": 1, "hue": 2}}',
-     "unknown campaign parameter"),
-    (b'{"format": "albot2d-campaign", "format_version": 1, "params": {"episodes": 1, '
-     b'"kinds": ["caves"]}}', "campaign.json: unknown world kind 'caves'"),
-])
-def test_resume_refuses_a_damaged_campaign_file(tmp_path: Path, content: bytes,
-                                                message: str) -> None:
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"not json", "not a campaign file written by albot2d"),
+        (b"[1, 2]", "format is not 'albot2d-campaign'"),
+        (b'{"format": "albot2d-report", "format_version": 1}', "format is not 'albot2d-campaign'"),
+        (b'{"format": "albot2d-campaign", "format_version": 7, "params": {}}', "format_version 7"),
+        (b'{"format": "albot2d-campaign", "format_version": 1}', "no params"),
+        (
+            b'{"format": "albot2d-campaign", "format_version": 1, '
+            b'"params": {"episodes": 1, "hue": 2}}',
+            "unknown campaign parameter",
+        ),
+        (
+            b'{"format": "albot2d-campaign", "format_version": 1, "params": {"episodes": 1, '
+            b'"kinds": ["caves"]}}',
+            "campaign.json: unknown world kind 'caves'",
+        ),
+    ],
+)
+def test_resume_refuses_a_damaged_campaign_file(
+    tmp_path: Path, content: bytes, message: str
+) -> None:
     (tmp_path / CAMPAIGN_NAME).write_bytes(content)
     before = folder_state(tmp_path)
     with pytest.raises(InputError, match=message):
@@ -283,19 +317,27 @@ def test_resume_refuses_a_damaged_campaign_file(tmp_path: Path, content: bytes,
 
 
 def record_line(index: int, seed: int = 0) -> bytes:
-    return json.dumps({"episode": index, "status": "ok",
-                       "seed": {"entropy": seed, "spawn_key": [index]}}).encode() + b"\n"
+    return (
+        json.dumps(
+            {"episode": index, "status": "ok", "seed": {"entropy": seed, "spawn_key": [index]}}
+        ).encode()
+        + b"\n"
+    )
 
 
-@pytest.mark.parametrize(("episodes", "message"), [
-    (record_line(0) + b"junk\n" + record_line(1), f"{EPISODES_NAME}:2: not an episode record"),
-    (record_line(0) + b'{"episode": 1}\n', f"{EPISODES_NAME}:2: not an episode record"),
-    (record_line(0) + b'{"episode": -1, "status": "ok"}\n', ":2: not an episode record"),
-    (record_line(0) + record_line(1) + record_line(0), ":3: episode 0 again .first on line 1"),
-    (record_line(0) + record_line(1, seed=5), ":2: episode 1 was not drawn from this campaign"),
-])
-def test_resume_refuses_episodes_that_are_not_this_campaigns(tmp_path: Path, episodes: bytes,
-                                                             message: str) -> None:
+@pytest.mark.parametrize(
+    ("episodes", "message"),
+    [
+        (record_line(0) + b"junk\n" + record_line(1), f"{EPISODES_NAME}:2: not an episode record"),
+        (record_line(0) + b'{"episode": 1}\n', f"{EPISODES_NAME}:2: not an episode record"),
+        (record_line(0) + b'{"episode": -1, "status": "ok"}\n', ":2: not an episode record"),
+        (record_line(0) + record_line(1) + record_line(0), ":3: episode 0 again .first on line 1"),
+        (record_line(0) + record_line(1, seed=5), ":2: episode 1 was not drawn from this campaign"),
+    ],
+)
+def test_resume_refuses_episodes_that_are_not_this_campaigns(
+    tmp_path: Path, episodes: bytes, message: str
+) -> None:
     params = CampaignParams(episodes=3, **SMALL)
     write_campaign(tmp_path, params, episodes)
     before = folder_state(tmp_path)
@@ -327,13 +369,18 @@ def test_a_locked_folder_is_refused_and_a_stale_lock_taken_over(tmp_path: Path) 
 
 def dead_pid() -> int:
     """The pid of a process that has ended."""
-    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                          capture_output=True, text=True, check=True)
+    done = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     return int(done.stdout)
 
 
-def test_without_fcntl_the_lock_is_a_pid_file(tmp_path: Path,
-                                             monkeypatch: pytest.MonkeyPatch) -> None:
+def test_without_fcntl_the_lock_is_a_pid_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """Where there is no fcntl (Windows): O_EXCL creation, a dead pid's file is stale."""
     monkeypatch.setattr(campaign_lock, "fcntl", None)
     (tmp_path / LOCK_NAME).write_text(f"{dead_pid()}\n")
@@ -347,10 +394,18 @@ def test_without_fcntl_the_lock_is_a_pid_file(tmp_path: Path,
 # -- the summary ------------------------------------------------------------------------------
 def test_ties_are_neither_wins_nor_losses() -> None:
     mine, odo = COMPARED_METRICS["heading_error_mean_deg"]
-    pairs = [(1.0, 1.0), (5.575216133517828, 5.5752161335178005), (0.0, 1e-15), (0.5, 1.0),
-             (2.0, 1.0), (1.0, 1.0 + 1e-6)]
-    records = [{"episode": k, "status": "ok", "metrics": {mine: a, odo: b}}
-               for k, (a, b) in enumerate(pairs)]
+    pairs = [
+        (1.0, 1.0),
+        (5.575216133517828, 5.5752161335178005),
+        (0.0, 1e-15),
+        (0.5, 1.0),
+        (2.0, 1.0),
+        (1.0, 1.0 + 1e-6),
+    ]
+    records = [
+        {"episode": k, "status": "ok", "metrics": {mine: a, odo: b}}
+        for k, (a, b) in enumerate(pairs)
+    ]
     summary = summarise(records, {}, ran=6, wall_time_s=1.0, workers=1)
     cmp = summary["mapper_vs_odometry"]["heading_error_mean_deg"]
     assert (cmp["mapper_better"], cmp["mapper_worse"], cmp["ties"]) == (2, 1, 3)
@@ -360,8 +415,9 @@ def test_ties_are_neither_wins_nor_losses() -> None:
 
 
 # -- failures: reproducers, crashes, dead workers, plugins -------------------------------------
-def test_a_violation_is_saved_as_a_reproducer_that_replays(plugins: Path, tmp_path: Path,
-                                                           capsys: pytest.CaptureFixture) -> None:
+def test_a_violation_is_saved_as_a_reproducer_that_replays(
+    plugins: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
     params = CampaignParams(episodes=2, seed=3, mapper="fuzz_plugins:BrokenRoute", **SMALL)
     summary = run_campaign(params, tmp_path / "c")
     assert summary["failures_by_invariant"] == {"route_connected": 2}
@@ -389,14 +445,19 @@ def test_a_violation_is_saved_as_a_reproducer_that_replays(plugins: Path, tmp_pa
     doc["reproducer"]["episode"]["mapper"] = "naive"
     fixed = tmp_path / "fixed.json"
     fixed.write_text(json.dumps(doc))
-    assert main(["run", "--reproduce", str(fixed), "--no-figures", "--out",
-                 str(tmp_path / "fixed")]) == 0
+    assert (
+        main(["run", "--reproduce", str(fixed), "--no-figures", "--out", str(tmp_path / "fixed")])
+        == 0
+    )
     assert "the recorded failure does not reproduce: route_connected violated" in (
-        capsys.readouterr().out)
+        capsys.readouterr().out
+    )
 
 
 def test_a_crashing_mapper_is_recorded_and_the_campaign_goes_on(
-    plugins: Path, tmp_path: Path, capsys: pytest.CaptureFixture,
+    plugins: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture,
 ) -> None:
     params = CampaignParams(episodes=3, seed=3, mapper="fuzz_plugins:Crashing", **SMALL)
     summary = run_campaign(params, tmp_path)
@@ -416,16 +477,20 @@ def test_a_crashing_mapper_is_recorded_and_the_campaign_goes_on(
     assert not (tmp_path / "again").exists()
     # A reproducer as albot2d wrote them for dead workers before: no report, no world, only
     # the campaign and the index; the episode is drawn again.
-    old = {"reproducer": {"episode": {k: record[k] for k in ("episode", "seed", "status",
-                                                             "error")},
-                          "campaign": params.to_dict()}}
+    old = {
+        "reproducer": {
+            "episode": {k: record[k] for k in ("episode", "seed", "status", "error")},
+            "campaign": params.to_dict(),
+        }
+    }
     path.write_text(json.dumps(old))
     assert main(["run", "--reproduce", str(path), "--out", str(tmp_path / "again")]) == 1
     assert "reproduce: the recorded failure reproduces" in capsys.readouterr().out
 
 
-def test_a_dead_worker_fails_only_its_own_episode(plugins: Path, tmp_path: Path,
-                                                  capsys: pytest.CaptureFixture) -> None:
+def test_a_dead_worker_fails_only_its_own_episode(
+    plugins: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
     params = CampaignParams(episodes=4, seed=2, mapper="fuzz_plugins:Dying", **SMALL)
     backend = LocalBackend(2)
     try:
@@ -450,7 +515,8 @@ def test_a_dead_worker_fails_only_its_own_episode(plugins: Path, tmp_path: Path,
     capsys.readouterr()
     assert main(["run", "--reproduce", str(path), "--out", str(tmp_path / "again")]) == 1
     assert "reproduce: the episode killed its process again (exit code 3)" in (
-        capsys.readouterr().out)
+        capsys.readouterr().out
+    )
     assert not (tmp_path / "again").exists()
 
 
@@ -462,28 +528,35 @@ def test_a_users_own_mapper_is_fuzzed_the_same_way(plugins: Path, tmp_path: Path
     assert record["mapper"] == "fuzz_plugins:Tiny"
     assert record["checked"] == ["laser_hits_on_obstacles", "robot_clear_of_obstacles"]
     assert record["metrics"]["heading_error_max_deg"] == pytest.approx(
-        record["metrics"]["odometry_heading_error_max_deg"], abs=1e-6)
+        record["metrics"]["odometry_heading_error_max_deg"], abs=1e-6
+    )
     # It is odometry by other arithmetic: every comparison is a tie, never a win.
     for label, cmp in summary["mapper_vs_odometry"].items():
         assert (cmp["ties"], cmp["mapper_better"], cmp["mapper_worse"]) == (3, 0, 0), label
 
 
-@pytest.mark.parametrize(("change", "message"), [
-    ({"kinds": ("caves",)}, "unknown world kind 'caves'"),
-    ({"mapper": "nope"}, "unknown mapper 'nope'"),
-    ({"profile": "sprint"}, "unknown driving profile 'sprint'"),
-    ({"episodes": 0}, "episodes must be a positive integer"),
-    ({"world_size_min_m": 40.0}, "world_size_min_m .* is larger than world_size_max_m"),
-])
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"kinds": ("caves",)}, "unknown world kind 'caves'"),
+        ({"mapper": "nope"}, "unknown mapper 'nope'"),
+        ({"profile": "sprint"}, "unknown driving profile 'sprint'"),
+        ({"episodes": 0}, "episodes must be a positive integer"),
+        ({"world_size_min_m": 40.0}, "world_size_min_m .* is larger than world_size_max_m"),
+    ],
+)
 def test_bad_campaign_parameters_are_input_errors(change: dict, message: str) -> None:
     with pytest.raises(InputError, match=message):
         CampaignParams(**{"episodes": 1, **change})
 
 
-@pytest.mark.parametrize(("index", "kind", "run_seed"), [
-    (326, "office", 5094196264049440860),  # two neighbouring mixed pixels
-    (126, "rooms", 8752786329543876772),  # a mixed pixel splitting a 0.205 m jump in two
-])
+@pytest.mark.parametrize(
+    ("index", "kind", "run_seed"),
+    [
+        (326, "office", 5094196264049440860),  # two neighbouring mixed pixels
+        (126, "rooms", 8752786329543876772),  # a mixed pixel splitting a 0.205 m jump in two
+    ],
+)
 def test_pinned_campaign_findings_now_pass(index: int, kind: str, run_seed: int) -> None:
     """Episodes that failed in 1000-episode campaigns (seed 0) and were fixed since: the
     laser-hit check took mixed pixels for hits off the walls."""

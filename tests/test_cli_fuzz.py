@@ -13,12 +13,26 @@ import pytest
 from albot2d.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-SMALL = ["--kinds", "rooms", "corridors", "--world-size", "12", "15", "--tour-length", "12", "15",
-         "--seed", "7"]
+SMALL = [
+    "--kinds",
+    "rooms",
+    "corridors",
+    "--world-size",
+    "12",
+    "15",
+    "--tour-length",
+    "12",
+    "15",
+    "--seed",
+    "7",
+]
 
 
-def albot2d(*args: str, extra_path: Path | None = None, code: str | None = None,
-            ) -> subprocess.CompletedProcess[str]:
+def albot2d(
+    *args: str,
+    extra_path: Path | None = None,
+    code: str | None = None,
+) -> subprocess.CompletedProcess[str]:
     paths = [str(ROOT)] + ([str(extra_path)] if extra_path else [])
     command = ["-c", code, *args] if code else ["-m", "albot2d", *args]
     return subprocess.run(
@@ -28,8 +42,9 @@ def albot2d(*args: str, extra_path: Path | None = None, code: str | None = None,
 
 
 @pytest.mark.slow  # a whole (small) campaign with its figures
-def test_fuzz_writes_the_stream_summary_and_histograms(tmp_path: Path,
-                                                       capsys: pytest.CaptureFixture) -> None:
+def test_fuzz_writes_the_stream_summary_and_histograms(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
     out = tmp_path / "out"
     assert main(["fuzz", "--episodes", "3", "--workers", "1", *SMALL, "--out", str(out)]) == 0
     printed = capsys.readouterr().out
@@ -44,15 +59,46 @@ def test_fuzz_writes_the_stream_summary_and_histograms(tmp_path: Path,
     assert not (out / "reproducers").exists()
 
     # --resume with more episodes runs only the new ones.
-    assert main(["fuzz", "--episodes", "5", "--workers", "1", *SMALL, "--resume",
-                 "--no-figures", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "fuzz",
+                "--episodes",
+                "5",
+                "--workers",
+                "1",
+                *SMALL,
+                "--resume",
+                "--no-figures",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert "ran 2 here" in capsys.readouterr().out
     lines = (out / "episodes.jsonl").read_text().splitlines()
     assert sorted(json.loads(line)["episode"] for line in lines) == [0, 1, 2, 3, 4]
 
     # --json prints summary.json itself instead of the table.
-    assert main(["fuzz", "--episodes", "5", "--workers", "1", *SMALL, "--resume",
-                 "--no-figures", "--json", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "fuzz",
+                "--episodes",
+                "5",
+                "--workers",
+                "1",
+                *SMALL,
+                "--resume",
+                "--no-figures",
+                "--json",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     printed = json.loads(capsys.readouterr().out)
     assert printed == json.loads((out / "summary.json").read_text())
 
@@ -65,29 +111,47 @@ def test_failures_exit_1_with_reproducers(tmp_path: Path) -> None:
         "        raise ValueError('boom')\n"
     )
     out = tmp_path / "out"
-    done = albot2d("fuzz", "--episodes", "2", "--workers", "1", *SMALL, "--no-figures",
-                   "--mapper", "bad_plugin:Explodes", "--out", str(out), extra_path=tmp_path)
+    done = albot2d(
+        "fuzz",
+        "--episodes",
+        "2",
+        "--workers",
+        "1",
+        *SMALL,
+        "--no-figures",
+        "--mapper",
+        "bad_plugin:Explodes",
+        "--out",
+        str(out),
+        extra_path=tmp_path,
+    )
     assert done.returncode == 1, done.stderr
     assert "0 ok, 0 with violations, 2 crashes" in done.stdout
     assert "crash ValueError 2" in done.stdout
     assert sorted(p.name for p in (out / "reproducers").iterdir()) == [
-        "episode-0.json", "episode-1.json"]
+        "episode-0.json",
+        "episode-1.json",
+    ]
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    (["--kinds", "caves"], "unknown world kind 'caves'"),
-    (["--mapper", "nope"], "unknown mapper 'nope'"),
-    (["--profile", "sprint"], "unknown driving profile 'sprint'"),
-    (["--noise", "loud"], "unknown odometry noise preset 'loud'"),
-    (["--episodes", "0"], "--episodes must be a positive integer"),
-    (["--workers", "-1"], "--workers must be a positive integer"),
-    (["--world-size", "30", "20"], "--world-size: MIN 30 is larger than MAX 20"),
-    (["--backend", "slurm"], "unknown backend 'slurm'"),
-    (["--address", "tcp://127.0.0.1:1"], "--address is for --backend dask"),
-    (["--resume"], "--resume: "),
-])
-def test_bad_input_is_one_line_and_exit_2(args: list[str], message: str, tmp_path: Path,
-                                          capsys: pytest.CaptureFixture) -> None:
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--kinds", "caves"], "unknown world kind 'caves'"),
+        (["--mapper", "nope"], "unknown mapper 'nope'"),
+        (["--profile", "sprint"], "unknown driving profile 'sprint'"),
+        (["--noise", "loud"], "unknown odometry noise preset 'loud'"),
+        (["--episodes", "0"], "--episodes must be a positive integer"),
+        (["--workers", "-1"], "--workers must be a positive integer"),
+        (["--world-size", "30", "20"], "--world-size: MIN 30 is larger than MAX 20"),
+        (["--backend", "slurm"], "unknown backend 'slurm'"),
+        (["--address", "tcp://127.0.0.1:1"], "--address is for --backend dask"),
+        (["--resume"], "--resume: "),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(
+    args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
     out = tmp_path / "out"
     argv = ["fuzz", "--episodes", "2", *args, "--out", str(out)]
     assert main(argv) == 2
@@ -96,8 +160,9 @@ def test_bad_input_is_one_line_and_exit_2(args: list[str], message: str, tmp_pat
     assert not out.exists()
 
 
-def test_an_unwritable_out_dir_is_one_line_and_exit_2(tmp_path: Path,
-                                                      capsys: pytest.CaptureFixture) -> None:
+def test_an_unwritable_out_dir_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("not a directory")
     assert main(["fuzz", "--episodes", "2", "--out", str(blocker / "out")]) == 2
@@ -108,8 +173,17 @@ def test_an_unwritable_out_dir_is_one_line_and_exit_2(tmp_path: Path,
 def test_an_unreachable_dask_scheduler_is_one_line_and_exit_2(tmp_path: Path) -> None:
     pytest.importorskip("dask.distributed")
     out = tmp_path / "out"
-    done = albot2d("fuzz", "--episodes", "2", "--backend", "dask", "--address",
-                   "tcp://127.0.0.1:1", "--out", str(out))
+    done = albot2d(
+        "fuzz",
+        "--episodes",
+        "2",
+        "--backend",
+        "dask",
+        "--address",
+        "tcp://127.0.0.1:1",
+        "--out",
+        str(out),
+    )
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "no dask scheduler reachable" in done.stderr
     assert not out.exists()
@@ -117,10 +191,13 @@ def test_an_unreachable_dask_scheduler_is_one_line_and_exit_2(tmp_path: Path) ->
 
 def test_the_dask_backend_without_dask_is_one_line_and_exit_2(tmp_path: Path) -> None:
     # sys.modules[name] = None makes `import name` fail: dask "not installed" here.
-    code = ("import sys; sys.modules['dask'] = sys.modules['dask.distributed'] = None; "
-            "from albot2d.cli import main; sys.exit(main(sys.argv[1:]))")
-    done = albot2d("fuzz", "--episodes", "2", "--backend", "dask", "--out",
-                   str(tmp_path / "out"), code=code)
+    code = (
+        "import sys; sys.modules['dask'] = sys.modules['dask.distributed'] = None; "
+        "from albot2d.cli import main; sys.exit(main(sys.argv[1:]))"
+    )
+    done = albot2d(
+        "fuzz", "--episodes", "2", "--backend", "dask", "--out", str(tmp_path / "out"), code=code
+    )
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1
     assert "--backend dask needs dask.distributed: pip install 'albot2d[dask]'" in done.stderr

@@ -32,8 +32,9 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A short simulated run (rooms world, dataset3, typical odometry noise) on disk."""
     world = generate("rooms", seed=5, width_m=15.0, height_m=15.0)
-    sim = Simulator(world, seed=stream_seed(5, RUN_STREAMS, "simulator"),
-                    odometry=noise_preset("typical"))
+    sim = Simulator(
+        world, seed=stream_seed(5, RUN_STREAMS, "simulator"), odometry=noise_preset("typical")
+    )
     out = tmp_path_factory.mktemp("run")
     write_run(out, sim.drive(plan_tour(world, "loop", 20.0), "dataset3"), params={"seed": 5})
     return out
@@ -54,11 +55,11 @@ def _odometry_rpe_by_hand(frames: list, relations: object) -> tuple[float, int]:
     return float(np.mean(errors)), len(errors)
 
 
-def test_replay_a_simulated_log(run_dir: Path, tmp_path: Path,
-                                capsys: pytest.CaptureFixture) -> None:
+def test_replay_a_simulated_log(
+    run_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
     out = tmp_path / "replay"
-    assert main(["replay", str(run_dir / "log.clf"), "--stop-every", "5", "--out",
-                 str(out)]) == 0
+    assert main(["replay", str(run_dir / "log.clf"), "--stop-every", "5", "--out", str(out)]) == 0
     assert "albot1" in capsys.readouterr().out
     report = json.loads((out / "report.json").read_text())
     run = read_run(run_dir)
@@ -75,8 +76,9 @@ def test_replay_a_simulated_log(run_dir: Path, tmp_path: Path,
     assert albot1["rpe"]["relations"] == n and albot1["rpe"]["short"]["relations"] > 0
     # Without the truth: no map quality, homing estimates only.
     assert all(albot1["map"][k] is None for k in ("accuracy_m_mean", "completeness"))
-    assert albot1["homing"] and all(h["bearing_true_deg"] is None and
-                                    h["bearing_est_deg"] is not None for h in albot1["homing"])
+    assert albot1["homing"] and all(
+        h["bearing_true_deg"] is None and h["bearing_est_deg"] is not None for h in albot1["homing"]
+    )
     assert albot1["end_pose_error"] is None
     for name in report["figures"]:
         assert (out / name).read_bytes().startswith(PNG_MAGIC)
@@ -84,12 +86,30 @@ def test_replay_a_simulated_log(run_dir: Path, tmp_path: Path,
 
 
 def test_replay_agrees_with_the_run_that_made_the_log(run_dir: Path, tmp_path: Path) -> None:
-    spec = RunSpec(kind="rooms", seed=5, world_params={"width_m": 15.0, "height_m": 15.0},
-                   profile="dataset3", tour_length_m=20.0, mappers=("naive",))
+    spec = RunSpec(
+        kind="rooms",
+        seed=5,
+        world_params={"width_m": 15.0, "height_m": 15.0},
+        profile="dataset3",
+        tour_length_m=20.0,
+        mappers=("naive",),
+    )
     live = run_experiment(spec).report
     out = tmp_path / "replay"
-    assert main(["replay", str(run_dir / "log.clf"), "--mapper", "naive", "--no-figures",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "replay",
+                str(run_dir / "log.clf"),
+                "--mapper",
+                "naive",
+                "--no-figures",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     replayed = json.loads((out / "report.json").read_text())
     a, b = live["odometry"]["rpe"], replayed["odometry"]["rpe"]
     assert a["relations"] == b["relations"]
@@ -102,8 +122,22 @@ def test_max_frames_and_an_explicit_relations_file(run_dir: Path, tmp_path: Path
     rel = tmp_path / "elsewhere.relations"
     rel.write_bytes((run_dir / "log.relations").read_bytes())
     out = tmp_path / "o"
-    assert main(["replay", str(run_dir / "log.clf"), "--relations", str(rel), "--max-frames",
-                 "25", "--no-figures", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "replay",
+                str(run_dir / "log.clf"),
+                "--relations",
+                str(rel),
+                "--max-frames",
+                "25",
+                "--no-figures",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     report = json.loads((out / "report.json").read_text())
     assert report["run"]["frames"] == 25 and report["params"]["max_frames"] == 25
     frames = list(read_frames(run_dir / "log.clf"))[:25]
@@ -112,15 +146,15 @@ def test_max_frames_and_an_explicit_relations_file(run_dir: Path, tmp_path: Path
     assert report["odometry"]["rpe"]["trans_m_mean"] == pytest.approx(trans, rel=1e-9)
 
 
-def test_no_relations_means_null_rpe(run_dir: Path, tmp_path: Path,
-                                     capsys: pytest.CaptureFixture) -> None:
+def test_no_relations_means_null_rpe(
+    run_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
     log = tmp_path / "alone.clf.gz"
     with gzip.open(log, "wb") as handle:
         handle.write((run_dir / "log.clf").read_bytes())
     assert find_relations(log) is None and log_stem(log) == "alone"
     out = tmp_path / "o"
-    assert main(["replay", str(log), "--max-frames", "10", "--no-figures",
-                 "--out", str(out)]) == 0
+    assert main(["replay", str(log), "--max-frames", "10", "--no-figures", "--out", str(out)]) == 0
     assert "no relations file" in capsys.readouterr().err
     report = json.loads((out / "report.json").read_text())
     assert report["odometry"]["rpe"] is None and report["mappers"]["albot1"]["rpe"] is None
@@ -189,7 +223,9 @@ def test_mit_csail_first_frames(shared_data: Path, tmp_path: Path) -> None:
 
 
 def test_a_log_is_found_in_the_data_folder(
-    run_dir: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    run_dir: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """ALBOT2D_DATA (or --data) is the data folder: LOG is looked up in it and in raw/,
@@ -203,11 +239,27 @@ def test_a_log_is_found_in_the_data_folder(
     assert main(["replay", "mine.clf", "--out", "a", "--no-figures"]) == 2
     assert "set ALBOT2D_DATA or --data" in capsys.readouterr().err
     monkeypatch.setenv("ALBOT2D_DATA", str(data))
-    assert main(["replay", "mine.clf", "--max-frames", "40", "--no-figures", "--json",
-                 "--out", "b"]) == 0
+    assert (
+        main(["replay", "mine.clf", "--max-frames", "40", "--no-figures", "--json", "--out", "b"])
+        == 0
+    )
     report = json.loads(capsys.readouterr().out)
     assert report["params"]["log"].endswith("raw/mine.clf")
     assert report["run"]["relations"] > 0
     monkeypatch.delenv("ALBOT2D_DATA")
-    assert main(["replay", "raw/mine.clf", "--data", str(data), "--max-frames", "40",
-                 "--no-figures", "--out", "c"]) == 0
+    assert (
+        main(
+            [
+                "replay",
+                "raw/mine.clf",
+                "--data",
+                str(data),
+                "--max-frames",
+                "40",
+                "--no-figures",
+                "--out",
+                "c",
+            ]
+        )
+        == 0
+    )

@@ -15,8 +15,20 @@ from albot2d.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-TINY = ["--kind", "rooms", "--width", "15", "--height", "15", "--tour-length", "20",
-        "--profile", "dataset3", "--stop-every", "5"]
+TINY = [
+    "--kind",
+    "rooms",
+    "--width",
+    "15",
+    "--height",
+    "15",
+    "--tour-length",
+    "20",
+    "--profile",
+    "dataset3",
+    "--stop-every",
+    "5",
+]
 
 
 def albot2d(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
@@ -38,9 +50,18 @@ def test_run_writes_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFix
     assert max(len(x) for x in printed.splitlines()[1:] if not x.startswith("->")) <= 100
     report = json.loads((out / "report.json").read_text())
     assert report["command"] == "run" and report["run"]["frames"] == 80
-    expected = {"paths.png", "maps.png", "homing.png", "albot1_map.png", "albot1_history.png",
-                "albot1_route.png", "naive_map.png", "truth_map.png", "errors.png",
-                "steps.png"}
+    expected = {
+        "paths.png",
+        "maps.png",
+        "homing.png",
+        "albot1_map.png",
+        "albot1_history.png",
+        "albot1_route.png",
+        "naive_map.png",
+        "truth_map.png",
+        "errors.png",
+        "steps.png",
+    }
     assert set(report["figures"]) == expected
     exports = {"groundtruth.tum", "odometry.tum"} | {
         f"{kind}_{name}.{ext}" for name in ("albot1", "naive", "truth")
@@ -60,12 +81,34 @@ def test_run_writes_report_and_figures(tmp_path: Path, capsys: pytest.CaptureFix
 
 def test_reproduce_gives_the_same_report(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     first = tmp_path / "first"
-    assert main(["run", *TINY, "--seed", "2", "--noise", "high", "--mapper", "albot1",
-                 "--mapper", "naive", "--no-figures", "--out", str(first)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                *TINY,
+                "--seed",
+                "2",
+                "--noise",
+                "high",
+                "--mapper",
+                "albot1",
+                "--mapper",
+                "naive",
+                "--no-figures",
+                "--out",
+                str(first),
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     again = tmp_path / "again"
-    assert main(["run", "--reproduce", str(first / "report.json"), "--no-figures",
-                 "--out", str(again)]) == 0
+    assert (
+        main(
+            ["run", "--reproduce", str(first / "report.json"), "--no-figures", "--out", str(again)]
+        )
+        == 0
+    )
     assert "reproduce: identical" in capsys.readouterr().out
     a = json.loads((first / "report.json").read_text())
     b = json.loads((again / "report.json").read_text())
@@ -77,16 +120,33 @@ def test_reproduce_gives_the_same_report(tmp_path: Path, capsys: pytest.CaptureF
 def test_a_plugin_mapper_runs_beside_the_builtins(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
 ) -> None:
-    (tmp_path / "my_mappers.py").write_text(textwrap.dedent("""
+    (tmp_path / "my_mappers.py").write_text(
+        textwrap.dedent("""
         from albot2d.mapping.baselines import NaiveIntegration
 
         class Odometer(NaiveIntegration):
             name = "odometer"
-    """))
+    """)
+    )
     monkeypatch.syspath_prepend(str(tmp_path))
     out = tmp_path / "out"
-    assert main(["run", *TINY, "--max-frames", "40", "--mapper", "truth", "my_mappers:Odometer",
-                 "--no-figures", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                *TINY,
+                "--max-frames",
+                "40",
+                "--mapper",
+                "truth",
+                "my_mappers:Odometer",
+                "--no-figures",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     report = json.loads((out / "report.json").read_text())
     assert list(report["mappers"]) == ["truth", "odometer"]  # the class's name attribute
     mine, odometry = report["mappers"]["odometer"]["rpe"], report["odometry"]["rpe"]
@@ -97,12 +157,14 @@ def test_a_plugin_mapper_runs_beside_the_builtins(
 
 def test_the_albot2d_script_imports_plugins_from_the_current_folder(tmp_path: Path) -> None:
     """The console script (unlike python -m) has no cwd on sys.path: main adds it."""
-    (tmp_path / "cwd_mappers.py").write_text(textwrap.dedent("""
+    (tmp_path / "cwd_mappers.py").write_text(
+        textwrap.dedent("""
         from albot2d.mapping.baselines import NaiveIntegration
 
         class LastViewOnly(NaiveIntegration):
             name = "last_view"
-    """))
+    """)
+    )
     script = "import sys; from albot2d.cli import main; sys.exit(main(sys.argv[1:]))"
     proc = subprocess.run(
         [sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, {str(ROOT)!r}); {script}",
@@ -155,8 +217,7 @@ def test_reproduce_refuses_other_settings_and_non_reports(
     fake.write_text(json.dumps({"format": "something-else"}))
     assert main(["run", "--reproduce", str(fake), "--out", str(tmp_path / "o")]) == 2
     assert "not an albot2d report" in capsys.readouterr().err
-    assert main(["run", "--reproduce", str(fake), "--seed", "1", "--out",
-                 str(tmp_path / "o")]) == 2
+    assert main(["run", "--reproduce", str(fake), "--seed", "1", "--out", str(tmp_path / "o")]) == 2
     assert "drop --seed" in capsys.readouterr().err
 
 
@@ -201,6 +262,20 @@ def test_run_profiles_every_view(tmp_path: Path) -> None:
 def test_cprofile_into_a_missing_directory_is_rejected(
     tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:
-    assert main(["run", *TINY, "--max-frames", "5", "--no-figures", "--cprofile",
-                 str(tmp_path / "nowhere" / "x.prof"), "--out", str(tmp_path / "o")]) == 2
+    assert (
+        main(
+            [
+                "run",
+                *TINY,
+                "--max-frames",
+                "5",
+                "--no-figures",
+                "--cprofile",
+                str(tmp_path / "nowhere" / "x.prof"),
+                "--out",
+                str(tmp_path / "o"),
+            ]
+        )
+        == 2
+    )
     assert "--cprofile" in capsys.readouterr().err and not (tmp_path / "o").exists()

@@ -28,8 +28,21 @@ def simulate(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
 
 def test_simulate_writes_a_run_that_reads_back(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    proc = simulate("--kind", "rooms", "--seed", "4", "--profile", "dataset3",
-                    "--tour-length", "15", "--noise", "low", "--out", str(out), cwd=tmp_path)
+    proc = simulate(
+        "--kind",
+        "rooms",
+        "--seed",
+        "4",
+        "--profile",
+        "dataset3",
+        "--tour-length",
+        "15",
+        "--noise",
+        "low",
+        "--out",
+        str(out),
+        cwd=tmp_path,
+    )
     assert proc.returncode == 0, proc.stderr
     assert "dataset3" in proc.stdout and str(out) in proc.stdout
     names = {p.name for p in out.iterdir()}
@@ -48,9 +61,22 @@ def test_simulate_writes_a_run_that_reads_back(tmp_path: Path) -> None:
     assert np.all(np.diff([f.timestamp for f in logged]) > 0)
     # Same arguments again: identical files (deterministic runs).
     again = tmp_path / "again"
-    proc = simulate("--kind", "rooms", "--seed", "4", "--profile", "dataset3",
-                    "--tour-length", "15", "--noise", "low", "--no-png", "--out", str(again),
-                    cwd=tmp_path)
+    proc = simulate(
+        "--kind",
+        "rooms",
+        "--seed",
+        "4",
+        "--profile",
+        "dataset3",
+        "--tour-length",
+        "15",
+        "--noise",
+        "low",
+        "--no-png",
+        "--out",
+        str(again),
+        cwd=tmp_path,
+    )
     assert proc.returncode == 0, proc.stderr
     for name in ("log.clf", "truth.txt", "log.relations"):
         assert (out / name).read_bytes() == (again / name).read_bytes()
@@ -65,8 +91,20 @@ def test_simulate_from_a_world_file(tmp_path: Path) -> None:
     )  # fmt: skip
     assert made.returncode == 0, made.stderr
     out = tmp_path / "run"
-    proc = simulate("--world", str(world), "--profile", "start_stop", "--tour-length", "20",
-                    "--no-png", "--laser-noise", "zero", "--out", str(out), cwd=tmp_path)
+    proc = simulate(
+        "--world",
+        str(world),
+        "--profile",
+        "start_stop",
+        "--tour-length",
+        "20",
+        "--no-png",
+        "--laser-noise",
+        "zero",
+        "--out",
+        str(out),
+        cwd=tmp_path,
+    )
     assert proc.returncode == 0, proc.stderr
     assert not (out / "paths.png").exists()
     manifest = json.loads((out / "run.json").read_text())
@@ -89,7 +127,10 @@ def test_simulate_from_a_world_file(tmp_path: Path) -> None:
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(
-    tmp_path: Path, args: list[str], message: str, capsys: pytest.CaptureFixture[str],
+    tmp_path: Path,
+    args: list[str],
+    message: str,
+    capsys: pytest.CaptureFixture[str],
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     monkeypatch.chdir(tmp_path)
@@ -128,8 +169,9 @@ def test_render_paths_png_handles_drift_and_empty_paths() -> None:
     world = room_world()
     true_xy = np.array([[1.0, 1.0], [5.0, 1.0]])
     odom_xy = np.array([[1.0, 1.0], [20.0, -9.0]])  # far outside the world
-    png = render_paths_png(world, true_xy=true_xy, odom_xy=odom_xy, collided=[False, True],
-                           title="t")
+    png = render_paths_png(
+        world, true_xy=true_xy, odom_xy=odom_xy, collided=[False, True], title="t"
+    )
     assert png.startswith(PNG_MAGIC)
     assert render_paths_png(world, true_xy=np.zeros((0, 3)), odom_xy=[]).startswith(PNG_MAGIC)
 

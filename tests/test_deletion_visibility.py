@@ -61,16 +61,16 @@ def test_a_doorway_is_not_seen_through_but_the_joined_polygon_covers_it() -> Non
 def test_visibility_turns_with_the_robot() -> None:
     turned = Pose(1.0, 1.0, np.pi / 2)  # at (1, 1) facing +y: the wall is y = 6
     wall = np.array([[3.0, 6.0, -1.0, 6.0]])  # scan order from the robot's right
-    share = visible_share(np.vstack([seg(0, 6.3, 2, 6.3), seg(0, 7.0, 2, 7.0)]), wall,
-                          turned, 0.5, 4)
+    share = visible_share(
+        np.vstack([seg(0, 6.3, 2, 6.3), seg(0, 7.0, 2, 7.0)]), wall, turned, 0.5, 4
+    )
     np.testing.assert_allclose(share, [1.0, 0.0])
 
 
 def test_seen_side_is_the_left_of_a_surface_in_scan_order() -> None:
     facing = WALL[0]
     back = facing[[2, 3, 0, 1]]  # the same line seen from beyond x = 5
-    np.testing.assert_array_equal(seen_side_mask(np.vstack([facing, back]), Pose()),
-                                  [True, False])
+    np.testing.assert_array_equal(seen_side_mask(np.vstack([facing, back]), Pose()), [True, False])
     assert not seen_side_mask(WALL, Pose(6.0, 0.0, np.pi))[0]
 
 
@@ -92,8 +92,7 @@ def test_the_far_face_of_a_wall_stays_and_the_displaced_copy_goes() -> None:
 
 
 @pytest.mark.parametrize(("min_share", "deleted"), [(0.0, 2), (0.5, 1), (1.0, 1)])
-def test_min_visible_share_decides_partly_visible_surfaces(min_share: float,
-                                                           deleted: int) -> None:
+def test_min_visible_share_decides_partly_visible_surfaces(min_share: float, deleted: int) -> None:
     partly = seg(3.0, -1.0, 3.0, 5.0)  # 3/8 visible (see above)
     wholly = seg(3.0, -1.0, 3.0, 1.0)
     g = GlobalMap(GlobalMapParams.preset("visible", min_visible_share=min_share))
@@ -123,8 +122,9 @@ def test_bad_visibility_parameters_are_refused() -> None:
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.integers(0, 2**32 - 1), st.sampled_from([0.0, 0.5, 1.0]),
-       st.sampled_from(["front", "any"]))
+@given(
+    st.integers(0, 2**32 - 1), st.sampled_from([0.0, 0.5, 1.0]), st.sampled_from(["front", "any"])
+)
 def test_the_invariant_recomputed_from_the_definitions_agrees_with_the_map(
     seed: int, min_share: float, side: str
 ) -> None:

@@ -14,8 +14,10 @@ from tests import digests
 @pytest.mark.parametrize("case", list(digests.CASES))
 def test_outputs_match_stored_digests(case: str) -> None:
     if case == "replay" and digests.find_mit_log() is None:
-        pytest.skip("the shared MIT CSAIL log is not found ($ALBOT2D_DATA, ../shared/data "
-                    "or /work/shared/data)")
+        pytest.skip(
+            "the shared MIT CSAIL log is not found ($ALBOT2D_DATA, ../shared/data "
+            "or /work/shared/data)"
+        )
     stored = digests.load()
     now = digests.compute(case)
     diff = digests.differences(stored["cases"][case], now)
@@ -29,9 +31,14 @@ def test_outputs_match_stored_digests(case: str) -> None:
 
 
 def test_canonical_drops_timings_and_paths() -> None:
-    report = {"wall_time_s": 1.5, "log": {"path": "/a/b/mit.clf.gz"},
-              "mappers": {"x": {"timing_ms": {"total": 3.0}, "rpe": 0.1 + 0.2}}}
-    assert digests.canonical(report) == {"log": {"path": "mit.clf.gz"},
-                                         "mappers": {"x": {"rpe": 0.3}}}
+    report = {
+        "wall_time_s": 1.5,
+        "log": {"path": "/a/b/mit.clf.gz"},
+        "mappers": {"x": {"timing_ms": {"total": 3.0}, "rpe": 0.1 + 0.2}},
+    }
+    assert digests.canonical(report) == {
+        "log": {"path": "mit.clf.gz"},
+        "mappers": {"x": {"rpe": 0.3}},
+    }
     # a real change (beyond the 12th significant digit) still shows
     assert digests.canonical({"v": 0.3000001}) != digests.canonical({"v": 0.3})

@@ -37,8 +37,12 @@ def open_space(walls: list[tuple[float, float, float, float]] = ()) -> pymunk.Sp
     return space
 
 
-def drive(waypoints: np.ndarray, profile: str | DrivingProfile, start: Pose,
-          space: pymunk.Space | None = None) -> tuple[list[Step], KinematicRobot]:
+def drive(
+    waypoints: np.ndarray,
+    profile: str | DrivingProfile,
+    start: Pose,
+    space: pymunk.Space | None = None,
+) -> tuple[list[Step], KinematicRobot]:
     robot = KinematicRobot(space or open_space(), pose=start)
     controller = TourController(waypoints, profile)
     steps: list[Step] = []
@@ -71,8 +75,11 @@ def test_steps_respect_profile_limits_and_reach_every_waypoint(
     assert robot.pose.distance_to(Pose(*wp[-1])) <= profile.waypoint_tolerance_m
     assert all(s.view for s in steps if s.kind == "move")
     min_view = math.radians(profile.turn_view_min_deg)
-    assert all(s.view == (profile.view_after_turn and abs(s.amount) >= min_view)
-               for s in steps if s.kind == "turn")
+    assert all(
+        s.view == (profile.view_after_turn and abs(s.amount) >= min_view)
+        for s in steps
+        if s.kind == "turn"
+    )
     # Each (merged) leg is driven in the fewest equal steps: ceil(length / move_step).
     legs = np.hypot(*np.diff(merge_straight(wp, profile.merge_offset_m), axis=0).T)
     legs = legs[legs > profile.waypoint_tolerance_m]
@@ -165,24 +172,34 @@ def test_dataset2_is_dataset1_with_induced_error() -> None:
 
 
 def test_step_duration_uses_nominal_speeds() -> None:
-    profile = DrivingProfile("x", move_step_m=1.0, turn_step_deg=10.0, speed_m_s=0.5,
-                             turn_rate_deg_s=45.0)
+    profile = DrivingProfile(
+        "x", move_step_m=1.0, turn_step_deg=10.0, speed_m_s=0.5, turn_rate_deg_s=45.0
+    )
     assert profile.step_duration_s("move", -1.0) == 2.0
     assert profile.step_duration_s("turn", math.radians(90.0)) == pytest.approx(2.0)
 
 
 def test_unknown_profile_lists_valid_names() -> None:
-    with pytest.raises(InputError,
-                       match="valid: dataset1, dataset2, dataset3, start_stop, start_stop_v1"):
+    with pytest.raises(
+        InputError, match="valid: dataset1, dataset2, dataset3, start_stop, start_stop_v1"
+    ):
         get_profile("dataset4")
     assert get_profile(PROFILES["dataset3"]) is PROFILES["dataset3"]
 
 
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("move_step_m", 0.0), ("turn_step_deg", -1.0), ("speed_m_s", math.nan),
-     ("max_blocked_steps", 0), ("view_after_turn", "yes"), ("stop_pause_s", -1.0),
-     ("induced_along_motion", 1), ("turn_view_min_deg", -1.0), ("merge_offset_m", math.inf)],
+    [
+        ("move_step_m", 0.0),
+        ("turn_step_deg", -1.0),
+        ("speed_m_s", math.nan),
+        ("max_blocked_steps", 0),
+        ("view_after_turn", "yes"),
+        ("stop_pause_s", -1.0),
+        ("induced_along_motion", 1),
+        ("turn_view_min_deg", -1.0),
+        ("merge_offset_m", math.inf),
+    ],
 )
 def test_profile_validated(field: str, value: object) -> None:
     with pytest.raises(InputError, match=field):

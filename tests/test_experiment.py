@@ -42,8 +42,14 @@ from albot2d.sim.simulator import Simulator
 from worldgen import plan_tour
 from worldgen.generate import generate
 
-SPEC = RunSpec(kind="rooms", seed=3, world_params={"width_m": 15.0, "height_m": 15.0},
-               profile="dataset3", tour_length_m=20.0, noise="typical")
+SPEC = RunSpec(
+    kind="rooms",
+    seed=3,
+    world_params={"width_m": 15.0, "height_m": 15.0},
+    profile="dataset3",
+    tour_length_m=20.0,
+    noise="typical",
+)
 PARAMS = EvaluationParams(homing=HomingParams(stop_every_m=4.0, min_start_distance_m=1.5))
 
 
@@ -57,8 +63,9 @@ def frames() -> list[Frame]:
     """The run's frames, simulated here as ``albot2d simulate`` seeds them."""
     world = generate("rooms", seed=3, width_m=15.0, height_m=15.0)
     tour = plan_tour(world, "loop", 20.0)
-    sim = Simulator(world, seed=stream_seed(3, RUN_STREAMS, "simulator"),
-                    odometry=noise_preset("typical"))
+    sim = Simulator(
+        world, seed=stream_seed(3, RUN_STREAMS, "simulator"), odometry=noise_preset("typical")
+    )
     return list(sim.drive(tour, "dataset3"))
 
 
@@ -85,11 +92,23 @@ def test_report_has_the_documented_shape(result: Any) -> None:
     assert set(report["mappers"]) == {"albot1", "naive", "truth"}
     for m in report["mappers"].values():
         assert {"views", "local_maps", "triangulations", "path_integrations"} <= set(m["counts"])
-        assert {"trans_m_mean", "trans_m_std", "rot_deg_mean", "rot_deg_std", "relations",
-                "short", "long"} <= set(m["rpe"])
+        assert {
+            "trans_m_mean",
+            "trans_m_std",
+            "rot_deg_mean",
+            "rot_deg_std",
+            "relations",
+            "short",
+            "long",
+        } <= set(m["rpe"])
         assert {"accuracy_m_mean", "accuracy_m_p95", "completeness"} <= set(m["map"])
-        assert m["homing"] and {"view", "bearing_est_deg", "bearing_true_deg", "distance_est_m",
-                                "distance_true_m"} <= set(m["homing"][0])
+        assert m["homing"] and {
+            "view",
+            "bearing_est_deg",
+            "bearing_true_deg",
+            "distance_est_m",
+            "distance_true_m",
+        } <= set(m["homing"][0])
         assert "extraction" in m["timing_ms"] and m["timing_ms"]["total"] > 0
     assert "rpe" in report["odometry"]
     assert "albot1" in format_summary_table(result.scores)
@@ -144,13 +163,17 @@ def test_homing_truth_is_computed_from_true_poses(result: Any, frames: list) -> 
     start = frames[0].true_pose
     stops = result.report["mappers"]["albot1"]["homing"]
     assert len(stops) >= 2
-    travelled = np.cumsum([0.0] + [math.hypot(f.odom_increment.x, f.odom_increment.y)
-                                   for f in frames[1:]])
+    travelled = np.cumsum(
+        [0.0] + [math.hypot(f.odom_increment.x, f.odom_increment.y) for f in frames[1:]]
+    )
     for stop in stops:
         pose = frames[stop["view"]].true_pose
         dx, dy = start.x - pose.x, start.y - pose.y
-        bearing = math.degrees(math.atan2(math.sin(math.atan2(dy, dx) - pose.theta),
-                                          math.cos(math.atan2(dy, dx) - pose.theta)))
+        bearing = math.degrees(
+            math.atan2(
+                math.sin(math.atan2(dy, dx) - pose.theta), math.cos(math.atan2(dy, dx) - pose.theta)
+            )
+        )
         assert stop["bearing_true_deg"] == pytest.approx(bearing, abs=1e-9)
         assert stop["distance_true_m"] == pytest.approx(math.hypot(dx, dy), abs=1e-12)
         assert stop["distance_true_m"] >= PARAMS.homing.min_start_distance_m
@@ -172,9 +195,16 @@ def test_same_spec_same_report_and_reproducible_from_it(result: Any) -> None:
 
 
 def test_bad_specs_are_input_errors() -> None:
-    for kwargs in ({"seed": -1}, {"tour_length_m": 0.0}, {"tour_kind": "spiral"},
-                   {"laser_noise": "loud"}, {"max_frames": 0}, {"mappers": ()},
-                   {"kind": None}, {"world_file": "w.json"}):
+    for kwargs in (
+        {"seed": -1},
+        {"tour_length_m": 0.0},
+        {"tour_kind": "spiral"},
+        {"laser_noise": "loud"},
+        {"max_frames": 0},
+        {"mappers": ()},
+        {"kind": None},
+        {"world_file": "w.json"},
+    ):
         with pytest.raises(InputError):
             RunSpec(**kwargs)
     with pytest.raises(InputError, match="unknown mapper"):
@@ -193,12 +223,21 @@ def test_max_frames_cuts_the_run(result: Any) -> None:
 
 def _frame(index: int, step_m: float) -> Frame:
     scan = Scan(np.ones(3), np.array([-0.1, 0.0, 0.1]), np.ones(3, bool), max_range_m=30.0)
-    return Frame(index, float(index), scan, Pose(0.0, 0.0, 0.0), Pose(step_m, 0.0, 0.0),
-                 true_pose=Pose(0.0, 0.0, 0.0))
+    return Frame(
+        index,
+        float(index),
+        scan,
+        Pose(0.0, 0.0, 0.0),
+        Pose(step_m, 0.0, 0.0),
+        true_pose=Pose(0.0, 0.0, 0.0),
+    )
 
 
-@given(steps=st.lists(st.floats(0.0, 3.0), min_size=1, max_size=40),
-       every=st.floats(0.5, 10.0), include_last=st.booleans())
+@given(
+    steps=st.lists(st.floats(0.0, 3.0), min_size=1, max_size=40),
+    every=st.floats(0.5, 10.0),
+    include_last=st.booleans(),
+)
 def test_stops_fall_on_each_new_multiple_of_the_spacing(
     steps: list[float], every: float, include_last: bool
 ) -> None:
@@ -208,8 +247,9 @@ def test_stops_fall_on_each_new_multiple_of_the_spacing(
     params = HomingParams(stop_every_m=every, min_start_distance_m=0.0, include_last=include_last)
     trace = drive_mappers(frames, {"truth": GroundTruthIntegration()}, homing=params)
     travelled = np.cumsum([0.0, *steps[1:]])
-    expected = [k for k in range(1, len(steps))
-                if travelled[k] // every > travelled[k - 1] // every]
+    expected = [
+        k for k in range(1, len(steps)) if travelled[k] // every > travelled[k - 1] // every
+    ]
     if include_last and (not expected or expected[-1] != len(steps) - 1):
         expected.append(len(steps) - 1)
     assert [s.row for s in trace.stops] == expected

@@ -35,7 +35,10 @@ def test_dask_backend_equals_the_local_backend_bit_for_bit(tmp_path: Path) -> No
     assert _comparable(dask) == expected
     # the runs really happened: both journeys, both seeds, stops on them
     assert sorted(expected["runs"]) == [
-        "fig15_room", "fig6_start_stop", "fig8_anticlockwise", "fig8_clockwise"
+        "fig15_room",
+        "fig6_start_stop",
+        "fig8_anticlockwise",
+        "fig8_clockwise",
     ]
     assert expected["experiments"]["table1"]["ours"]["n_stops"] > 0
     assert set(expected["runs"]["fig15_room"]["per_seed"]) == {"0", "1"}

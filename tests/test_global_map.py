@@ -123,9 +123,7 @@ def test_radial_enlargement_pushes_vertices_out_from_the_viewpoint() -> None:
 
 def test_groups_split_where_map_ids_jump() -> None:
     existing = set(range(200))
-    assert group_maps((3, 10, 40, 45), "split", 20, existing) == (
-        *range(3, 11), *range(40, 46)
-    )
+    assert group_maps((3, 10, 40, 45), "split", 20, existing) == (*range(3, 11), *range(40, 46))
     assert group_maps((3, 10, 40, 45), "contiguous", 20, existing) == tuple(range(3, 46))
     assert group_maps((3, 10, 40, 45), "none", 20, existing) == (3, 10, 40, 45)
     assert group_maps((3, 23, 44), "split", 20, existing) == (*range(3, 24), 44)
@@ -135,6 +133,7 @@ def test_groups_split_where_map_ids_jump() -> None:
 def test_a_revisit_deletes_only_the_group_near_the_revisited_maps() -> None:
     """Maps 0–4 at a place, 5–59 elsewhere, then the robot returns: the 'contiguous' Expand
     deletes the facing surfaces of every map in between; 'split' only those of 0–4."""
+
     def build(params: GlobalMapParams) -> GlobalMap:
         g = GlobalMap(params)
         for m in range(5):
@@ -166,8 +165,11 @@ def test_forward_ray_touches_what_lies_across_the_heading() -> None:
     far_wall = seg(2.8, -0.2, 2.8, 0.2)  # across the heading, outside a view closed at 1 m
     view = np.array([[1.0, -3.0, 1.0, -2.0], [1.0, 2.0, 1.0, 3.0]])
     for ray, deleted in ((0.0, 0), (3.0, 1)):
-        g = GlobalMap(GlobalMapParams.preset("paper", enlarge_m=0.0, forward_ray_m=ray,
-                                             include_viewpoint=False))
+        g = GlobalMap(
+            GlobalMapParams.preset(
+                "paper", enlarge_m=0.0, forward_ray_m=ray, include_viewpoint=False
+            )
+        )
         g.insert(far_wall, 0)
         assert g.add_view(view, 1, Pose()).deleted_current == deleted
 
@@ -199,9 +201,7 @@ def test_view_polygon_is_enlarged_view_area() -> None:
 
 
 @given(
-    st.lists(
-        st.tuples(*[st.floats(-50, 50) for _ in range(4)]), min_size=1, max_size=60
-    ),
+    st.lists(st.tuples(*[st.floats(-50, 50) for _ in range(4)]), min_size=1, max_size=60),
     st.tuples(st.floats(-60, 60), st.floats(-60, 60), st.floats(0.1, 30), st.floats(0.1, 30)),
     st.floats(0.3, 7.0),
 )

@@ -55,8 +55,12 @@ def test_a_real_run_passes_every_check(run) -> None:  # type: ignore[no-untyped-
     for f in frames:
         checker(f)
     assert checker.finish() == [] and checker.hits > 100 * len(frames)
-    bound = inv.heading_error_bound(truth, NOISE_PRESETS["typical"], get_profile("dataset3"),
-                                    inv.local_maps_per_row(m.route, index))
+    bound = inv.heading_error_bound(
+        truth,
+        NOISE_PRESETS["typical"],
+        get_profile("dataset3"),
+        inv.local_maps_per_row(m.route, index),
+    )
     inv.check_heading_error_bound(m.trajectory(), truth, bound)
 
 
@@ -79,8 +83,9 @@ def test_a_broken_local_map_rule_is_caught(run) -> None:  # type: ignore[no-unty
     broken.route = m.route
     broken.steps = list(m.steps)
     s = m.steps[k]
-    broken.steps[k] = StepRecord(s.frame_index, s.tracked, s.use_vc, (s.frame_index,),
-                                 ("triangulation",))
+    broken.steps[k] = StepRecord(
+        s.frame_index, s.tracked, s.use_vc, (s.frame_index,), ("triangulation",)
+    )
     with pytest.raises(inv.InvariantError, match="local_map_rule"):
         inv.check_local_map_rule(broken, views)
 
@@ -112,8 +117,7 @@ def test_an_update_that_keeps_older_facing_surfaces_is_caught(run) -> None:  # t
     view = transform_segments(last.pose.as_array(), last.view.segments)
     # A pretend update that sees the last view again from its own viewpoint, yet deleted
     # nothing: the surfaces it sees (the last map's own) were left behind.
-    report = UpdateReport(m.map.n_updates + 1, last.map_id + 2, 0, (), (), 0, 0,
-                          shapely.Polygon())
+    report = UpdateReport(m.map.n_updates + 1, last.map_id + 2, 0, (), (), 0, 0, shapely.Polygon())
     with pytest.raises(inv.InvariantError, match="update_deletes_facing_overlap"):
         inv.check_update_deleted_facing_overlap(m, report, last.pose, view)
     report = report._replace(map_id=last.map_id + 1)
@@ -145,10 +149,14 @@ def test_hits_seen_from_the_wrong_pose_are_caught(run, laser: LaserNoise) -> Non
 
 def test_a_heading_that_jumps_is_caught(run) -> None:  # type: ignore[no-untyped-def]
     m, truth, index = run[2], run[4], run[5]
-    bound = inv.heading_error_bound(truth, NOISE_PRESETS["typical"], get_profile("dataset3"),
-                                    inv.local_maps_per_row(m.route, index))
+    bound = inv.heading_error_bound(
+        truth,
+        NOISE_PRESETS["typical"],
+        get_profile("dataset3"),
+        inv.local_maps_per_row(m.route, index),
+    )
     estimate = m.trajectory().copy()
-    estimate[len(estimate) // 2:, 2] += math.radians(60.0)
+    estimate[len(estimate) // 2 :, 2] += math.radians(60.0)
     with pytest.raises(inv.InvariantError, match="heading_error_bound"):
         inv.check_heading_error_bound(estimate, truth, bound)
 
@@ -172,14 +180,19 @@ def test_a_misplaced_local_map_breaks_zero_noise_localisation(run) -> None:  # t
     rows = {int(i): r for r, i in enumerate(index)}
     for lm in m.route:
         prev = exact.maps[-1] if exact.maps else None
-        rel = (Pose() if prev is None
-               else Pose.from_array(truth[rows[prev.frame_index]]).between(
-                   Pose.from_array(truth[rows[lm.frame_index]])))
+        rel = (
+            Pose()
+            if prev is None
+            else Pose.from_array(truth[rows[prev.frame_index]]).between(
+                Pose.from_array(truth[rows[lm.frame_index]])
+            )
+        )
         exact.append(lm.frame_index, lm.view, rel, lm.method)
     inv.check_zero_noise_localisation(exact, index, truth)
     maps = list(exact.maps)
-    maps[3] = dataclasses.replace(maps[3], pose_in_previous=maps[3].pose_in_previous
-                                  @ Pose(0.0, 0.08, 0.0))
+    maps[3] = dataclasses.replace(
+        maps[3], pose_in_previous=maps[3].pose_in_previous @ Pose(0.0, 0.08, 0.0)
+    )
     with pytest.raises(inv.InvariantError, match=r"1 of \d+ local maps off; worst map 3"):
         inv.check_zero_noise_localisation(RouteMap(maps), index, truth)
 
@@ -210,15 +223,24 @@ def test_albot1_heading_error_stays_within_the_noise_bound(world, seed, noise) -
 
 
 @pytest.mark.slow  # ten full episodes
-@pytest.mark.parametrize(("profile", "noise", "episodes", "tour_m"),
-                         [("dataset3", "high", 8, 25.0), ("dataset2", "none", 2, 8.0)])
+@pytest.mark.parametrize(
+    ("profile", "noise", "episodes", "tour_m"),
+    [("dataset3", "high", 8, 25.0), ("dataset2", "none", 2, 8.0)],
+)
 def test_albot1_beats_raw_odometry_on_average(profile, noise, episodes, tour_m) -> None:  # type: ignore[no-untyped-def]
     """Holds clearly for the high preset and for dataset 2's induced error; with the typical
     and low presets odometry is already good and Albot1 is not better on every run."""
-    campaign = CampaignParams(episodes=episodes, seed=3, kinds=("rooms", "corridors", "open"),
-                              profile=profile, noise=noise, world_size_min_m=12.0,
-                              world_size_max_m=16.0, tour_length_min_m=tour_m,
-                              tour_length_max_m=tour_m)
+    campaign = CampaignParams(
+        episodes=episodes,
+        seed=3,
+        kinds=("rooms", "corridors", "open"),
+        profile=profile,
+        noise=noise,
+        world_size_min_m=12.0,
+        world_size_max_m=16.0,
+        tour_length_min_m=tour_m,
+        tour_length_max_m=tour_m,
+    )
     records = [run_episode(EpisodeSpec.draw(campaign, k)).record for k in range(episodes)]
     assert [r["status"] for r in records] == ["ok"] * episodes, [r["violations"] for r in records]
     mine = np.mean([r["metrics"]["heading_error_mean_deg"] for r in records])

@@ -98,8 +98,10 @@ def test_map_quality_known_offsets() -> None:
     start = Pose(2.0, 1.0, math.pi / 2)
     world_seg = np.array([[1.0, 0.05, 3.0, 0.05]])
     local = np.hstack(
-        [start.inverse().transform_points(world_seg[:, :2]),
-         start.inverse().transform_points(world_seg[:, 2:])]
+        [
+            start.inverse().transform_points(world_seg[:, :2]),
+            start.inverse().transform_points(world_seg[:, 2:]),
+        ]
     )
     seen = sample_segments(np.array([[0.0, 0.0, 4.0, 0.0]]), 0.5)  # 4 m seen, 2 m mapped
     q = map_quality(local, truth, start_pose=start, seen_points=seen)

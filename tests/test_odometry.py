@@ -26,8 +26,10 @@ steps = st.one_of(
 )
 
 
-@given(start=st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-3, 3)),
-       increments=st.lists(steps, max_size=60))
+@given(
+    start=st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-3, 3)),
+    increments=st.lists(steps, max_size=60),
+)
 def test_zero_noise_equals_truth_bit_for_bit(start: tuple, increments: list[Pose]) -> None:
     truth = Pose(*start)
     odom = Odometry(OdometryNoise(), start=truth)
@@ -131,9 +133,14 @@ def test_reading_properties() -> None:
 
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("alpha1", -0.1), ("alpha3", math.nan), ("distance_scale_error", -1.0),
-     ("heading_drift_deg_per_m", math.inf), ("induced_step_m", "x"),
-     ("induced_along_motion", 1)],
+    [
+        ("alpha1", -0.1),
+        ("alpha3", math.nan),
+        ("distance_scale_error", -1.0),
+        ("heading_drift_deg_per_m", math.inf),
+        ("induced_step_m", "x"),
+        ("induced_along_motion", 1),
+    ],
 )
 def test_noise_params_validated(field: str, value: object) -> None:
     with pytest.raises(InputError, match=field):
@@ -178,8 +185,9 @@ def test_pioneer3dx_quarter_turn_error_is_about_one_percent():
     rng = np.random.default_rng(0)
     p3 = noise_preset("pioneer3dx")
     quarter = math.pi / 2
-    reported = np.array([perturb_increment(Pose(0.0, 0.0, quarter), p3, rng).theta
-                         for _ in range(1000)])
+    reported = np.array(
+        [perturb_increment(Pose(0.0, 0.0, quarter), p3, rng).theta for _ in range(1000)]
+    )
     err = np.degrees(reported - quarter)
     assert np.mean(err) == pytest.approx(0.9, abs=0.15)
     assert np.std(err) == pytest.approx(0.9, abs=0.15)

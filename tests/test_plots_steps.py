@@ -71,4 +71,3 @@ def test_plot_step_times_draws_every_time_line_and_the_remembered_marks() -> Non
     assert len(total.get_xdata()) == 10
     assert max(ln.get_ydata().max() for ln in binned.get_lines() if ln.get_marker() != "|") >= 2.5
     assert render_step_times_png(some_steps()).startswith(PNG_MAGIC)
-

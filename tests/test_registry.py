@@ -57,8 +57,10 @@ def test_user_plugin_by_module_and_class(tmp_path: Path, monkeypatch: pytest.Mon
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
-        ("albot2", "unknown mapper 'albot2'; built-in mappers: albot1, naive, scan_odometry, "
-                   "slam, truth"),
+        (
+            "albot2",
+            "unknown mapper 'albot2'; built-in mappers: albot1, naive, scan_odometry, slam, truth",
+        ),
         ("no_such_module_xyz:Cls", "cannot import module 'no_such_module_xyz'"),
     ],
 )

@@ -52,9 +52,7 @@ class Room:
         for x in xs:
             for y in ys:
                 pose = Pose(float(x), float(y), 0.0)
-                if self.clearance(pose) >= margin and self.free_space.contains(
-                    shapely.Point(x, y)
-                ):
+                if self.clearance(pose) >= margin and self.free_space.contains(shapely.Point(x, y)):
                     return pose
         return None
 
@@ -72,8 +70,9 @@ def rooms(draw: st.DrawFn) -> Room:
         clutter.append(affinity.rotate(box, draw(st.floats(0, 180))))
     walls = []
     for _ in range(draw(st.integers(0, 4))):
-        walls.append([draw(unit) * width, draw(unit) * height,
-                      draw(unit) * width, draw(unit) * height])
+        walls.append(
+            [draw(unit) * width, draw(unit) * height, draw(unit) * width, draw(unit) * height]
+        )
     return Room(width, height, walls, clutter)
 
 
@@ -184,8 +183,11 @@ def test_drive_follows_exact_arc_endpoint() -> None:
     v, omega, dt = 0.5, 0.4, 3.0
     result = robot.drive(v, omega, dt)
     radius = v / omega
-    expected = Pose(10.0 + radius * math.sin(omega * dt),
-                    10.0 + radius * (1.0 - math.cos(omega * dt)), omega * dt)
+    expected = Pose(
+        10.0 + radius * math.sin(omega * dt),
+        10.0 + radius * (1.0 - math.cos(omega * dt)),
+        omega * dt,
+    )
     assert result.pose.x == pytest.approx(expected.x, abs=1e-9)
     assert result.pose.y == pytest.approx(expected.y, abs=1e-9)
     assert result.pose.theta == pytest.approx(expected.theta, abs=1e-12)

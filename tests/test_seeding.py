@@ -39,10 +39,12 @@ def test_named_streams_are_the_spawn_children_they_replace():
 
     for seed in (0, 5, 2**40):
         assert stream_seed(seed, RUN_STREAMS, "simulator").spawn_key == (2,)
-        assert (stream_rng(seed, RUN_STREAMS, "simulator").random(4)
-                == spawn_rngs(seed, 3)[2].random(4)).all()
-        assert (stream_rng(seed, WORLD_STREAMS, "tour").random(4)
-                == spawn_rngs(seed, 2)[1].random(4)).all()
+        assert (
+            stream_rng(seed, RUN_STREAMS, "simulator").random(4) == spawn_rngs(seed, 3)[2].random(4)
+        ).all()
+        assert (
+            stream_rng(seed, WORLD_STREAMS, "tour").random(4) == spawn_rngs(seed, 2)[1].random(4)
+        ).all()
     parent = np.random.SeedSequence(7, spawn_key=(3,))
     parent.spawn(5)  # a used parent: the named child does not depend on its spawn counter
     assert stream_seed(parent, WORLD_STREAMS, "tour").spawn_key == (3, 1)

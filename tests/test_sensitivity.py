@@ -15,7 +15,9 @@ from albot2d.evaluation.sensitivity import (
 )
 
 SMALL = SensitivitySetup(
-    kind="office", world_params={"width_m": 30.0, "height_m": 24.0}, tour_length_m=40.0,
+    kind="office",
+    world_params={"width_m": 30.0, "height_m": 24.0},
+    tour_length_m=40.0,
     mappers=("albot1", "albot1[preset=start_stop]", "naive"),
 )
 
@@ -53,8 +55,10 @@ def test_sensitivity_counts_stops_within_the_bound():
 
 def test_reverse_drives_the_circuit_the_other_way_round():
     setup = SensitivitySetup(
-        kind="office", world_params={"width_m": 30.0, "height_m": 24.0},
-        tour_length_m=40.0, mappers=("truth",),
+        kind="office",
+        world_params={"width_m": 30.0, "height_m": 24.0},
+        tour_length_m=40.0,
+        mappers=("truth",),
     )
     fwd = run_one(2, "none", setup, "forward")
     rev = run_one(2, "none", setup, "reverse")

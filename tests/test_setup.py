@@ -18,8 +18,14 @@ from albot2d.sim.simulator import Simulator
 from worldgen import generate, plan_tour
 from worldgen.io import world_to_json
 
-SPEC = RunSpec(kind="rooms", seed=4, world_params={"width_m": 15.0, "height_m": 15.0},
-               profile="dataset3", tour_length_m=20.0, mappers=("albot1", "naive"))
+SPEC = RunSpec(
+    kind="rooms",
+    seed=4,
+    world_params={"width_m": 15.0, "height_m": 15.0},
+    profile="dataset3",
+    tour_length_m=20.0,
+    mappers=("albot1", "naive"),
+)
 
 
 def test_build_run_is_world_tour_and_simulator_made_by_hand() -> None:
@@ -29,8 +35,12 @@ def test_build_run_is_world_tour_and_simulator_made_by_hand() -> None:
     tour = plan_tour(world, "loop", 20.0)
     assert np.array_equal(setup.tour.waypoints, tour.waypoints)
     assert list(setup.mapper_factories) == ["albot1", "naive"]
-    sim = Simulator(world, seed=stream_seed(4, RUN_STREAMS, "simulator"),
-                    odometry=noise_preset("typical"), laser_noise=LaserNoise.sick_lms200())
+    sim = Simulator(
+        world,
+        seed=stream_seed(4, RUN_STREAMS, "simulator"),
+        odometry=noise_preset("typical"),
+        laser_noise=LaserNoise.sick_lms200(),
+    )
     ours = itertools.islice(setup.simulator.drive(setup.tour, setup.profile), 30)
     theirs = itertools.islice(sim.drive(tour, "dataset3"), 30)
     for a, b in zip(ours, theirs, strict=True):
@@ -52,8 +62,14 @@ def test_names_are_resolved_once_with_the_valid_ones_listed() -> None:
 
 
 def test_typed_scores_are_the_report_sections() -> None:
-    counts = ProcessCounts(views=10, local_maps=2, triangulations=1, path_integrations=0,
-                           global_map_surfaces=7, moves_between_updates_mean=5.0)
+    counts = ProcessCounts(
+        views=10,
+        local_maps=2,
+        triangulations=1,
+        path_integrations=0,
+        global_map_surfaces=7,
+        moves_between_updates_mean=5.0,
+    )
     assert "loop_closures" not in counts.to_dict()
     with_slam = ProcessCounts(1, 1, 0, 0, 0, None, loop_closures={"keyframes": 3})
     assert with_slam.to_dict()["loop_closures"] == {"keyframes": 3}
@@ -65,8 +81,12 @@ def test_typed_scores_are_the_report_sections() -> None:
     summary = HomingSummary.of((known, unknown))  # only stops with the truth count
     assert summary.stops == 2 and summary.distance_abs_max_m == pytest.approx(0.5)
     assert HomingSummary.of((unknown,)).to_dict() == {
-        "stops": 1, "bearing_abs_max_deg": None, "bearing_abs_mean_deg": None,
-        "distance_abs_max_m": None, "distance_abs_mean_m": None}
+        "stops": 1,
+        "bearing_abs_max_deg": None,
+        "bearing_abs_mean_deg": None,
+        "distance_abs_max_m": None,
+        "distance_abs_mean_m": None,
+    }
 
 
 def test_the_help_texts_defaults_are_the_dataclasses_defaults() -> None:

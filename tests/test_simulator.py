@@ -56,9 +56,14 @@ def room_world(dynamic: tuple[DynamicObstacle, ...] = ()) -> World:
     walls = polygon_ring_segments(np.asarray(room.exterior.coords))
     edges = np.array([[0, 1], [1, 2], [2, 3], [0, 3]])
     return World(
-        walls=walls, clutter=(pillar,), free_space=room.difference(pillar),
-        bounds=(0.0, 0.0, 12.0, 8.0), start=Pose(1.5, 1.5, 0.0),
-        roadmap=Roadmap(LOOP[:4], edges), kind="test-room", seed=0,
+        walls=walls,
+        clutter=(pillar,),
+        free_space=room.difference(pillar),
+        bounds=(0.0, 0.0, 12.0, 8.0),
+        start=Pose(1.5, 1.5, 0.0),
+        roadmap=Roadmap(LOOP[:4], edges),
+        kind="test-room",
+        seed=0,
         dynamic_obstacles=dynamic,
     )
 
@@ -129,10 +134,12 @@ def test_dataset3_views_are_at_most_1m_or_10deg_apart() -> None:
 
 def test_start_stop_views_after_every_move_and_turn_instruction() -> None:
     frames = drive("start_stop")
-    moved = np.array([prev.true_pose.distance_to(f.true_pose)
-                      for prev, f in itertools.pairwise(frames)])
-    turned = np.degrees([abs(prev.true_pose.between(f.true_pose).theta)
-                         for prev, f in itertools.pairwise(frames)])
+    moved = np.array(
+        [prev.true_pose.distance_to(f.true_pose) for prev, f in itertools.pairwise(frames)]
+    )
+    turned = np.degrees(
+        [abs(prev.true_pose.between(f.true_pose).theta) for prev, f in itertools.pairwise(frames)]
+    )
     is_move = moved > 1e-9
     assert (turned[~is_move] > 10.0).all() and (turned <= 60.0 + 1e-6).all()
     assert (~is_move).any()  # the corners are turn-only views
@@ -142,8 +149,7 @@ def test_start_stop_views_after_every_move_and_turn_instruction() -> None:
 
 def test_start_stop_v1_views_about_3m_apart_with_turns_merged() -> None:
     frames = drive("start_stop_v1")
-    steps = [prev.true_pose.distance_to(f.true_pose)
-             for prev, f in itertools.pairwise(frames)]
+    steps = [prev.true_pose.distance_to(f.true_pose) for prev, f in itertools.pairwise(frames)]
     assert max(steps) <= 3.0 + 1e-9 and np.mean(steps) > 2.0
     assert min(steps) > 1.0  # every view follows a move: no turn-only views
     gaps = np.diff([f.timestamp for f in frames])
@@ -154,8 +160,7 @@ def test_timestamps_follow_nominal_speeds() -> None:
     frames = drive("dataset1")
     t = np.array([f.timestamp for f in frames])
     dt = np.diff(t)
-    moved = np.array([a.true_pose.distance_to(b.true_pose) for a, b in
-                      itertools.pairwise(frames)])
+    moved = np.array([a.true_pose.distance_to(b.true_pose) for a, b in itertools.pairwise(frames)])
     is_move = moved > 1e-9
     assert dt[is_move] == pytest.approx(moved[is_move] / 0.3)
     assert dt[~is_move] == pytest.approx(np.full((~is_move).sum(), 1.0 / 30.0))
@@ -185,8 +190,13 @@ def test_noisy_run_is_deterministic_across_processes() -> None:
         from albot2d.sim.odometry import NOISE_PRESETS
         print(digest(drive("dataset3", movers=True, odometry=NOISE_PRESETS["typical"])))
     """)
-    out = subprocess.run([sys.executable, "-c", script, str(ROOT)], capture_output=True,
-                         text=True, check=True, cwd=ROOT)
+    out = subprocess.run(
+        [sys.executable, "-c", script, str(ROOT)],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=ROOT,
+    )
     here = drive("dataset3", movers=True, odometry=NOISE_PRESETS["typical"])
     assert out.stdout.strip() == digest(here)
 
@@ -200,8 +210,10 @@ def test_noise_streams_are_independent() -> None:
         assert np.array_equal(a.scan.ranges, b.scan.ranges)  # laser draws unchanged
         assert a.odom_pose == c.odom_pose  # odometry draws unchanged
     assert any(a.odom_pose != a.true_pose for a in noisy)
-    assert any(not np.array_equal(a.scan.ranges, c.scan.ranges)
-               for a, c in zip(noisy, exact_laser, strict=True))
+    assert any(
+        not np.array_equal(a.scan.ranges, c.scan.ranges)
+        for a, c in zip(noisy, exact_laser, strict=True)
+    )
 
 
 def test_bad_profile_fails_before_the_first_frame() -> None:
@@ -231,8 +243,11 @@ def test_robot_pushes_a_box_and_people_walk_back_and_forth() -> None:
 
 def test_laser_sees_moving_obstacles_and_run_stays_collision_free() -> None:
     world = room_world(MOVERS)
-    frames = list(Simulator(world, seed=2, laser_noise=LaserNoise.zero()).drive(
-        Tour(LOOP, "loop"), "dataset3"))
+    frames = list(
+        Simulator(world, seed=2, laser_noise=LaserNoise.zero()).drive(
+            Tour(LOOP, "loop"), "dataset3"
+        )
+    )
     static = world.obstacle_segments
     off_static = 0
     for f in frames:
@@ -286,8 +301,7 @@ def test_physics_params_validated(field: str, value: float) -> None:
 
 @settings(max_examples=examples(10))
 @given(
-    points=st.lists(st.tuples(st.floats(0.3, 11.7), st.floats(0.3, 7.7)), min_size=1,
-                    max_size=5),
+    points=st.lists(st.tuples(st.floats(0.3, 11.7), st.floats(0.3, 7.7)), min_size=1, max_size=5),
     profile=st.sampled_from(["dataset3", "start_stop"]),
     seed=st.integers(0, 2**32),
 )

@@ -158,8 +158,9 @@ def test_closure_information_follows_what_the_registration_fixed(extra: None) ->
     assert across == pytest.approx(params.loop_sigma_m)
     assert heading < np.radians(3 * params.loop_sigma_deg)
     wall = np.column_stack([np.full_like(x, 3.0), x])  # a second wall across the end
-    corner = registration_information(np.vstack([walls, wall]),
-                                      np.vstack([up, down, np.tile([-1.0, 0.0], (61, 1))]))
+    corner = registration_information(
+        np.vstack([walls, wall]), np.vstack([up, down, np.tile([-1.0, 0.0], (61, 1))])
+    )
     assert max(_sigmas(graph.loop_noise(corner))[:2]) < 3 * params.loop_sigma_m
     plain = PoseGraph(PoseGraphParams(loop_information=False))
     np.testing.assert_allclose(_sigmas(plain.loop_noise(corridor)),

@@ -40,7 +40,9 @@ def assert_pose_close(a: Pose, b: Pose, tol: float = 1e-9) -> None:
 
 
 @given(
-    st.floats(-1.0, 1.0), st.floats(-1.0, 1.0), st.floats(-math.pi, math.pi),
+    st.floats(-1.0, 1.0),
+    st.floats(-1.0, 1.0),
+    st.floats(-math.pi, math.pi),
     st.integers(1, 4),
 )
 def test_exact_observations_triangulate_to_the_true_pose(

@@ -123,12 +123,17 @@ def test_circuit_on_a_tree_roadmap_is_an_out_and_back():
     from worldgen.world import Roadmap
 
     world = generate("office", seed=0)
-    nodes = np.array([[world.start.x, world.start.y],
-                      [world.start.x + 1.0, world.start.y], [world.start.x + 2.0, world.start.y]])
+    nodes = np.array(
+        [
+            [world.start.x, world.start.y],
+            [world.start.x + 1.0, world.start.y],
+            [world.start.x + 2.0, world.start.y],
+        ]
+    )
     tree = dataclasses.replace(world, roadmap=Roadmap(nodes, np.array([[0, 1], [1, 2]])))
     tour = make_tour(tree, 0, kind="circuit", min_length_m=4.0)
     assert tour.length_m >= 4.0
-    assert tour.node_ids[: 5] == (0, 1, 2, 1, 0)
+    assert tour.node_ids[:5] == (0, 1, 2, 1, 0)
 
 
 @pytest.mark.parametrize("kind", TOUR_KINDS)

@@ -320,18 +320,24 @@ class Fig6Params(_DoorParams):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for low, high in (("corridor_width_min_m", "corridor_width_max_m"),
-                          ("room_depth_min_m", "room_depth_max_m"),
-                          ("room_width_min_m", "room_width_max_m"),
-                          ("hall_depth_min_m", "hall_depth_max_m"),
-                          ("cross_offset_min_m", "cross_offset_max_m")):
+        for low, high in (
+            ("corridor_width_min_m", "corridor_width_max_m"),
+            ("room_depth_min_m", "room_depth_max_m"),
+            ("room_width_min_m", "room_width_max_m"),
+            ("hall_depth_min_m", "hall_depth_max_m"),
+            ("cross_offset_min_m", "cross_offset_max_m"),
+        ):
             check_positive(self, low, high)
             _check_order(self, low, high)
         _check_at_least(self, "corridor_width_min_m", self.passage_m, "to let the robot through")
         small = self.door_width_max_m + self.wall_thickness_m + 1.0
         _check_at_least(self, "room_width_min_m", small, "(a door must fit in a room wall)")
-        _check_at_least(self, "cross_offset_min_m", self.corridor_width_max_m + small,
-                        "(a room between the left and the cross corridor)")
+        _check_at_least(
+            self,
+            "cross_offset_min_m",
+            self.corridor_width_max_m + small,
+            "(a room between the left and the cross corridor)",
+        )
         ring_w = 2.0 * self.room_depth_max_m + self.cross_offset_max_m + 2.0 * small + 6.0
         ring_h = self.room_depth_max_m + self.hall_depth_max_m + 2.0 * small + 4.0
         _check_at_least(self, "width_m", ring_w, "(room bands, the ring and the cross corridor)")

@@ -264,7 +264,11 @@ def _straightener(world: World) -> Callable[[list[int]], list[int]]:
 
 
 def _circuit(
-    graph: nx.Graph, nodes: np.ndarray, s: int, rng: np.random.Generator, min_length_m: float,
+    graph: nx.Graph,
+    nodes: np.ndarray,
+    s: int,
+    rng: np.random.Generator,
+    min_length_m: float,
     straighten: Callable[[list[int]], list[int]] = lambda walk: walk,
     rooms: frozenset[int] = frozenset(),
 ) -> list[int]:
@@ -281,8 +285,9 @@ def _circuit(
         return _out_and_back(graph, nodes, s, rng, min_length_m)
     entry = min(reachable_core, key=lambda v: (dist[v], v))
     way_in = [int(v) for v in paths[entry]]
-    core: nx.Graph[int] = nx.Graph(graph.subgraph(nx.node_connected_component(
-        graph.subgraph(core_nodes), entry)))
+    core: nx.Graph[int] = nx.Graph(
+        graph.subgraph(nx.node_connected_component(graph.subgraph(core_nodes), entry))
+    )
     core_dist = nx.single_source_dijkstra_path_length(core, entry, weight="weight")
     ids = np.array(sorted(core_dist), dtype=np.int64)
     reach = np.array([core_dist[v] for v in ids])
@@ -411,8 +416,10 @@ def make_tour(
         waypoints = waypoints[keep]
     tour = Tour(waypoints=waypoints, kind=kind, node_ids=tuple(walk))
     if tour.length_m <= 0.0:
-        raise InputError(f"{kind} tour from the start has length 0 m: the roadmap near "
-                         f"the start has no edge of positive length")
+        raise InputError(
+            f"{kind} tour from the start has length 0 m: the roadmap near "
+            f"the start has no edge of positive length"
+        )
     return tour
 
 

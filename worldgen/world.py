@@ -88,8 +88,10 @@ class Tour:
     node_ids: tuple[int, ...] = ()
 
     def __repr__(self) -> str:
-        return (f"Tour(kind={self.kind!r}, waypoints={len(self.waypoints)}, "
-                f"length_m={self.length_m:.6g})")
+        return (
+            f"Tour(kind={self.kind!r}, waypoints={len(self.waypoints)}, "
+            f"length_m={self.length_m:.6g})"
+        )
 
     def __post_init__(self) -> None:
         wp = np.asarray(self.waypoints, dtype=np.float64).reshape(-1, 2)
@@ -140,23 +142,30 @@ class DynamicObstacle:
 
     def __post_init__(self) -> None:
         if self.kind not in _OBSTACLE_KINDS:
-            raise InputError(f"DynamicObstacle.kind must be one of {_OBSTACLE_KINDS}, "
-                             f"got {self.kind!r}")
+            raise InputError(
+                f"DynamicObstacle.kind must be one of {_OBSTACLE_KINDS}, got {self.kind!r}"
+            )
         shape = _obstacle_points(self.shape, "shape")
         path = _obstacle_points(self.path, "path")
         _obstacle_points([self.pose.x, self.pose.y], "pose")
         _obstacle_number(self.pose.theta, "pose theta")
         if len(shape) < 3 or shapely.Polygon(shape).convex_hull.area <= 0.0:
-            raise InputError(f"DynamicObstacle.shape must be an outline of positive area "
-                             f"(3 or more points, not all on one line), got {_head(shape)}")
+            raise InputError(
+                f"DynamicObstacle.shape must be an outline of positive area "
+                f"(3 or more points, not all on one line), got {_head(shape)}"
+            )
         speed = _obstacle_number(self.speed_m_s, "speed_m_s")
         if not 0.0 <= speed <= MAX_OBSTACLE_SPEED_M_S:
-            raise InputError(f"DynamicObstacle.speed_m_s must be in [0, {MAX_OBSTACLE_SPEED_M_S}] "
-                             f"m/s (MAX_OBSTACLE_SPEED_M_S), got {speed!r}")
+            raise InputError(
+                f"DynamicObstacle.speed_m_s must be in [0, {MAX_OBSTACLE_SPEED_M_S}] "
+                f"m/s (MAX_OBSTACLE_SPEED_M_S), got {speed!r}"
+            )
         mass = _obstacle_number(self.mass_kg, "mass_kg")
         if not 0.0 < mass <= MAX_OBSTACLE_MASS_KG:
-            raise InputError(f"DynamicObstacle.mass_kg must be in (0, {MAX_OBSTACLE_MASS_KG:g}] "
-                             f"kg (MAX_OBSTACLE_MASS_KG), got {mass!r}")
+            raise InputError(
+                f"DynamicObstacle.mass_kg must be in (0, {MAX_OBSTACLE_MASS_KG:g}] "
+                f"kg (MAX_OBSTACLE_MASS_KG), got {mass!r}"
+            )
         object.__setattr__(self, "shape", readonly(shape))
         object.__setattr__(self, "path", readonly(path))
 
@@ -181,8 +190,10 @@ def _obstacle_points(value: Any, name: str) -> FloatArray:
     except (TypeError, ValueError):
         raise InputError(f"DynamicObstacle.{name} must be [x, y] points, got {value!r}") from None
     if len(pts) > MAX_OBSTACLE_POINTS:
-        raise InputError(f"DynamicObstacle.{name} has {len(pts)} points; at most "
-                         f"{MAX_OBSTACLE_POINTS} (MAX_OBSTACLE_POINTS)")
+        raise InputError(
+            f"DynamicObstacle.{name} has {len(pts)} points; at most "
+            f"{MAX_OBSTACLE_POINTS} (MAX_OBSTACLE_POINTS)"
+        )
     bad = ~np.isfinite(pts)
     if bad.any():
         k = int(np.flatnonzero(bad.any(axis=1))[0])

@@ -63,18 +63,29 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     world.add_argument("--seed", metavar="N", help="world and run seed (default 0)")
     world.add_argument("--width", metavar="W", help="generated world's width in metres")
     world.add_argument("--height", metavar="H", help="generated world's height in metres")
-    world.add_argument("--param", action="append", metavar="NAME=VALUE",
-                       help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)")
+    world.add_argument(
+        "--param",
+        action="append",
+        metavar="NAME=VALUE",
+        help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)",
+    )
     drive = p.add_argument_group("driving")
-    drive.add_argument("--profile", help=f"dataset1, dataset2, dataset3, start_stop "
-                       f"(default {DEFAULT_PROFILE})")
-    drive.add_argument("--noise", help=f"odometry noise preset: none, low, typical, high "
-                       f"(default {DEFAULT_NOISE})")
+    drive.add_argument(
+        "--profile", help=f"dataset1, dataset2, dataset3, start_stop (default {DEFAULT_PROFILE})"
+    )
+    drive.add_argument(
+        "--noise", help=f"odometry noise preset: none, low, typical, high (default {DEFAULT_NOISE})"
+    )
     drive.add_argument("--laser-noise", help=f"sick_lms200 or zero (default {DEFAULT_LASER_NOISE})")
-    drive.add_argument("--tour-kind", help="loop, out_and_back, backtracking, circuit "
-                       f"(default {DEFAULT_TOUR_KIND})")
-    drive.add_argument("--tour-length", metavar="METRES",
-                       help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})")
+    drive.add_argument(
+        "--tour-kind",
+        help=f"loop, out_and_back, backtracking, circuit (default {DEFAULT_TOUR_KIND})",
+    )
+    drive.add_argument(
+        "--tour-length",
+        metavar="METRES",
+        help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})",
+    )
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
 
 
@@ -113,14 +124,24 @@ def add_json_option(
 
 def add_scoring_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("scoring")
-    g.add_argument("--stop-every", metavar="METRES",
-                   help="homing: stop every this many odometer metres (default 20)")
-    g.add_argument("--min-start-distance", metavar="METRES",
-                   help="homing: skip stops nearer the start than this (default 3)")
-    g.add_argument("--last-k-views", metavar="K",
-                   help="map completeness over the walls seen in the last K views (default 10)")
-    g.add_argument("--snapshots", metavar="N",
-                   help="moments of the map history to draw and report (default 4)")
+    g.add_argument(
+        "--stop-every",
+        metavar="METRES",
+        help="homing: stop every this many odometer metres (default 20)",
+    )
+    g.add_argument(
+        "--min-start-distance",
+        metavar="METRES",
+        help="homing: skip stops nearer the start than this (default 3)",
+    )
+    g.add_argument(
+        "--last-k-views",
+        metavar="K",
+        help="map completeness over the walls seen in the last K views (default 10)",
+    )
+    g.add_argument(
+        "--snapshots", metavar="N", help="moments of the map history to draw and report (default 4)"
+    )
 
 
 def scoring_params(args: argparse.Namespace, base: Any = None) -> Any:
@@ -184,15 +205,20 @@ def _render(result: Any, no_figures: bool, command: str, animate: bool = False) 
 
             animation = render_map_animation(result)
             if not animation:
-                print(f"albot2d {command}: note: no animation (no mapper keeps a map history; "
-                      "give --mapper albot1)", file=sys.stderr)
+                print(
+                    f"albot2d {command}: note: no animation (no mapper keeps a map history; "
+                    "give --mapper albot1)",
+                    file=sys.stderr,
+                )
             figures.update(animation)
         return figures
     except ImportError as exc:
         if not (exc.name or "").startswith("matplotlib"):
             raise  # our own import broke: a bug to see, not a missing extra
-        print(f"albot2d {command}: note: no figures ({exc}); pip install 'albot2d[viz]'",
-              file=sys.stderr)
+        print(
+            f"albot2d {command}: note: no figures ({exc}); pip install 'albot2d[viz]'",
+            file=sys.stderr,
+        )
         return {}
 
 
@@ -223,8 +249,13 @@ def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, by
 
 
 def finish(
-    out: Path, created: bool, command: str, compute: Callable[[], Any], no_figures: bool,
-    stage: Callable[[str], None] | None = None, animate: bool = False,
+    out: Path,
+    created: bool,
+    command: str,
+    compute: Callable[[], Any],
+    no_figures: bool,
+    stage: Callable[[str], None] | None = None,
+    animate: bool = False,
 ) -> Any:
     """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
     maps, write everything; on any failure remove the output directory again if this
@@ -241,8 +272,11 @@ def finish(
         result.report["figures"] = sorted(figures)
         result.report["exports"] = sorted(exports)
         # steps.csv: one row per view (stage times, counters), for profiling a run.
-        files = {**figures, **exports,
-                 "steps.csv": result.trace.step_times.to_csv().encode("utf-8")}
+        files = {
+            **figures,
+            **exports,
+            "steps.csv": result.trace.step_times.to_csv().encode("utf-8"),
+        }
         write_outputs(out, result.report, files)
     except BaseException:
         remove_if_empty(out, created)
@@ -253,8 +287,15 @@ def finish(
 def progress_bar(total: float | None, unit: str, desc: str) -> Any:
     from tqdm import tqdm
 
-    return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, leave=False,
-                disable=not sys.stderr.isatty(), dynamic_ncols=True)
+    return tqdm(
+        total=total,
+        unit=unit,
+        desc=desc,
+        file=sys.stderr,
+        leave=False,
+        disable=not sys.stderr.isatty(),
+        dynamic_ncols=True,
+    )
 
 
 def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
@@ -274,8 +315,11 @@ def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
     print(format_summary_table(result.scores))
     print(format_homing_table(result.scores))
     files = report["figures"] + report.get("exports", [])
-    print(f"-> {out / REPORT_NAME} + {len(files)} files ({', '.join(files)})"
-          if len(files) <= 4 else f"-> {out / REPORT_NAME} + {len(files)} files")
+    print(
+        f"-> {out / REPORT_NAME} + {len(files)} files ({', '.join(files)})"
+        if len(files) <= 4
+        else f"-> {out / REPORT_NAME} + {len(files)} files"
+    )
 
 
 def differences(a: Any, b: Any, path: str = "") -> list[str]:
@@ -286,8 +330,11 @@ def differences(a: Any, b: Any, path: str = "") -> list[str]:
             out += differences(a.get(key), b.get(key), f"{path}.{key}" if path else key)
         return out
     if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
-        return [d for i, (x, y) in enumerate(zip(a, b, strict=True))
-                for d in differences(x, y, f"{path}[{i}]")]
+        return [
+            d
+            for i, (x, y) in enumerate(zip(a, b, strict=True))
+            for d in differences(x, y, f"{path}[{i}]")
+        ]
     return [] if a == b else [path]
 
 

@@ -40,8 +40,14 @@ from albot2d.errors import InputError
 __all__ = ["register", "reproduce_failure", "reproducer_document", "run"]
 
 # CampaignParams' defaults, named here only for --help (tests/test_setup.py checks them).
-DEFAULTS = {"profile": "dataset3", "noise": "typical", "laser_noise": "sick_lms200",
-            "mapper": "albot1", "tour_kind": "loop", "backend": "local"}
+DEFAULTS = {
+    "profile": "dataset3",
+    "noise": "typical",
+    "laser_noise": "sick_lms200",
+    "mapper": "albot1",
+    "tour_kind": "loop",
+    "backend": "local",
+}
 
 
 def register(subparsers: Any) -> None:
@@ -51,31 +57,50 @@ def register(subparsers: Any) -> None:
     )  # fmt: skip
     p.add_argument("--episodes", metavar="N", required=True, help="number of episodes")
     p.add_argument("--seed", metavar="S", help="campaign seed (default 0)")
-    p.add_argument("--kinds", nargs="+", action="extend", metavar="KIND",
-                   help="world kinds to draw from (default: all: corridors rooms open office "
-                        "mixed)")
-    p.add_argument("--world-size", nargs=2, metavar=("MIN", "MAX"),
-                   help="world width and height range in metres (default 15 30; offices are "
-                        "at least 24 m, mixed worlds 32 m)")
-    p.add_argument("--tour-length", nargs=2, metavar=("MIN", "MAX"),
-                   help="minimum tour length range in metres (default 30 60)")
+    p.add_argument(
+        "--kinds",
+        nargs="+",
+        action="extend",
+        metavar="KIND",
+        help="world kinds to draw from (default: all: corridors rooms open office mixed)",
+    )
+    p.add_argument(
+        "--world-size",
+        nargs=2,
+        metavar=("MIN", "MAX"),
+        help="world width and height range in metres (default 15 30; offices are "
+        "at least 24 m, mixed worlds 32 m)",
+    )
+    p.add_argument(
+        "--tour-length",
+        nargs=2,
+        metavar=("MIN", "MAX"),
+        help="minimum tour length range in metres (default 30 60)",
+    )
     p.add_argument("--tour-kind", help="loop, out_and_back, backtracking (default loop)")
     p.add_argument("--profile", help=f"driving profile (default {DEFAULTS['profile']})")
-    p.add_argument("--noise", help=f"odometry noise: none, low, typical, high "
-                                   f"(default {DEFAULTS['noise']})")
+    p.add_argument(
+        "--noise", help=f"odometry noise: none, low, typical, high (default {DEFAULTS['noise']})"
+    )
     p.add_argument("--laser-noise", help="sick_lms200 or zero (default sick_lms200)")
-    p.add_argument("--mapper", metavar="NAME",
-                   help="mapper under test: albot1, naive, truth, … or module:Class "
-                        "(default albot1)")
+    p.add_argument(
+        "--mapper",
+        metavar="NAME",
+        help="mapper under test: albot1, naive, truth, … or module:Class (default albot1)",
+    )
     p.add_argument("--workers", metavar="K", help="worker processes (default: every core)")
     p.add_argument("--backend", help="local (process pool) or dask (default local)")
     p.add_argument("--address", metavar="tcp://HOST:PORT", help="dask scheduler to use")
-    p.add_argument("--resume", action="store_true",
-                   help="continue the campaign in --out (skip the episodes already done)")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the campaign in --out (skip the episodes already done)",
+    )
     p.add_argument("--no-figures", action="store_true", help="no histograms.png")
     add_json_option(p, "print summary.json on stdout instead of the summary table")
-    p.add_argument("--out", metavar="DIR", required=True,
-                   help="output directory (created if missing)")
+    p.add_argument(
+        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
+    )
     p.set_defaults(handler=run)
 
 
@@ -134,8 +159,9 @@ def _check_backend(args: argparse.Namespace) -> str:
         try:
             import dask.distributed  # noqa: F401
         except ImportError:
-            raise InputError("--backend dask needs dask.distributed: "
-                             "pip install 'albot2d[dask]'") from None
+            raise InputError(
+                "--backend dask needs dask.distributed: pip install 'albot2d[dask]'"
+            ) from None
     return name
 
 
@@ -150,8 +176,10 @@ def _write_histograms(out: Path, no_figures: bool) -> str | None:
         records, _ = read_episodes(out / EPISODES_NAME)
         png = render_campaign_histograms_png([records[k] for k in sorted(records)])
     except ImportError as exc:
-        print(f"albot2d fuzz: note: no histograms ({exc}); pip install 'albot2d[viz]'",
-              file=sys.stderr)
+        print(
+            f"albot2d fuzz: note: no histograms ({exc}); pip install 'albot2d[viz]'",
+            file=sys.stderr,
+        )
         return None
     atomic_write_bytes(out / HISTOGRAMS_NAME, png)
     return HISTOGRAMS_NAME
@@ -174,13 +202,16 @@ def run(args: argparse.Namespace) -> int:
     try:
         backend = make_backend(backend_name, workers=workers, address=args.address)
         try:
-            summary = run_campaign(params, out, backend=backend, resume=args.resume,
-                                   progress=True, on_note=_note)
+            summary = run_campaign(
+                params, out, backend=backend, resume=args.resume, progress=True, on_note=_note
+            )
         finally:
             backend.close()
     except CampaignInterrupted as exc:
-        _note(f"interrupted: {exc.done} of {exc.total} episodes are in "
-              f"{out / 'episodes.jsonl'}; continue with the same options and --resume")
+        _note(
+            f"interrupted: {exc.done} of {exc.total} episodes are in "
+            f"{out / 'episodes.jsonl'}; continue with the same options and --resume"
+        )
         return 130
     except BaseException:
         if created:
@@ -205,9 +236,11 @@ def _failure_lines(record: dict[str, Any]) -> list[str]:
     if record.get("status") == "crash":
         error = record.get("error") or {}
         return [f"crash: {error.get('type')}: {error.get('message')}"]
-    return [f"{name} violated: {messages[0]}" + (f" (+{len(messages) - 1} more)"
-                                                 if len(messages) > 1 else "")
-            for name, messages in (record.get("violations") or {}).items()] or ["?"]
+    return [
+        f"{name} violated: {messages[0]}"
+        + (f" (+{len(messages) - 1} more)" if len(messages) > 1 else "")
+        for name, messages in (record.get("violations") or {}).items()
+    ] or ["?"]
 
 
 def _replay_isolated(doc: dict[str, Any], where: str) -> tuple[int | None, dict[str, Any] | None]:
@@ -273,8 +306,10 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
         if (recorded.get("error") or {}).get("type") == "WorkerDiedError":
             code, record = _replay_isolated(doc, where)
             if record is None:
-                print(f"reproduce: the episode killed its process again (exit code {code}); "
-                      f"recorded: {_failure_lines(recorded)[0]}")
+                print(
+                    f"reproduce: the episode killed its process again (exit code {code}); "
+                    f"recorded: {_failure_lines(recorded)[0]}"
+                )
                 common.remove_if_empty(out, created)
                 return 1
         outcome, result = reproduce_episode(doc, where=where)
@@ -296,14 +331,21 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
         print((record["error"] or {}).get("traceback", ""), file=sys.stderr, end="")
     checked = len(record["checked"])
     if record["status"] == "ok":
-        print(f"reproduce: every invariant holds ({checked} checked); the recorded failure "
-              f"does not reproduce: {_failure_lines(recorded)[0]}")
+        print(
+            f"reproduce: every invariant holds ({checked} checked); the recorded failure "
+            f"does not reproduce: {_failure_lines(recorded)[0]}"
+        )
         return 0
     for line in _failure_lines(record):
         print(f"reproduce: {line}")
-    same = (record["status"] == recorded["status"]
-            and sorted(record["violations"]) == sorted(recorded.get("violations") or {})
-            and (record["error"] or {}).get("type") == (recorded.get("error") or {}).get("type"))
-    print("reproduce: the recorded failure reproduces" if same else
-          f"reproduce: fails differently from the record ({_failure_lines(recorded)[0]})")
+    same = (
+        record["status"] == recorded["status"]
+        and sorted(record["violations"]) == sorted(recorded.get("violations") or {})
+        and (record["error"] or {}).get("type") == (recorded.get("error") or {}).get("type")
+    )
+    print(
+        "reproduce: the recorded failure reproduces"
+        if same
+        else f"reproduce: fails differently from the record ({_failure_lines(recorded)[0]})"
+    )
     return 1

@@ -63,21 +63,37 @@ def register(subparsers: Any) -> None:
         "replay", help="run the mappers on a CARMEN log and score them against its relations",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
-    p.add_argument("log", metavar="LOG.clf[.gz]",
-                   help="a CARMEN log (plain or gzip), as a path or in the data folder")
-    p.add_argument("--data", metavar="DIR",
-                   help=f"data folder where LOG is looked up (default: ${DATA_ENV})")
-    p.add_argument("--relations", metavar="FILE",
-                   help="Kümmerle relations file (default: found beside the log)")
-    p.add_argument("--mapper", nargs="+", action="extend", metavar="NAME",
-                   help="mappers: albot1, naive or module:Class (default: albot1 naive)")
+    p.add_argument(
+        "log",
+        metavar="LOG.clf[.gz]",
+        help="a CARMEN log (plain or gzip), as a path or in the data folder",
+    )
+    p.add_argument(
+        "--data", metavar="DIR", help=f"data folder where LOG is looked up (default: ${DATA_ENV})"
+    )
+    p.add_argument(
+        "--relations",
+        metavar="FILE",
+        help="Kümmerle relations file (default: found beside the log)",
+    )
+    p.add_argument(
+        "--mapper",
+        nargs="+",
+        action="extend",
+        metavar="NAME",
+        help="mappers: albot1, naive or module:Class (default: albot1 naive)",
+    )
     p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")
     add_scoring_options(p)
-    p.add_argument("--out", metavar="DIR", required=True,
-                   help="output directory (created if missing)")
+    p.add_argument(
+        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
+    )
     p.add_argument("--no-figures", action="store_true", help="write report.json only")
-    p.add_argument("--strict", action="store_true",
-                   help="refuse a log with anomalies (bad ranges, timestamps out of order)")
+    p.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse a log with anomalies (bad ranges, timestamps out of order)",
+    )
     add_json_option(p)
     p.set_defaults(handler=run)
 
@@ -118,14 +134,22 @@ def run(args: argparse.Namespace) -> int:
     if any(anomalies[k] for k in anomalies if not k.startswith("frames_")):
         from albot2d.logs.anomalies import LogAnomalies
 
-        print(f"albot2d replay: warning: {log}: {LogAnomalies(**anomalies).summary()} "
-              "(--strict refuses such a log)", file=sys.stderr)
+        print(
+            f"albot2d replay: warning: {log}: {LogAnomalies(**anomalies).summary()} "
+            "(--strict refuses such a log)",
+            file=sys.stderr,
+        )
     print_tables(result, out, args.json)
     used = result.report["run"].get("relations_used")
     if relations is None:
-        print(f"albot2d replay: note: no relations file for {log} (give --relations), "
-              "so no RPE", file=sys.stderr)
+        print(
+            f"albot2d replay: note: no relations file for {log} (give --relations), so no RPE",
+            file=sys.stderr,
+        )
     elif not used:
-        print(f"albot2d replay: warning: no relation of {relations} matches the log's "
-              "timestamps (is it the relations file of this log?)", file=sys.stderr)
+        print(
+            f"albot2d replay: warning: no relation of {relations} matches the log's "
+            "timestamps (is it the relations file of this log?)",
+            file=sys.stderr,
+        )
     return 0

@@ -37,9 +37,25 @@ from albot2d.errors import InputError
 __all__ = ["register", "run"]
 
 # Options that describe the run itself; --reproduce takes them from the report instead.
-_RUN_OPTIONS = ("world", "kind", "seed", "width", "height", "param", "profile", "mapper",
-                "noise", "laser_noise", "tour_kind", "tour_length", "max_frames", "stop_every",
-                "min_start_distance", "last_k_views", "snapshots")
+_RUN_OPTIONS = (
+    "world",
+    "kind",
+    "seed",
+    "width",
+    "height",
+    "param",
+    "profile",
+    "mapper",
+    "noise",
+    "laser_noise",
+    "tour_kind",
+    "tour_length",
+    "max_frames",
+    "stop_every",
+    "min_start_distance",
+    "last_k_views",
+    "snapshots",
+)
 
 
 def register(subparsers: Any) -> None:
@@ -48,21 +64,36 @@ def register(subparsers: Any) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
     add_run_options(p)
-    p.add_argument("--mapper", nargs="+", action="extend", metavar="NAME",
-                   help="mappers: albot1, naive, truth, slam and scan_odometry ([slam] extra), "
-                        "albot1[KEY=VALUE,...] (keys preset, deletion, min_tracked) or "
-                        "module:Class (default: albot1 naive truth)")
+    p.add_argument(
+        "--mapper",
+        nargs="+",
+        action="extend",
+        metavar="NAME",
+        help="mappers: albot1, naive, truth, slam and scan_odometry ([slam] extra), "
+        "albot1[KEY=VALUE,...] (keys preset, deletion, min_tracked) or "
+        "module:Class (default: albot1 naive truth)",
+    )
     add_scoring_options(p)
-    p.add_argument("--reproduce", metavar="report.json",
-                   help="re-run the run recorded in a report (give only --out with it)")
-    p.add_argument("--out", metavar="DIR", required=True,
-                   help="output directory (created if missing)")
+    p.add_argument(
+        "--reproduce",
+        metavar="report.json",
+        help="re-run the run recorded in a report (give only --out with it)",
+    )
+    p.add_argument(
+        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
+    )
     p.add_argument("--no-figures", action="store_true", help="write report.json only")
-    p.add_argument("--animate", action="store_true",
-                   help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
-                        "over time beside the truth")
-    p.add_argument("--cprofile", metavar="FILE",
-                   help="also write a cProfile pstats file of the run (python -m pstats FILE)")
+    p.add_argument(
+        "--animate",
+        action="store_true",
+        help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
+        "over time beside the truth",
+    )
+    p.add_argument(
+        "--cprofile",
+        metavar="FILE",
+        help="also write a cProfile pstats file of the run (python -m pstats FILE)",
+    )
     add_json_option(p)
     p.set_defaults(handler=run)
 

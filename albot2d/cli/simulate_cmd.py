@@ -37,8 +37,9 @@ def register(subparsers: Any) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
     add_run_options(p)
-    p.add_argument("--out", metavar="DIR", required=True,
-                   help="output directory (created if missing)")
+    p.add_argument(
+        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
+    )
     p.add_argument("--no-png", action="store_true", help=f"do not draw {PNG_NAME}")
     p.set_defaults(handler=run)
 
@@ -53,8 +54,14 @@ def _out_dir(text: str) -> Path:
 def _frames(frames: Any, total: int | None, show_progress: bool) -> list[Any]:
     from tqdm import tqdm
 
-    with tqdm(itertools.islice(frames, total), total=total, desc="simulate", unit=" frames",
-              file=sys.stderr, disable=not show_progress) as bar:
+    with tqdm(
+        itertools.islice(frames, total),
+        total=total,
+        desc="simulate",
+        unit=" frames",
+        file=sys.stderr,
+        disable=not show_progress,
+    ) as bar:
         return list(bar)
 
 
@@ -65,11 +72,14 @@ def _render_png(world: Any, frames: list[Any], title: str) -> bytes | None:
         true_xy = np.array([[f.true_pose.x, f.true_pose.y] for f in frames])
         odom_xy = np.array([[f.odom_pose.x, f.odom_pose.y] for f in frames])
         collided = np.array([f.collided for f in frames], dtype=bool)
-        return render_paths_png(world, true_xy=true_xy, odom_xy=odom_xy, collided=collided,
-                                title=title)
+        return render_paths_png(
+            world, true_xy=true_xy, odom_xy=odom_xy, collided=collided, title=title
+        )
     except ImportError as exc:
-        print(f"albot2d simulate: note: no {PNG_NAME} ({exc}); pip install 'albot2d[viz]'",
-              file=sys.stderr)
+        print(
+            f"albot2d simulate: note: no {PNG_NAME} ({exc}); pip install 'albot2d[viz]'",
+            file=sys.stderr,
+        )
         return None
 
 
@@ -84,9 +94,11 @@ def run(args: argparse.Namespace) -> int:
     setup = build_run(spec)
     world, tour, profile, sim = setup.world, setup.tour, setup.profile, setup.simulator
     frames = _frames(sim.drive(tour, profile), spec.max_frames, sys.stderr.isatty())
-    travelled = (f"first {len(frames)} frames of a " if spec.max_frames is not None else "")
-    title = (f"{world.kind} seed {world.seed}  {profile.name}  {travelled}{tour.kind} tour "
-             f"{tour.length_m:.0f} m  odometry noise {spec.noise}")
+    travelled = f"first {len(frames)} frames of a " if spec.max_frames is not None else ""
+    title = (
+        f"{world.kind} seed {world.seed}  {profile.name}  {travelled}{tour.kind} tour "
+        f"{tour.length_m:.0f} m  odometry noise {spec.noise}"
+    )
     png = None if args.no_png else _render_png(world, frames, title)
     params = {
         "seed": spec.seed,
@@ -95,8 +107,12 @@ def run(args: argparse.Namespace) -> int:
         "profile": profile.name,
         "odometry_preset": spec.noise,
         "laser_noise_preset": spec.laser_noise,
-        "tour": {"kind": tour.kind, "min_length_m": spec.tour_length_m,
-                 "length_m": tour.length_m, "waypoints": len(tour.waypoints)},
+        "tour": {
+            "kind": tour.kind,
+            "min_length_m": spec.tour_length_m,
+            "length_m": tour.length_m,
+            "waypoints": len(tour.waypoints),
+        },
         "max_frames": spec.max_frames,
         **sim.params(),
     }

@@ -71,8 +71,9 @@ def _build_world(args: argparse.Namespace, seed: int | None, params: dict[str, A
 
     # generate() rejects an unknown kind with the list of valid kinds, and bad
     # parameters with the field name and value.
-    return build_world(RunSpec(seed=0 if seed is None else seed, kind=args.kind,
-                               world_params=params))
+    return build_world(
+        RunSpec(seed=0 if seed is None else seed, kind=args.kind, world_params=params)
+    )
 
 
 def _tour_options(args: argparse.Namespace) -> tuple[str, float] | None:

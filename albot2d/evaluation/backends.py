@@ -90,8 +90,9 @@ def _init_worker(parent_pid: int) -> None:
     campaign: a watchdog thread ends the worker when its parent dies (``kill -9``), which
     no signal or pipe of the pool would tell it."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    threading.Thread(target=_exit_with_parent, args=(parent_pid,), name="albot2d-watchdog",
-                     daemon=True).start()
+    threading.Thread(
+        target=_exit_with_parent, args=(parent_pid,), name="albot2d-watchdog", daemon=True
+    ).start()
 
 
 class LocalBackend:
@@ -115,8 +116,10 @@ class LocalBackend:
     def _executor(self) -> ProcessPoolExecutor:
         if self._pool is None:
             self._pool = ProcessPoolExecutor(
-                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
-                initializer=_init_worker, initargs=(os.getpid(),),
+                max_workers=self.workers,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=_init_worker,
+                initargs=(os.getpid(),),
             )
         return self._pool
 
@@ -157,8 +160,12 @@ class LocalBackend:
                     if isinstance(exc, BrokenProcessPool):
                         broken = True
                         if isolating:
-                            yield item, WorkerDiedError(
-                                f"the worker process died while running task {item}")
+                            yield (
+                                item,
+                                WorkerDiedError(
+                                    f"the worker process died while running task {item}"
+                                ),
+                            )
                         else:
                             suspects.append(item)
                     else:
@@ -216,8 +223,9 @@ def _check_reachable(address: str) -> None:
         with socket.create_connection((host, port), timeout=_CONNECT_TIMEOUT_S):
             pass
     except OSError as exc:
-        raise InputError(f"--address {address}: no dask scheduler reachable there "
-                         f"({exc.strerror or exc})") from None
+        raise InputError(
+            f"--address {address}: no dask scheduler reachable there ({exc.strerror or exc})"
+        ) from None
 
 
 class DaskBackend:
@@ -227,19 +235,26 @@ class DaskBackend:
         try:
             from dask.distributed import Client, LocalCluster
         except ImportError:
-            raise InputError("--backend dask needs dask.distributed: "
-                             "pip install 'albot2d[dask]'") from None
+            raise InputError(
+                "--backend dask needs dask.distributed: pip install 'albot2d[dask]'"
+            ) from None
         self._cluster: Any = None
         if address is not None:
             _check_reachable(address)
             try:
                 self._client = Client(address, timeout=_CONNECT_TIMEOUT_S)
             except (OSError, TimeoutError) as exc:
-                raise InputError(f"--address {address}: cannot connect to a dask scheduler "
-                                 f"({exc})") from None
+                raise InputError(
+                    f"--address {address}: cannot connect to a dask scheduler ({exc})"
+                ) from None
         else:
-            self._cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                         host="127.0.0.1", dashboard_address=None)
+            self._cluster = LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+            )
             self._client = Client(self._cluster)
         self.workers = max(1, sum(self._client.nthreads().values()))
 
@@ -283,4 +298,3 @@ def make_backend(name: str, *, workers: int, address: str | None = None) -> Back
             raise InputError("--address is for --backend dask")
         return LocalBackend(workers)
     return DaskBackend(address, workers)
-

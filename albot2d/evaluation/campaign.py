@@ -123,11 +123,14 @@ class CampaignParams:
         noise_preset(self.noise)
         laser_noise_preset(self.laser_noise)
         if self.tour_kind not in TOUR_KINDS:
-            raise InputError(f"unknown tour kind {self.tour_kind!r}; "
-                             f"valid: {', '.join(TOUR_KINDS)}")
+            raise InputError(
+                f"unknown tour kind {self.tour_kind!r}; valid: {', '.join(TOUR_KINDS)}"
+            )
         resolve_mappers([self.mapper])
-        for low, high in (("world_size_min_m", "world_size_max_m"),
-                          ("tour_length_min_m", "tour_length_max_m")):
+        for low, high in (
+            ("world_size_min_m", "world_size_max_m"),
+            ("tour_length_min_m", "tour_length_max_m"),
+        ):
             a, b = getattr(self, low), getattr(self, high)
             for name, value in ((low, a), (high, b)):
                 if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
@@ -201,13 +204,21 @@ def _scan_episodes(path: Path) -> tuple[list[tuple[int, dict[str, Any]]], int, i
         except ValueError:
             record = None
         index = record.get("episode") if isinstance(record, dict) else None
-        if (not isinstance(index, int) or isinstance(index, bool) or index < 0
-                or record.get("status") not in STATUSES):
-            raise InputError(f"{path}:{number}: not an episode record; the file is damaged "
-                             "(move it away to start afresh)")
+        if (
+            not isinstance(index, int)
+            or isinstance(index, bool)
+            or index < 0
+            or record.get("status") not in STATUSES
+        ):
+            raise InputError(
+                f"{path}:{number}: not an episode record; the file is damaged "
+                "(move it away to start afresh)"
+            )
         if index in lines_of:
-            raise InputError(f"{path}:{number}: episode {index} again (first on line "
-                             f"{lines_of[index]}); the file is damaged (two writers?)")
+            raise InputError(
+                f"{path}:{number}: episode {index} again (first on line "
+                f"{lines_of[index]}); the file is damaged (two writers?)"
+            )
         lines_of[index] = number
         records.append((number, record))
     return records, keep, len(data) - keep
@@ -248,8 +259,11 @@ def _crash_outcome(params: Mapping[str, Any], index: int, exc: BaseException) ->
     """A crash outside ``run_episode`` (drawing the episode, a dead worker)."""
     import traceback
 
-    error = {"type": type(exc).__name__, "message": str(exc),
-             "traceback": "".join(traceback.format_exception(exc))}
+    error = {
+        "type": type(exc).__name__,
+        "message": str(exc),
+        "traceback": "".join(traceback.format_exception(exc)),
+    }
     try:
         spec = EpisodeSpec.draw(CampaignParams.from_dict(params), index)
     except Exception:  # the episode cannot even be drawn: the campaign says which it is
@@ -264,6 +278,7 @@ _COST_PER_M2 = {"rooms": 3.0, "office": 3.0, "open": 1.6, "mixed": 1.1, "corrido
 
 def _longest_first(indices: list[int], params: CampaignParams) -> list[int]:
     """Episode indices, the (probably) longest first; results do not depend on the order."""
+
     def cost(index: int) -> float:
         spec = EpisodeSpec.draw(params, index)
         area = float(np.prod(list(spec.world_params.values())))
@@ -290,11 +305,14 @@ def read_campaign(out_dir: str | os.PathLike[str]) -> CampaignParams:
     except (OSError, ValueError) as exc:
         raise InputError(f"{path}: not a campaign file written by albot2d ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != _FORMAT:
-        raise InputError(f"{path}: not a campaign file written by albot2d "
-                         f"(format is not {_FORMAT!r})")
+        raise InputError(
+            f"{path}: not a campaign file written by albot2d (format is not {_FORMAT!r})"
+        )
     if meta.get("format_version") != _FORMAT_VERSION:
-        raise InputError(f"{path}: campaign format_version {meta.get('format_version')!r}, "
-                         f"this albot2d reads {_FORMAT_VERSION}")
+        raise InputError(
+            f"{path}: campaign format_version {meta.get('format_version')!r}, "
+            f"this albot2d reads {_FORMAT_VERSION}"
+        )
     if not isinstance(meta.get("params"), dict):
         raise InputError(f"{path}: not a campaign file written by albot2d (no params)")
     return CampaignParams.from_dict(meta["params"], where=str(path))
@@ -307,26 +325,35 @@ def _check_folder(out: Path, params: CampaignParams, resume: bool) -> tuple[dict
     if not resume:
         for path in (meta_path, episodes_path):
             if path.exists() and path.stat().st_size > 0:
-                raise InputError(f"{out} already holds a campaign ({path.name}); give --resume "
-                                 "to continue it, or another --out")
+                raise InputError(
+                    f"{out} already holds a campaign ({path.name}); give --resume "
+                    "to continue it, or another --out"
+                )
         return {}, 0
     try:
         old = read_campaign(out)
     except InputError as exc:
         raise InputError(f"--resume: {exc}") from None
     if old.identity() != params.identity():
-        diff = [f"{k} {old.identity()[k]!r} there, {v!r} here"
-                for k, v in params.identity().items() if old.identity()[k] != v]
-        raise InputError(f"--resume: {meta_path} was written with other parameters "
-                         f"({'; '.join(diff)}); use the same options")
+        diff = [
+            f"{k} {old.identity()[k]!r} there, {v!r} here"
+            for k, v in params.identity().items()
+            if old.identity()[k] != v
+        ]
+        raise InputError(
+            f"--resume: {meta_path} was written with other parameters "
+            f"({'; '.join(diff)}); use the same options"
+        )
     if not episodes_path.exists():
         return {}, 0
     records, keep, _ = _scan_episodes(episodes_path)
     for number, record in records:
         k = record["episode"]
         if record.get("seed") != {"entropy": params.seed, "spawn_key": [k]}:
-            raise InputError(f"{episodes_path}:{number}: episode {k} was not drawn from this "
-                             f"campaign's seed {params.seed}; the file is not this campaign's")
+            raise InputError(
+                f"{episodes_path}:{number}: episode {k} was not drawn from this "
+                f"campaign's seed {params.seed}; the file is not this campaign's"
+            )
     return {r["episode"]: r for _, r in records if r["episode"] < params.episodes}, keep
 
 
@@ -368,8 +395,9 @@ class _Interrupts:
         self.count += 1
         if self.count == 1:
             if self._note is not None:
-                self._note("interrupted: finishing the running episodes (Ctrl-C again to "
-                           "stop at once)")
+                self._note(
+                    "interrupted: finishing the running episodes (Ctrl-C again to stop at once)"
+                )
         elif self._writing:
             self._deferred = True
         else:
@@ -416,30 +444,42 @@ def run_campaign(
         if on_note is not None and resume:
             size = episodes_path.stat().st_size if episodes_path.exists() else 0
             if size > keep:
-                on_note(f"{episodes_path}: a damaged last line ({size - keep} bytes, an "
-                        "interrupted write) is dropped and its episode redone")
+                on_note(
+                    f"{episodes_path}: a damaged last line ({size - keep} bytes, an "
+                    "interrupted write) is dropped and its episode redone"
+                )
         _remove_stale_temporaries(out)
-        _write_json(out / CAMPAIGN_NAME, {"format": _FORMAT, "format_version": _FORMAT_VERSION,
-                                          "params": params.to_dict()})
+        _write_json(
+            out / CAMPAIGN_NAME,
+            {"format": _FORMAT, "format_version": _FORMAT_VERSION, "params": params.to_dict()},
+        )
         todo = _longest_first([k for k in range(params.episodes) if k not in done], params)
         own_backend = backend is None
         backend = backend or LocalBackend(1)
         try:
-            wall = _run_episodes(params, out, backend, todo, done, keep, progress, on_episode,
-                                 on_note)
+            wall = _run_episodes(
+                params, out, backend, todo, done, keep, progress, on_episode, on_note
+            )
         finally:
             if own_backend:
                 backend.close()
         records = [done[k] for k in sorted(done)]
-        summary = summarise(records, params.to_dict(), ran=len(todo), wall_time_s=wall,
-                            workers=backend.workers)
+        summary = summarise(
+            records, params.to_dict(), ran=len(todo), wall_time_s=wall, workers=backend.workers
+        )
         _write_json(out / SUMMARY_NAME, summary)
     return summary
 
 
 def _run_episodes(
-    params: CampaignParams, out: Path, backend: Any, todo: list[int], done: dict[int, Any],
-    keep: int, progress: bool, on_episode: Callable[[dict[str, Any]], None] | None,
+    params: CampaignParams,
+    out: Path,
+    backend: Any,
+    todo: list[int],
+    done: dict[int, Any],
+    keep: int,
+    progress: bool,
+    on_episode: Callable[[dict[str, Any]], None] | None,
     on_note: Callable[[str], None] | None,
 ) -> float:
     """Run ``todo`` on ``backend``, writing each episode down; returns the wall time."""
@@ -454,8 +494,11 @@ def _run_episodes(
             for index, result in backend.map_unordered(_episode_task, queue, params.to_dict()):
                 if isinstance(result, BaseException) and not isinstance(result, Exception):
                     raise result  # an interrupt on a worker: stop, it is no finding
-                outcome = (result if isinstance(result, EpisodeOutcome)
-                           else _crash_outcome(params.to_dict(), index, result))
+                outcome = (
+                    result
+                    if isinstance(result, EpisodeOutcome)
+                    else _crash_outcome(params.to_dict(), index, result)
+                )
                 with interrupts.writing():
                     if outcome.reproducer is not None:
                         path = reproducer_path(out, index)
@@ -493,6 +536,12 @@ def _progress(total: int, initial: int, enabled: bool) -> Any:
         return None
     from tqdm import tqdm
 
-    return tqdm(total=total, initial=initial, unit="ep", desc="fuzz", file=sys.stderr,
-                dynamic_ncols=True, disable=None)
-
+    return tqdm(
+        total=total,
+        initial=initial,
+        unit="ep",
+        desc="fuzz",
+        file=sys.stderr,
+        dynamic_ncols=True,
+        disable=None,
+    )

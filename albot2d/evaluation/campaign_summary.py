@@ -53,9 +53,12 @@ def _distribution(values: Sequence[float]) -> dict[str, Any]:
 
 
 def _values(records: Sequence[Mapping[str, Any]], name: str) -> list[float]:
-    return [float(r["metrics"][name]) for r in records
-            if isinstance(r.get("metrics", {}).get(name), int | float)
-            and not isinstance(r["metrics"][name], bool)]
+    return [
+        float(r["metrics"][name])
+        for r in records
+        if isinstance(r.get("metrics", {}).get(name), int | float)
+        and not isinstance(r["metrics"][name], bool)
+    ]
 
 
 def mapper_vs_odometry(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
@@ -63,22 +66,28 @@ def mapper_vs_odometry(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     better than raw odometry, worse, or tied (equal to float rounding)."""
     out = {}
     for label, (mine, odo) in COMPARED_METRICS.items():
-        pairs = [(r["metrics"][mine], r["metrics"][odo]) for r in records
-                 if r.get("metrics", {}).get(mine) is not None
-                 and r["metrics"].get(odo) is not None]
+        pairs = [
+            (r["metrics"][mine], r["metrics"][odo])
+            for r in records
+            if r.get("metrics", {}).get(mine) is not None and r["metrics"].get(odo) is not None
+        ]
         if not pairs:
             continue
         a = np.asarray(pairs, dtype=np.float64)
         tied = np.isclose(a[:, 0], a[:, 1], rtol=TIE_RTOL, atol=TIE_ATOL)
         better = ~tied & (a[:, 0] < a[:, 1])
         worse = ~tied & (a[:, 0] > a[:, 1])
-        out[label] = {"episodes": len(a), "mapper_mean": float(a[:, 0].mean()),
-                      "odometry_mean": float(a[:, 1].mean()),
-                      "mapper_better": int(better.sum()), "mapper_worse": int(worse.sum()),
-                      "ties": int(tied.sum()),
-                      "mapper_better_share": float(better.mean()),
-                      "mapper_worse_share": float(worse.mean()),
-                      "tie_share": float(tied.mean())}
+        out[label] = {
+            "episodes": len(a),
+            "mapper_mean": float(a[:, 0].mean()),
+            "odometry_mean": float(a[:, 1].mean()),
+            "mapper_better": int(better.sum()),
+            "mapper_worse": int(worse.sum()),
+            "ties": int(tied.sum()),
+            "mapper_better_share": float(better.mean()),
+            "mapper_worse_share": float(worse.mean()),
+            "tie_share": float(tied.mean()),
+        }
     return out
 
 
@@ -100,11 +109,18 @@ def summarise(
     crashes = Counter(r["error"]["type"] for r in records if r["status"] == "crash")
     names = sorted({k for r in records for k in r.get("metrics", {})})
     failing = [
-        {"episode": r["episode"], "status": r["status"],
-         "kind": r.get("world", {}).get("kind"),
-         "first": (r["error"]["message"] if r["status"] == "crash"
-                   else next(f"{k}: {v[0]}" for k, v in r["violations"].items()))}
-        for r in records if r["status"] != "ok"
+        {
+            "episode": r["episode"],
+            "status": r["status"],
+            "kind": r.get("world", {}).get("kind"),
+            "first": (
+                r["error"]["message"]
+                if r["status"] == "crash"
+                else next(f"{k}: {v[0]}" for k, v in r["violations"].items())
+            ),
+        }
+        for r in records
+        if r["status"] != "ok"
     ]
     return {
         "format": "albot2d-campaign-summary",
@@ -116,8 +132,11 @@ def summarise(
         "failures_by_invariant": dict(sorted(by_invariant.items())),
         "checked_by_invariant": dict(sorted(checked.items())),
         "crashes_by_type": dict(sorted(crashes.items())),
-        "kinds": dict(sorted(Counter(r.get("world", {}).get("kind") for r in records
-                                     if r.get("world")).items())),
+        "kinds": dict(
+            sorted(
+                Counter(r.get("world", {}).get("kind") for r in records if r.get("world")).items()
+            )
+        ),
         "ran": ran,
         "workers": workers,
         "wall_time_s": wall_time_s,
@@ -147,18 +166,27 @@ def format_summary(summary: Mapping[str, Any]) -> str:
         for f in summary["failing_episodes"][:5]:
             lines.append(f"  episode {f['episode']} ({f['kind']}): {f['first'][:160]}")
     metrics = summary["metrics"]
-    rows = [("homing_bearing_error_max_deg", ".1f"), ("homing_distance_error_max_m", ".2f"),
-            ("rpe_rot_deg", ".2f"), ("odometry_rpe_rot_deg", ".2f"),
-            ("heading_error_max_deg", ".1f"), ("odometry_heading_error_max_deg", ".1f")]
+    rows = [
+        ("homing_bearing_error_max_deg", ".1f"),
+        ("homing_distance_error_max_m", ".2f"),
+        ("rpe_rot_deg", ".2f"),
+        ("odometry_rpe_rot_deg", ".2f"),
+        ("heading_error_max_deg", ".1f"),
+        ("odometry_heading_error_max_deg", ".1f"),
+    ]
     for name, spec in rows:
         d = metrics.get(name)
         if d and d["n"]:
-            lines.append(f"  {name:32s} median {d['p50']:{spec}}  p90 {d['p90']:{spec}}  "
-                         f"max {d['max']:{spec}}  (n={d['n']})")
+            lines.append(
+                f"  {name:32s} median {d['p50']:{spec}}  p90 {d['p90']:{spec}}  "
+                f"max {d['max']:{spec}}  (n={d['n']})"
+            )
     cmp = summary["mapper_vs_odometry"].get("heading_error_mean_deg")
     if cmp:
-        lines.append(f"  mean heading error: mapper {cmp['mapper_mean']:.2f}° vs odometry "
-                     f"{cmp['odometry_mean']:.2f}° (of {cmp['episodes']} episodes mapper "
-                     f"better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']}, "
-                     f"tied in {cmp['ties']})")
+        lines.append(
+            f"  mean heading error: mapper {cmp['mapper_mean']:.2f}° vs odometry "
+            f"{cmp['odometry_mean']:.2f}° (of {cmp['episodes']} episodes mapper "
+            f"better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']}, "
+            f"tied in {cmp['ties']})"
+        )
     return "\n".join(lines)

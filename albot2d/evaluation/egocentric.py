@@ -108,7 +108,6 @@ def in_robot_frame(pose: FloatArray, segments: FloatArray, reach_m: float) -> Fl
     return local[near]
 
 
-
 def egocentric_quality(
     seen_local: FloatArray,
     map_local: FloatArray,
@@ -153,11 +152,11 @@ def _covered(points: FloatArray, segs: FloatArray, tolerance_m: float) -> NDArra
         return out
     tree = shapely.STRtree(shapely.linestrings(segs.reshape(-1, 2, 2)))
     for b0 in range(0, len(points), _BLOCK_POINTS):
-        pts = points[b0:b0 + _BLOCK_POINTS]
+        pts = points[b0 : b0 + _BLOCK_POINTS]
         lo, hi = pts - tolerance_m, pts + tolerance_m
         which, seg = tree.query(shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]))
         for c0 in range(0, len(which), _CHUNK_PAIRS):
-            w, sg = which[c0:c0 + _CHUNK_PAIRS], seg[c0:c0 + _CHUNK_PAIRS]
+            w, sg = which[c0 : c0 + _CHUNK_PAIRS], seg[c0 : c0 + _CHUNK_PAIRS]
             d = point_to_segment_geos(pts[w, 0], pts[w, 1], segs[sg])
             out[b0 + w[d <= tolerance_m]] = True
     return out

@@ -188,11 +188,13 @@ class _Checks:
 
     def on_start(self, world: Any, tour: Any) -> None:
         self.world = world
-        self.clearance = sim_inv.ClearanceChecker.for_world(world, RobotParams().radius_m,
-                                                            raise_at_once=False)
+        self.clearance = sim_inv.ClearanceChecker.for_world(
+            world, RobotParams().radius_m, raise_at_once=False
+        )
         if not world.dynamic_obstacles:  # hits on moving obstacles are not on the walls
-            self.frames = sim_inv.FrameChecker(world.obstacle_segments, self.laser,
-                                           raise_at_once=False)
+            self.frames = sim_inv.FrameChecker(
+                world.obstacle_segments, self.laser, raise_at_once=False
+            )
 
     def on_frame(self, frame: Any, travelled_m: float) -> None:
         if self.clearance is not None:  # walls, clutter and moving obstacles at every frame
@@ -254,11 +256,17 @@ class _Checks:
             pos, head = inv.local_map_errors(route, trace.frame_indices, truth)
             metrics["local_map_position_error_max_m"] = float(pos.max()) if len(pos) else None
             metrics["local_map_heading_error_max_deg"] = (
-                math.degrees(float(head.max())) if len(head) else None)
+                math.degrees(float(head.max())) if len(head) else None
+            )
             noise = noise_preset(self.spec.noise)
             if noise.is_zero and self.laser.is_zero:
-                self.run("zero_noise_localisation", inv.check_zero_noise_localisation, route,
-                         trace.frame_indices, truth)
+                self.run(
+                    "zero_noise_localisation",
+                    inv.check_zero_noise_localisation,
+                    route,
+                    trace.frame_indices,
+                    truth,
+                )
             maps = inv.local_maps_per_row(route, trace.frame_indices)
             bound = inv.heading_error_bound(truth, noise, get_profile(self.spec.profile), maps)
             err = inv.heading_errors(estimate, truth)
@@ -405,20 +413,32 @@ def crash_outcome(
         }
     else:
         record = spec.describe()
-    record |= {"status": "crash", "checked": [], "violations": {}, "error": dict(error),
-               "metrics": {}, "digest": None,
-               "timings": {"total_s": elapsed_s, "ms_per_view": None}}
+    record |= {
+        "status": "crash",
+        "checked": [],
+        "violations": {},
+        "error": dict(error),
+        "metrics": {},
+        "digest": None,
+        "timings": {"total_s": elapsed_s, "ms_per_view": None},
+    }
     record = plain(record)
     episode = {k: v for k, v in record.items() if k not in ("metrics", "timings")}
     if spec is None:
-        return EpisodeOutcome(record, plain({"reproducer": {"episode": episode,
-                                                            "campaign": dict(campaign or {})}}))
+        return EpisodeOutcome(
+            record, plain({"reproducer": {"episode": episode, "campaign": dict(campaign or {})}})
+        )
     params = params or EvaluationParams()
-    reproducer = make_report("run", seed=spec.run_seed,
-                             params={"spec": spec.run_spec().to_dict(),
-                                     **evaluation_params_dict(params)})
-    reproducer["reproducer"] = {"episode": episode, "world_json": _world_document(spec, world),
-                                "how": REPRODUCE_HOW}
+    reproducer = make_report(
+        "run",
+        seed=spec.run_seed,
+        params={"spec": spec.run_spec().to_dict(), **evaluation_params_dict(params)},
+    )
+    reproducer["reproducer"] = {
+        "episode": episode,
+        "world_json": _world_document(spec, world),
+        "how": REPRODUCE_HOW,
+    }
     return EpisodeOutcome(record, plain(reproducer))
 
 
@@ -438,16 +458,25 @@ def run_checked(
     t0 = time.perf_counter()
     result: ExperimentResult | None = None
     try:
-        result = run_experiment(spec.run_spec(), params, on_start=checks.on_start,
-                                on_frame=checks.chain(hooks.pop("on_frame", None)),
-                                on_mappers=checks.on_mappers, **hooks)
+        result = run_experiment(
+            spec.run_spec(),
+            params,
+            on_start=checks.on_start,
+            on_frame=checks.chain(hooks.pop("on_frame", None)),
+            on_mappers=checks.on_mappers,
+            **hooks,
+        )
         metrics = _score_metrics(result)
         metrics |= checks.finish(result)
     except Exception as exc:  # any failure is a finding, not the end of the campaign
-        error = {"type": type(exc).__name__, "message": str(exc),
-                 "traceback": traceback.format_exc()}
-        return crash_outcome(spec, error, params=params, world=checks.world,
-                             elapsed_s=time.perf_counter() - t0), None
+        error = {
+            "type": type(exc).__name__,
+            "message": str(exc),
+            "traceback": traceback.format_exc(),
+        }
+        return crash_outcome(
+            spec, error, params=params, world=checks.world, elapsed_s=time.perf_counter() - t0
+        ), None
     elapsed = time.perf_counter() - t0
     status = "violation" if checks.violations else "ok"
     record["world"]["sha256"] = result.report["world"]["sha256"]

@@ -41,6 +41,7 @@ __all__ = [
     "world_digest",
 ]
 
+
 def evaluation_params_from_report(report: Mapping[str, Any]) -> EvaluationParams:
     """The scoring parameters recorded in a report."""
     p = report.get("params", {})
@@ -154,8 +155,12 @@ def run_experiment(
         profile=profile.name,
         params={
             "spec": spec.to_dict(),
-            "tour": {"kind": tour.kind, "min_length_m": spec.tour_length_m,
-                     "length_m": tour.length_m, "waypoints": len(tour.waypoints)},
+            "tour": {
+                "kind": tour.kind,
+                "min_length_m": spec.tour_length_m,
+                "length_m": tour.length_m,
+                "waypoints": len(tour.waypoints),
+            },
             **evaluation_params_dict(params),
             "simulator": sim.params(),
         },
@@ -170,6 +175,8 @@ def run_experiment(
     driven = f"{tour.kind} tour {tour.length_m:.0f} m"
     if spec.max_frames is not None:  # cut short: say how much of the tour was driven
         driven = f"{run_info['travelled_m']:.0f} m of a {driven}"
-    title = (f"{world.kind} seed {world.seed}  {profile.name}  {driven}  "
-             f"odometry noise {spec.noise}  {trace.n_frames} views")
+    title = (
+        f"{world.kind} seed {world.seed}  {profile.name}  {driven}  "
+        f"odometry noise {spec.noise}  {trace.n_frames} views"
+    )
     return ExperimentResult(report, trace, world, tour, relations, title, scores)

@@ -110,10 +110,17 @@ class InvariantParams:
     triangulation_heading_deg: float = 0.6
 
     def __post_init__(self) -> None:
-        check_non_negative(self, "chain_atol_m", "overlap_tolerance_m", "hit_tolerance_m",
-                           "heading_floor_deg", "triangulation_heading_deg")
-        check_positive(self, "hit_sigmas", "zero_noise_position_m", "zero_noise_heading_deg",
-                       "heading_sigmas")
+        check_non_negative(
+            self,
+            "chain_atol_m",
+            "overlap_tolerance_m",
+            "hit_tolerance_m",
+            "heading_floor_deg",
+            "triangulation_heading_deg",
+        )
+        check_positive(
+            self, "hit_sigmas", "zero_noise_position_m", "zero_noise_heading_deg", "heading_sigmas"
+        )
 
 
 # -- the route map and algorithm #2 ---------------------------------------------------------
@@ -126,8 +133,11 @@ def check_route_connected(route: RouteMap, atol_m: float = 1e-9) -> None:
         fail(name, "local map ids are not 0, 1, 2, … in order")
     for lm in maps[1:]:
         if lm.method == "start":
-            fail(name, f"local map {lm.map_id} (frame {lm.frame_index}) has no pose in its "
-                        "predecessor (method 'start')")
+            fail(
+                name,
+                f"local map {lm.map_id} (frame {lm.frame_index}) has no pose in its "
+                "predecessor (method 'start')",
+            )
     if not maps:
         return
     rel = route.relative_poses()
@@ -140,8 +150,11 @@ def check_route_connected(route: RouteMap, atol_m: float = 1e-9) -> None:
     diff[:, 2] = np.abs(wrap_angle(chain[:, 2] - stored[:, 2]))
     if diff.max() > atol_m:
         bad = int(np.argmax(diff.max(axis=1)))
-        fail(name, f"local map {bad}: composed chain differs from its stored pose by "
-                    f"{diff[bad].max():.3g}")
+        fail(
+            name,
+            f"local map {bad}: composed chain differs from its stored pose by "
+            f"{diff[bad].max():.3g}",
+        )
 
 
 class ViewRecorder:
@@ -225,15 +238,21 @@ def check_local_map_rule(
     if held != expected:
         k = next((i for i, (a, b) in enumerate(zip(held, expected, strict=False)) if a != b),
                  min(len(held), len(expected)))  # fmt: skip
-        fail(name, f"the route map remembers frames {held[k:k + 3]}… from its local map {k} "
-                    f"on, the recounted rule gives {expected[k:k + 3]}…")
+        fail(
+            name,
+            f"the route map remembers frames {held[k : k + 3]}… from its local map {k} "
+            f"on, the recounted rule gives {expected[k : k + 3]}…",
+        )
     use_vc = False
     for step, record in zip(steps, m.steps, strict=True):
         recounted = (step.frame_index, step.tracked, step.remembered, use_vc)
         if (record.frame_index, record.tracked, record.remembered, record.use_vc) != recounted:
-            fail(name, f"frame {step.frame_index}: recorded {record.tracked} tracked, "
-                        f"{record.remembered} remembered, Use-Vc {record.use_vc}; recounted "
-                        f"{step.tracked}, {step.remembered}, {use_vc}")
+            fail(
+                name,
+                f"frame {step.frame_index}: recorded {record.tracked} tracked, "
+                f"{record.remembered} remembered, Use-Vc {record.use_vc}; recounted "
+                f"{step.tracked}, {step.remembered}, {use_vc}",
+            )
         use_vc = bool(step.remembered) and step.remembered[-1] == step.frame_index
     try:
         check_route_connected(m.route)
@@ -253,8 +272,9 @@ def _facing(segs: FloatArray, robot: Pose, test: str) -> NDArray[np.bool_]:
     return (fwd0 + fwd1) > 0.0
 
 
-def _view_polygon(view: FloatArray, robot: Pose, enlarge_m: float, mode: str,
-                  through_viewpoint: bool) -> shapely.Geometry:
+def _view_polygon(
+    view: FloatArray, robot: Pose, enlarge_m: float, mode: str, through_viewpoint: bool
+) -> shapely.Geometry:
     """P from its definition: the view's endpoints joined in scan order (from the
     viewpoint), enlarged by ``enlarge_m`` (a buffer, cut at the robot's lateral axis for
     ``forward``; every vertex moved ``enlarge_m`` away from the viewpoint for ``radial``)."""
@@ -281,13 +301,14 @@ def _view_polygon(view: FloatArray, robot: Pose, enlarge_m: float, mode: str,
     return poly
 
 
-def _visible_share(segs: FloatArray, view: FloatArray, robot: Pose, beyond_m: float,
-                   samples: int) -> FloatArray:
+def _visible_share(
+    segs: FloatArray, view: FloatArray, robot: Pose, beyond_m: float, samples: int
+) -> FloatArray:
     """The share of the surfaces' sample points seen from the viewpoint: the sight line
     through the point meets a view surface, the nearest meeting at most ``beyond_m`` short
     of the point (or beyond it)."""
     frac = (np.arange(samples) + 0.5) / samples
-    pts = (segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2]))
+    pts = segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2])
     pts = pts.reshape(-1, 2)
     o = np.array([robot.x, robot.y])
     dist = np.linalg.norm(pts - o, axis=1)
@@ -324,8 +345,7 @@ def check_update_deleted_facing_overlap(
         return
     segs = snap.segments[older]
     ids = snap.map_ids[older]
-    poly = _view_polygon(view, robot, params.enlarge_m, params.enlarge,
-                         params.include_viewpoint)
+    poly = _view_polygon(view, robot, params.enlarge_m, params.enlarge, params.include_viewpoint)
     hits = shapely.intersects(poly, shapely.linestrings(segs.reshape(-1, 2, 2)))
     seeable = hits & _facing(segs, robot, params.facing_test)
     if params.seen_side == "front":  # the robot on the left of the directed surface
@@ -334,19 +354,26 @@ def check_update_deleted_facing_overlap(
         seeable &= d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0] > 0
     if params.could_see == "visible" and seeable.any():
         share = np.zeros(len(segs))
-        share[seeable] = _visible_share(segs[seeable], view, robot, params.enlarge_m,
-                                        params.visible_samples)
+        share[seeable] = _visible_share(
+            segs[seeable], view, robot, params.enlarge_m, params.visible_samples
+        )
         seeable &= (share > 0) & (share >= params.min_visible_share)
     current = report.map_id - 1
     left = (hits if params.current_map == "touch" else seeable) & (ids == current)
     if left.any():
-        fail(name, f"update {report.update} (map {report.map_id}): {int(left.sum())} surface(s) "
-                    f"of the map being left remain inside the view polygon")
+        fail(
+            name,
+            f"update {report.update} (map {report.map_id}): {int(left.sum())} surface(s) "
+            f"of the map being left remain inside the view polygon",
+        )
     stale = seeable & (ids < current)
     if stale.any():
-        fail(name, f"update {report.update} (map {report.map_id}): {int(stale.sum())} older "
-                    f"surface(s) of map(s) {sorted(set(ids[stale].tolist()))} remain in view "
-                    "on the facing side")
+        fail(
+            name,
+            f"update {report.update} (map {report.map_id}): {int(stale.sum())} older "
+            f"surface(s) of map(s) {sorted(set(ids[stale].tolist()))} remain in view "
+            "on the facing side",
+        )
 
 
 class UpdateRecorder:
@@ -404,7 +431,9 @@ def local_map_errors(
 
 
 def check_zero_noise_localisation(
-    route: RouteMap, frame_indices: NDArray[np.int64], true_poses: FloatArray,
+    route: RouteMap,
+    frame_indices: NDArray[np.int64],
+    true_poses: FloatArray,
     params: InvariantParams | None = None,
 ) -> None:
     """With no noise, every local map is placed in its predecessor within the bounds."""
@@ -412,14 +441,21 @@ def check_zero_noise_localisation(
     pos, head = local_map_errors(route, frame_indices, true_poses)
     bad = (pos > p.zero_noise_position_m) | (head > math.radians(p.zero_noise_heading_deg))
     if bad.any():
-        k = int(np.argmax(np.maximum(pos / p.zero_noise_position_m,
-                                     head / math.radians(p.zero_noise_heading_deg))))
+        k = int(
+            np.argmax(
+                np.maximum(
+                    pos / p.zero_noise_position_m, head / math.radians(p.zero_noise_heading_deg)
+                )
+            )
+        )
         lm = route[k + 1]
-        fail("zero_noise_localisation",
-              f"{int(bad.sum())} of {len(pos)} local maps off; worst map {lm.map_id} (frame "
-              f"{lm.frame_index}, {lm.method}, {lm.tracked} tracked): {pos[k]:.3f} m, "
-              f"{math.degrees(head[k]):.2f}° (bounds {p.zero_noise_position_m} m, "
-              f"{p.zero_noise_heading_deg}°)")
+        fail(
+            "zero_noise_localisation",
+            f"{int(bad.sum())} of {len(pos)} local maps off; worst map {lm.map_id} (frame "
+            f"{lm.frame_index}, {lm.method}, {lm.tracked} tracked): {pos[k]:.3f} m, "
+            f"{math.degrees(head[k]):.2f}° (bounds {p.zero_noise_position_m} m, "
+            f"{p.zero_noise_heading_deg}°)",
+        )
 
 
 def heading_errors(estimate: FloatArray, truth: FloatArray) -> FloatArray:
@@ -456,9 +492,11 @@ def heading_error_bound(
     turn_steps = np.ceil(turn / math.radians(profile.turn_step_deg) - 1e-9)
     var = (noise.alpha1 * turn + noise.alpha2 * dist) ** 2 + (noise.alpha2 * dist) ** 2
     induced_rad = math.radians(abs(noise.induced_step_deg) + abs(profile.induced_step_deg))
-    systematic = (abs(noise.turn_scale_error) * turn
-                  + math.radians(abs(noise.heading_drift_deg_per_m)) * dist
-                  + induced_rad * turn_steps)
+    systematic = (
+        abs(noise.turn_scale_error) * turn
+        + math.radians(abs(noise.heading_drift_deg_per_m)) * dist
+        + induced_rad * turn_steps
+    )
     zero = np.zeros(1)
     var_total = np.concatenate([zero, np.cumsum(var)])
     var_total += math.radians(p.triangulation_heading_deg) ** 2 * np.asarray(local_maps)
@@ -480,6 +518,8 @@ def check_heading_error_bound(
     over = err > bound
     if over.any():
         k = int(np.argmax(err - bound))
-        fail("heading_error_bound",
-              f"row {k}: heading error {math.degrees(err[k]):.2f}° exceeds the bound "
-              f"{math.degrees(bound[k]):.2f}° ({int(over.sum())} of {len(err)} poses over)")
+        fail(
+            "heading_error_bound",
+            f"row {k}: heading error {math.degrees(err[k]):.2f}° exceeds the bound "
+            f"{math.degrees(bound[k]):.2f}° ({int(over.sum())} of {len(err)} poses over)",
+        )

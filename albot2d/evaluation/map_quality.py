@@ -226,12 +226,12 @@ def nearest_segment_distance_bounded(
     pending = np.arange(len(points))
     for radius in radii_m:
         for b0 in range(0, len(pending), _BLOCK_POINTS):
-            rows = pending[b0:b0 + _BLOCK_POINTS]
+            rows = pending[b0 : b0 + _BLOCK_POINTS]
             pts = points[rows]
             lo, hi = pts - radius, pts + radius
             which, seg = tree.query(shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]))
             for c0 in range(0, len(which), _CHUNK_PAIRS):
-                w, sg = which[c0:c0 + _CHUNK_PAIRS], seg[c0:c0 + _CHUNK_PAIRS]
+                w, sg = which[c0 : c0 + _CHUNK_PAIRS], seg[c0 : c0 + _CHUNK_PAIRS]
                 d = point_to_segment_geos(pts[w, 0], pts[w, 1], segments[sg])
                 np.minimum.at(out, rows[w], d)
         pending = pending[~(out[pending] <= radius)]

@@ -81,8 +81,7 @@ def read_report(path: str | os.PathLike[str]) -> dict[str, Any]:
     version = report.get("format_version")
     if version != REPORT_FORMAT_VERSION:
         raise InputError(
-            f"{path}: report format_version {version!r}, this albot2d reads "
-            f"{REPORT_FORMAT_VERSION}"
+            f"{path}: report format_version {version!r}, this albot2d reads {REPORT_FORMAT_VERSION}"
         )
     return report
 
@@ -109,25 +108,41 @@ def _rpe_cells(rpe: RPEResult | None) -> list[str]:
     if rpe is None:
         return ["-"] * 5
     o, short, long = rpe.overall, rpe.short, rpe.long
-    return [_pm(o.trans_m_mean, o.trans_m_std, ".3f"), _pm(o.rot_deg_mean, o.rot_deg_std, ".2f"),
-            _pm(short.rot_deg_mean, short.rot_deg_std, ".2f"),
-            _pm(long.trans_m_mean, long.trans_m_std, ".2f"),
-            _pm(long.rot_deg_mean, long.rot_deg_std, ".1f")]
+    return [
+        _pm(o.trans_m_mean, o.trans_m_std, ".3f"),
+        _pm(o.rot_deg_mean, o.rot_deg_std, ".2f"),
+        _pm(short.rot_deg_mean, short.rot_deg_std, ".2f"),
+        _pm(long.trans_m_mean, long.trans_m_std, ".2f"),
+        _pm(long.rot_deg_mean, long.rot_deg_std, ".1f"),
+    ]
 
 
 def _table(header: list[str], rows: list[list[str]]) -> str:
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
-    lines = ["  ".join(c.ljust(w) if i == 0 else c.rjust(w)
-                       for i, (c, w) in enumerate(zip(r, widths, strict=True)))
-             for r in [header, *rows]]
+    lines = [
+        "  ".join(
+            c.ljust(w) if i == 0 else c.rjust(w)
+            for i, (c, w) in enumerate(zip(r, widths, strict=True))
+        )
+        for r in [header, *rows]
+    ]
     return "\n".join(lines)
 
 
 def format_summary_table(scores: RunScores) -> str:
     """Two tables of one row per mapper (and raw odometry), each under 100 columns:
     accuracy (RPE overall/short/long, APE, worst homing error) and process/map quality."""
-    header = ["", "RPE m", "RPE deg", "short deg", "long m", "long deg", "APE m",
-              "home max°", "max m"]
+    header = [
+        "",
+        "RPE m",
+        "RPE deg",
+        "short deg",
+        "long m",
+        "long deg",
+        "APE m",
+        "home max°",
+        "max m",
+    ]
     odometry = scores.odometry
     ape = None if odometry.ape is None else odometry.ape.trans_m_rmse
     rows = [["odometry", *_rpe_cells(odometry.rpe), _num(ape, ".3f"), "", ""]]
@@ -137,8 +152,17 @@ def format_summary_table(scores: RunScores) -> str:
             name, *_rpe_cells(m.rpe), _num(None if m.ape is None else m.ape.trans_m_rmse, ".3f"),
             _num(h.bearing_abs_max_deg, ".1f"), _num(h.distance_abs_max_m, ".2f"),
         ])  # fmt: skip
-    header2 = ["", "views", "local maps", "triangulated", "integrated", "surfaces",
-               "map acc m", "p95 m", "complete"]
+    header2 = [
+        "",
+        "views",
+        "local maps",
+        "triangulated",
+        "integrated",
+        "surfaces",
+        "map acc m",
+        "p95 m",
+        "complete",
+    ]
     rows2 = []
     for name, m in scores.mappers.items():
         c, q = m.counts, m.map.quality
@@ -173,6 +197,9 @@ def format_homing_table(scores: RunScores) -> str:
             else:
                 row.append(f"{e.bearing_est_deg:+.1f}/{e.distance_est_m:.1f}")
         rows.append(row)
-    title = ("homing: error of each mapper's bearing/distance to the start (estimates in "
-             "report.json)" if known else "homing: each mapper's bearing/distance to the start")
+    title = (
+        "homing: error of each mapper's bearing/distance to the start (estimates in report.json)"
+        if known
+        else "homing: each mapper's bearing/distance to the start"
+    )
     return title + "\n" + _table(header, rows)

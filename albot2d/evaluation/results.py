@@ -75,8 +75,11 @@ class HomingSummary:
 
     @classmethod
     def of(cls, stops: tuple[HomingStop, ...]) -> HomingSummary:
-        errors = [(s.homing.bearing_error_deg, s.homing.distance_error_m) for s in stops
-                  if s.homing.bearing_error_deg is not None]
+        errors = [
+            (s.homing.bearing_error_deg, s.homing.distance_error_m)
+            for s in stops
+            if s.homing.bearing_error_deg is not None
+        ]
         if not errors:
             return cls(len(stops))
         b, d = np.abs(np.array(errors, dtype=np.float64)).T
@@ -177,9 +180,12 @@ class Revisits:
         return int(sum(e.deleted for e in self.events))
 
     def to_dict(self) -> dict[str, Any]:
-        return {"min_gap_maps": self.min_gap_maps, "updates": self.updates,
-                "deleted_surfaces": self.deleted_surfaces,
-                "events": [e.to_dict() for e in self.events]}
+        return {
+            "min_gap_maps": self.min_gap_maps,
+            "updates": self.updates,
+            "deleted_surfaces": self.deleted_surfaces,
+            "events": [e.to_dict() for e in self.events],
+        }
 
 
 @dataclass(frozen=True, slots=True)
@@ -191,9 +197,11 @@ class OdometryScores:
     ape: AbsolutePoseError | None
 
     def to_dict(self) -> dict[str, Any]:
-        return {"rpe": _dict_or_none(self.rpe),
-                "end_pose_error": _dict_or_none(self.end_pose_error),
-                "ape": _dict_or_none(self.ape)}
+        return {
+            "rpe": _dict_or_none(self.rpe),
+            "end_pose_error": _dict_or_none(self.end_pose_error),
+            "ape": _dict_or_none(self.ape),
+        }
 
 
 @dataclass(frozen=True, slots=True)

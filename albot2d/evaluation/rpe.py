@@ -37,8 +37,11 @@ class RPEStats:
             return cls(None, None, None, None, 0)
         rot_deg = np.degrees(rot_rad)
         return cls(
-            float(trans_m.mean()), float(trans_m.std()),
-            float(rot_deg.mean()), float(rot_deg.std()), len(trans_m),
+            float(trans_m.mean()),
+            float(trans_m.std()),
+            float(rot_deg.mean()),
+            float(rot_deg.std()),
+            len(trans_m),
         )
 
     def to_dict(self) -> dict[str, float | int | None]:

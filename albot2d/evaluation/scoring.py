@@ -153,8 +153,11 @@ def homing_section(
         pose, start = stop.estimates[name]
         view = int(trace.frame_indices[stop.row])
         truth = trace.true_poses
-        result = (homing_to_start(view, pose, start) if truth is None
-                  else homing_to_start(view, pose, start, truth[stop.row], truth[0]))
+        result = (
+            homing_to_start(view, pose, start)
+            if truth is None
+            else homing_to_start(view, pose, start, truth[stop.row], truth[0])
+        )
         ego = egocentric_at(trace, stop, name, world_segments)
         out.append(HomingStop(result, stop.travelled_m, ego))
     return tuple(out)
@@ -305,5 +308,7 @@ def score_run(
 ) -> RunScores:
     """Raw odometry and every mapper scored; ``world`` for a simulated run (None: a log)."""
     segments = None if world is None else world.obstacle_segments
-    return RunScores(odometry_scores(trace, relations, params),
-                     score_mappers(trace, relations, segments, params, world))
+    return RunScores(
+        odometry_scores(trace, relations, params),
+        score_mappers(trace, relations, segments, params, world),
+    )

@@ -54,7 +54,9 @@ DEFAULT_MAPPERS = ("albot1", "albot1[preset=start_stop]", "naive")
 DIRECTIONS = ("forward", "reverse")
 # The paper's Table 1 setting: the Fig. 6 world, its Fig. 8 journeys, a stop every 4 m.
 PAPER_FIG8: dict[str, Any] = {
-    "kind": "fig6", "routes": ("fig8_clockwise", "fig8_anticlockwise"), "stop_every_m": 4.0,
+    "kind": "fig6",
+    "routes": ("fig8_clockwise", "fig8_anticlockwise"),
+    "stop_every_m": 4.0,
 }
 
 
@@ -168,8 +170,7 @@ def run_one(
 
 def _share(stops: list[tuple[float, float, float]], setup: SensitivitySetup) -> dict[str, Any]:
     within = [
-        abs(b) <= setup.bearing_bound_deg and abs(d) <= setup.distance_bound_m
-        for b, d, _ in stops
+        abs(b) <= setup.bearing_bound_deg and abs(d) <= setup.distance_bound_m for b, d, _ in stops
     ]
     return {
         "stops": len(stops),
@@ -259,10 +260,16 @@ def format_table(result: dict[str, Any]) -> str:
     for preset, by_mapper in result["presets"].items():
         for name, p in by_mapper.items():
             a = p["all"]
-            worst_b = "-" if a["worst_bearing_error_deg"] is None else (
-                f"{a['worst_bearing_error_deg']:.1f}")
-            worst_d = "-" if a["worst_distance_error_m"] is None else (
-                f"{a['worst_distance_error_m']:.2f}")
+            worst_b = (
+                "-"
+                if a["worst_bearing_error_deg"] is None
+                else (f"{a['worst_bearing_error_deg']:.1f}")
+            )
+            worst_d = (
+                "-"
+                if a["worst_distance_error_m"] is None
+                else (f"{a['worst_distance_error_m']:.2f}")
+            )
             lines.append(
                 f"{preset:<11} {name:<26} {_cell(a):>12} {_cell(p['table1']):>14} "
                 f"{worst_b:>8} {worst_d:>8}"
@@ -292,8 +299,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--presets", nargs="+", default=list(DEFAULT_PRESETS))
     ap.add_argument("--mappers", nargs="+", default=list(DEFAULT_MAPPERS))
     ap.add_argument("--directions", nargs="+", default=list(DIRECTIONS))
-    ap.add_argument("--paper-fig8", action="store_true",
-                    help="the paper's Table 1 setting: Fig. 6 world, Fig. 8 journeys")
+    ap.add_argument(
+        "--paper-fig8",
+        action="store_true",
+        help="the paper's Table 1 setting: Fig. 6 world, Fig. 8 journeys",
+    )
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--json", metavar="FILE", help="also write the full result here")
     args = ap.parse_args(argv)

@@ -80,8 +80,10 @@ class RunSpec:
         if self.world_file is not None and self.world_params:
             raise InputError("RunSpec.world_params apply to generated worlds, not a world file")
         length = self.tour_length_m
-        if isinstance(length, bool) or not isinstance(length, int | float) or not (
-            math.isfinite(length) and length > 0
+        if (
+            isinstance(length, bool)
+            or not isinstance(length, int | float)
+            or not (math.isfinite(length) and length > 0)
         ):
             raise InputError(f"RunSpec.tour_length_m must be a positive number, got {length!r}")
         if self.tour_kind not in TOUR_KINDS:
@@ -106,8 +108,10 @@ class RunSpec:
     def from_report(cls, report: Mapping[str, Any], where: str = "report") -> RunSpec:
         """The spec recorded in a report written by ``albot2d run``."""
         if report.get("command") != "run":
-            raise InputError(f"{where}: not a report of `albot2d run` (command "
-                             f"{report.get('command')!r}); only runs can be reproduced")
+            raise InputError(
+                f"{where}: not a report of `albot2d run` (command "
+                f"{report.get('command')!r}); only runs can be reproduced"
+            )
         spec = report.get("params", {}).get("spec")
         if not isinstance(spec, dict):
             raise InputError(f"{where}: params.spec is missing; cannot reproduce the run")
@@ -192,8 +196,10 @@ class RunSetup:
     mapper_factories: Mapping[str, Callable[[], Mapper]]
 
     def __repr__(self) -> str:
-        return (f"RunSetup({self.world.kind} seed {self.world.seed}, {self.tour.kind} tour "
-                f"{self.tour.length_m:.0f} m, {self.profile.name})")
+        return (
+            f"RunSetup({self.world.kind} seed {self.world.seed}, {self.tour.kind} tour "
+            f"{self.tour.length_m:.0f} m, {self.profile.name})"
+        )
 
 
 def build_run(spec: RunSpec) -> RunSetup:
@@ -202,5 +208,6 @@ def build_run(spec: RunSpec) -> RunSetup:
 
     factories = check_spec(spec)
     world, tour = plan_run_tour(spec, build_world(spec))
-    return RunSetup(spec, world, tour, get_profile(spec.profile), make_simulator(world, spec),
-                    factories)
+    return RunSetup(
+        spec, world, tour, get_profile(spec.profile), make_simulator(world, spec), factories
+    )

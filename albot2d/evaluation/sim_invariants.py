@@ -40,8 +40,9 @@ FloatArray = NDArray[np.float64]
 def _nearest_distance(tree: shapely.STRtree, points: FloatArray) -> FloatArray:
     if len(points) == 0:
         return np.zeros(0)
-    (idx, _), dist = tree.query_nearest(shapely.points(points), return_distance=True,
-                                        all_matches=False)
+    (idx, _), dist = tree.query_nearest(
+        shapely.points(points), return_distance=True, all_matches=False
+    )
     out = np.full(len(points), np.inf)
     out[idx] = dist
     return out
@@ -52,7 +53,9 @@ def _segment_tree(segments: FloatArray) -> shapely.STRtree:
 
 
 def check_robot_clear(
-    obstacle_segments: FloatArray, true_poses: FloatArray, radius_m: float,
+    obstacle_segments: FloatArray,
+    true_poses: FloatArray,
+    radius_m: float,
     tolerance_m: float = 1e-9,
 ) -> None:
     """The robot disc at every true pose keeps clear of every static obstacle segment."""
@@ -62,9 +65,11 @@ def check_robot_clear(
     overlap = radius_m - dist
     if overlap.max() > tolerance_m:
         k = int(np.argmax(overlap))
-        fail("robot_clear_of_obstacles",
-              f"frame row {k}: the robot (radius {radius_m} m) reaches {overlap[k]:.3g} m into "
-              f"an obstacle at ({true_poses[k, 0]:.3f}, {true_poses[k, 1]:.3f})")
+        fail(
+            "robot_clear_of_obstacles",
+            f"frame row {k}: the robot (radius {radius_m} m) reaches {overlap[k]:.3g} m into "
+            f"an obstacle at ({true_poses[k, 0]:.3f}, {true_poses[k, 1]:.3f})",
+        )
 
 
 def _overlap_with_ring(centres: FloatArray, ring: FloatArray, radius_m: float) -> FloatArray:
@@ -103,17 +108,25 @@ class ClearanceChecker:
     """
 
     def __init__(
-        self, obstacle_segments: FloatArray, moving_shapes: Sequence[FloatArray],
-        radius_m: float, *, tolerance_m: float = 1e-9,
-        moving_tolerance_m: float = MOVING_OVERLAP_TOLERANCE_M, batch: int = 4096,
-        raise_at_once: bool = True, names: Sequence[str] | None = None,
+        self,
+        obstacle_segments: FloatArray,
+        moving_shapes: Sequence[FloatArray],
+        radius_m: float,
+        *,
+        tolerance_m: float = 1e-9,
+        moving_tolerance_m: float = MOVING_OVERLAP_TOLERANCE_M,
+        batch: int = 4096,
+        raise_at_once: bool = True,
+        names: Sequence[str] | None = None,
     ) -> None:
         self.segments = np.asarray(obstacle_segments, dtype=np.float64).reshape(-1, 4)
         self._tree = _segment_tree(self.segments) if len(self.segments) else None
-        self.rings = [polygon_ring_segments(np.asarray(s, dtype=np.float64))
-                      for s in moving_shapes]
-        self.names = list(names) if names is not None else [
-            f"moving obstacle {m}" for m in range(len(self.rings))]
+        self.rings = [polygon_ring_segments(np.asarray(s, dtype=np.float64)) for s in moving_shapes]
+        self.names = (
+            list(names)
+            if names is not None
+            else [f"moving obstacle {m}" for m in range(len(self.rings))]
+        )
         self.radius_m = float(radius_m)
         self.tolerance_m = tolerance_m
         self.moving_tolerance_m = moving_tolerance_m
@@ -130,25 +143,34 @@ class ClearanceChecker:
         self.violations: list[str] = []
 
     @classmethod
-    def for_world(cls, world: World, radius_m: float | None = None,
-                  **kwargs: Unpack[CheckerOptions]) -> ClearanceChecker:
+    def for_world(
+        cls, world: World, radius_m: float | None = None, **kwargs: Unpack[CheckerOptions]
+    ) -> ClearanceChecker:
         """A checker for ``world``'s walls, clutter and moving obstacles."""
         obstacles = world.dynamic_obstacles
-        return cls(world.obstacle_segments, [o.shape for o in obstacles],
-                   world.robot_radius_m if radius_m is None else radius_m,
-                   names=[f"dynamic_obstacles[{m}] ({o.kind})" for m, o in enumerate(obstacles)],
-                   **kwargs)
+        return cls(
+            world.obstacle_segments,
+            [o.shape for o in obstacles],
+            world.robot_radius_m if radius_m is None else radius_m,
+            names=[f"dynamic_obstacles[{m}] ({o.kind})" for m, o in enumerate(obstacles)],
+            **kwargs,
+        )
 
-    def add(self, robot_pose: Pose, obstacle_poses: FloatArray | None = None,
-            row: int | None = None) -> None:
+    def add(
+        self, robot_pose: Pose, obstacle_poses: FloatArray | None = None, row: int | None = None
+    ) -> None:
         """One true robot pose and the moving obstacles' true poses ``(M, 3)`` then."""
         self._xy.append((robot_pose.x, robot_pose.y))
         if self.rings:
-            poses = (np.full((len(self.rings), 3), np.nan) if obstacle_poses is None
-                     else np.asarray(obstacle_poses, dtype=np.float64).reshape(-1, 3))
+            poses = (
+                np.full((len(self.rings), 3), np.nan)
+                if obstacle_poses is None
+                else np.asarray(obstacle_poses, dtype=np.float64).reshape(-1, 3)
+            )
             if len(poses) != len(self.rings):
-                raise ValueError(f"{len(poses)} obstacle poses for {len(self.rings)} "
-                                 "moving obstacles")
+                raise ValueError(
+                    f"{len(poses)} obstacle poses for {len(self.rings)} moving obstacles"
+                )
             self._poses.append(poses)
         self._rows.append(self.poses_checked + len(self._rows) if row is None else row)
         if len(self._xy) >= self.batch:
@@ -174,9 +196,11 @@ class ClearanceChecker:
             bad = overlap > self.tolerance_m
             self.static_overlaps += int(bad.sum())
             if bad.any():
-                self._violation(f"row {rows[k]}: the robot (radius {self.radius_m} m) reaches "
-                                f"{overlap[k]:.3g} m into a wall or clutter at "
-                                f"({xy[k, 0]:.3f}, {xy[k, 1]:.3f})")
+                self._violation(
+                    f"row {rows[k]}: the robot (radius {self.radius_m} m) reaches "
+                    f"{overlap[k]:.3g} m into a wall or clutter at "
+                    f"({xy[k, 0]:.3f}, {xy[k, 1]:.3f})"
+                )
         if poses is None:
             return
         for m, ring in enumerate(self.rings):
@@ -195,9 +219,11 @@ class ClearanceChecker:
             self.moving_overlaps += int(bad.sum())
             if bad.any():
                 j = int(known[k])
-                self._violation(f"row {rows[j]}: the robot (radius {self.radius_m} m) reaches "
-                                f"{overlap[k]:.3g} m into {self.names[m]} at "
-                                f"({xy[j, 0]:.3f}, {xy[j, 1]:.3f})")
+                self._violation(
+                    f"row {rows[j]}: the robot (radius {self.radius_m} m) reaches "
+                    f"{overlap[k]:.3g} m into {self.names[m]} at "
+                    f"({xy[j, 0]:.3f}, {xy[j, 1]:.3f})"
+                )
 
     def _violation(self, message: str) -> None:
         if self.raise_at_once:
@@ -223,8 +249,12 @@ class FrameChecker:
     """
 
     def __init__(
-        self, obstacle_segments: FloatArray, laser_noise: LaserNoise,
-        params: InvariantParams | None = None, *, batch_frames: int = 64,
+        self,
+        obstacle_segments: FloatArray,
+        laser_noise: LaserNoise,
+        params: InvariantParams | None = None,
+        *,
+        batch_frames: int = 64,
         raise_at_once: bool = True,
     ) -> None:
         self.params = params or InvariantParams()
@@ -243,8 +273,9 @@ class FrameChecker:
         """How far a hit at ``ranges`` may lie from the wall it hit."""
         p, nz = self.params, self.noise
         sigma = nz.range_sigma_m + nz.range_sigma_per_m * ranges
-        lateral = ranges * math.sin(min(p.hit_sigmas * math.radians(nz.angle_jitter_deg),
-                                        0.5 * math.pi))
+        lateral = ranges * math.sin(
+            min(p.hit_sigmas * math.radians(nz.angle_jitter_deg), 0.5 * math.pi)
+        )
         return p.hit_tolerance_m + p.hit_sigmas * sigma + 0.5 * nz.range_resolution_m + lateral
 
     def __call__(self, frame: Frame, travelled_m: float = 0.0) -> None:
@@ -282,10 +313,12 @@ class FrameChecker:
         for j in (1, 2):
             other = exact[:, j]
             with np.errstate(invalid="ignore"):
-                jump = np.isfinite(own) & np.isfinite(other) & (
-                    np.abs(own - other) > nz.mixed_pixel_min_jump_m)
-                between = ((np.minimum(own, other) - tol <= r)
-                           & (r <= np.maximum(own, other) + tol))
+                jump = (
+                    np.isfinite(own)
+                    & np.isfinite(other)
+                    & (np.abs(own - other) > nz.mixed_pixel_min_jump_m)
+                )
+                between = (np.minimum(own, other) - tol <= r) & (r <= np.maximum(own, other) + tol)
             mixed |= jump & between
         return mixed
 
@@ -309,11 +342,16 @@ class FrameChecker:
         off[suspects[mixed]] = False
         if off.any():
             k = int(np.flatnonzero(off)[0])
-            dist = (_nearest_distance(self._tree, pts[k : k + 1])[0] if self._tree is not None
-                    else math.inf)
-            msg = (f"frame {int(rows[k, 3])}: {int(off.sum())} valid hit(s) off every obstacle "
-                   f"(and not mixed pixels), e.g. ({pts[k, 0]:.3f}, {pts[k, 1]:.3f}) "
-                   f"{dist:.3g} m away (tolerance {tol[k]:.3g} m)")
+            dist = (
+                _nearest_distance(self._tree, pts[k : k + 1])[0]
+                if self._tree is not None
+                else math.inf
+            )
+            msg = (
+                f"frame {int(rows[k, 3])}: {int(off.sum())} valid hit(s) off every obstacle "
+                f"(and not mixed pixels), e.g. ({pts[k, 0]:.3f}, {pts[k, 1]:.3f}) "
+                f"{dist:.3g} m away (tolerance {tol[k]:.3g} m)"
+            )
             if self.raise_at_once:
                 fail("laser_hits_on_obstacles", msg)
             self.violations.append(msg)

@@ -169,8 +169,10 @@ class Trace:
 
     def __repr__(self) -> str:
         metres = float(self.travelled_m[-1]) if self.n_frames else 0.0
-        return (f"Trace({self.n_frames} frames, {metres:.1f} m, truth={self.has_truth}, "
-                f"{len(self.stops)} stops, mappers={list(self.mappers)})")
+        return (
+            f"Trace({self.n_frames} frames, {metres:.1f} m, truth={self.has_truth}, "
+            f"{len(self.stops)} stops, mappers={list(self.mappers)})"
+        )
 
     @property
     def has_truth(self) -> bool:
@@ -290,8 +292,10 @@ def drive_mappers(
         frame = next(stream, None)
         if frame is None:
             break
-        row: dict[str, float] = {"view": frame.index,
-                                 "simulation_ms": (time.perf_counter_ns() - t0) / 1e6}
+        row: dict[str, float] = {
+            "view": frame.index,
+            "simulation_ms": (time.perf_counter_ns() - t0) / 1e6,
+        }
         rec.add(frame)
         views: dict[ExtractionParams, tuple[Surfaces, int]] = {}
         for extraction in perceives.values():

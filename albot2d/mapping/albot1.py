@@ -134,8 +134,7 @@ class Albot1Params:
         value = self.heading_fallback_surfaces
         if isinstance(value, bool) or not isinstance(value, int) or value < 0:
             raise InputError(
-                "Albot1Params.heading_fallback_surfaces must be an integer >= 0, "
-                f"got {value!r}"
+                f"Albot1Params.heading_fallback_surfaces must be an integer >= 0, got {value!r}"
             )
 
     @classmethod
@@ -147,7 +146,9 @@ class Albot1Params:
         elif name == "original":
             base = cls(
                 tracking=TrackingParams(
-                    min_view_angle_deg=0.0, match_endpoint="key", match_order="fitness",
+                    min_view_angle_deg=0.0,
+                    match_endpoint="key",
+                    match_order="fitness",
                     fitness_floor=80.0,
                 ),
                 triangulation=TriangulationParams(choose="fitness", heading="selected"),
@@ -158,9 +159,7 @@ class Albot1Params:
         elif name == "start_stop":
             base = cls(heading_fallback_surfaces=1)
         else:
-            raise InputError(
-                f"unknown Albot1 preset {name!r}; valid: paper, original, start_stop"
-            )
+            raise InputError(f"unknown Albot1 preset {name!r}; valid: paper, original, start_stop")
         return dataclasses.replace(base, **overrides)
 
 
@@ -268,13 +267,20 @@ class Albot1:
         new = self.route.maps[n_maps:]
         self.steps.append(
             StepRecord(
-                frame_index, tracked_after, use_vc,
-                tuple(m.frame_index for m in new), tuple(m.method for m in new),
+                frame_index,
+                tracked_after,
+                use_vc,
+                tuple(m.frame_index for m in new),
+                tuple(m.method for m in new),
             )
         )
 
     def _main_loop_step(
-        self, frame_index: int, timestamp: float, view: Surfaces, increment: Pose,
+        self,
+        frame_index: int,
+        timestamp: float,
+        view: Surfaces,
+        increment: Pose,
         prev: _ViewState,
     ) -> int:
         """Algorithm #2, lines 3–16, for the new view V(c); returns |S_t| after line 4."""
@@ -303,8 +309,13 @@ class Albot1:
                     prev.tracked, prev.pose_in_map, prev.steps_in_map
                 )
             self._update_maps(
-                prev.frame_index, prev.timestamp, prev.view, pose_prev, method,
-                tracked=len(prev.tracked), replaces_last_frame=True,
+                prev.frame_index,
+                prev.timestamp,
+                prev.view,
+                pose_prev,
+                method,
+                tracked=len(prev.tracked),
+                replaces_last_frame=True,
             )
             assert self._tracked is not None  # set by _update_maps
             # Line 12 (goto 4): re-track V(c-1)'s surfaces into V(c).
@@ -325,8 +336,13 @@ class Albot1:
         return tracked_after
 
     def _keep_tracking(
-        self, frame_index: int, timestamp: float, view: Surfaces, pose: Pose,
-        tracked: TrackedSurfaces, steps: int,
+        self,
+        frame_index: int,
+        timestamp: float,
+        view: Surfaces,
+        pose: Pose,
+        tracked: TrackedSurfaces,
+        steps: int,
     ) -> None:
         """Algorithm #2, lines 15–16: Use-V(c) ← false, V(c-1) ← V(c), next view."""
         self._tracked = tracked
@@ -411,7 +427,10 @@ class Albot1:
         self.last_update = report
         self.update_log.append(
             UpdateSummary(
-                lm.map_id, frame_index, report.deleted_current, report.deleted_older,
+                lm.map_id,
+                frame_index,
+                report.deleted_current,
+                report.deleted_older,
                 min(report.affected_maps, default=-1),
             )
         )

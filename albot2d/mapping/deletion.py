@@ -149,8 +149,10 @@ class GlobalMapParams:
         check_positive(self, "index_cell_m")
         check_positive_int(self, "group_gap_maps", "visible_samples")
         if not 0.0 <= self.min_visible_share <= 1.0:
-            raise InputError(f"GlobalMapParams.min_visible_share must be in [0, 1], got "
-                             f"{self.min_visible_share!r}")
+            raise InputError(
+                f"GlobalMapParams.min_visible_share must be in [0, 1], got "
+                f"{self.min_visible_share!r}"
+            )
         for name, valid in _CHOICES.items():
             value = getattr(self, name)
             if value not in valid:

@@ -124,9 +124,9 @@ class GlobalMap:
             box = np.array(poly.bounds)
             if p.forward_ray_m > 0:
                 tip = robot @ Pose(p.forward_ray_m, 0.0, 0.0)
-                box = np.array([
-                    min(box[0], tip.x), min(box[1], tip.y), max(box[2], tip.x), max(box[3], tip.y)
-                ])
+                box = np.array(
+                    [min(box[0], tip.x), min(box[1], tip.y), max(box[2], tip.x), max(box[3], tip.y)]
+                )
             cand = self._alive_ids(self._index.query_box(*box))
             touch = touching_mask(poly, self._segments[cand], robot, p.forward_ray_m)
             hit = cand[touch]
@@ -136,8 +136,7 @@ class GlobalMap:
             if p.seen_side == "front":
                 visible &= seen_side_mask(hsegs, robot)
             if p.could_see == "visible" and visible.any():
-                share = visible_share(hsegs[visible], segs, robot, p.enlarge_m,
-                                      p.visible_samples)
+                share = visible_share(hsegs[visible], segs, robot, p.enlarge_m, p.visible_samples)
                 visible[visible] = (share > 0.0) & (share >= p.min_visible_share)
             is_current = hit_maps == current
             cur_del = is_current if p.current_map == "touch" else is_current & visible
@@ -159,8 +158,9 @@ class GlobalMap:
                         keep &= seen_side_mask(gsegs, robot)
                     if p.could_see == "in_range":
                         pts = segs.reshape(-1, 2)
-                        reach = float(np.max(np.hypot(pts[:, 0] - robot.x, pts[:, 1] - robot.y),
-                                             initial=0.0))
+                        reach = float(
+                            np.max(np.hypot(pts[:, 0] - robot.x, pts[:, 1] - robot.y), initial=0.0)
+                        )
                         keep &= in_range_mask(gsegs, robot, reach + p.enlarge_m)
                     older = ids[keep]
                 doomed = np.concatenate([doomed, older])

@@ -45,9 +45,11 @@ class LocalMap:
     timestamp: float = 0.0
 
     def __repr__(self) -> str:
-        return (f"LocalMap(map_id={self.map_id}, frame_index={self.frame_index}, "
-                f"method={self.method!r}, pose={self.pose!r}, tracked={self.tracked}, "
-                f"timestamp={self.timestamp:.6g}, view={self.view!r})")
+        return (
+            f"LocalMap(map_id={self.map_id}, frame_index={self.frame_index}, "
+            f"method={self.method!r}, pose={self.pose!r}, tracked={self.tracked}, "
+            f"timestamp={self.timestamp:.6g}, view={self.view!r})"
+        )
 
 
 @dataclass(eq=False)

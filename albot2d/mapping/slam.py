@@ -92,9 +92,7 @@ class ScanMatchingParams:
                 f"max_range_m ({self.max_range_m})"
             )
         heights = tuple(float(h) for h in self.layer_heights_m)
-        if len(heights) < 2 or len(set(heights)) != len(heights) or not all(
-            np.isfinite(heights)
-        ):
+        if len(heights) < 2 or len(set(heights)) != len(heights) or not all(np.isfinite(heights)):
             raise InputError(
                 "ScanMatchingParams.layer_heights_m needs at least 2 distinct finite heights "
                 f"(one layer leaves roll and pitch unconstrained), got {self.layer_heights_m!r}"
@@ -324,7 +322,7 @@ class LoopClosingSLAM:
         with self.timer.stage("global_map"):
             counts = np.array([len(s) for s in self._segments], dtype=np.int64)
             owner = np.repeat(np.arange(len(counts)), counts)
-            segs = (np.concatenate(self._segments) if len(owner) else np.zeros((0, 4)))
+            segs = np.concatenate(self._segments) if len(owner) else np.zeros((0, 4))
             poses = self.trajectory()[owner]
             a = transform_points_each(poses, segs[:, :2])
             b = transform_points_each(poses, segs[:, 2:])

@@ -49,7 +49,10 @@ from albot2d.perception.tracking import TrackingParams
 from albot2d.validation import check_non_negative
 
 __all__ = [
-    "Affordances", "TriangulationParams", "heading_from_directions", "pose_affordances",
+    "Affordances",
+    "TriangulationParams",
+    "heading_from_directions",
+    "pose_affordances",
     "triangulate",
 ]
 
@@ -91,8 +94,7 @@ class TriangulationParams:
             )
         if self.choose not in ("nearest_to_pi", "fitness"):
             raise InputError(
-                "TriangulationParams.choose must be nearest_to_pi or fitness, "
-                f"got {self.choose!r}"
+                f"TriangulationParams.choose must be nearest_to_pi or fitness, got {self.choose!r}"
             )
 
 
@@ -214,16 +216,20 @@ def _pi_fitness(aff: Affordances, current: Surfaces, path_integration: Pose) -> 
     its corner and heading land from the local map's when moved by path integration."""
     pts = aff.current_points
     c, s = np.cos(path_integration.theta), np.sin(path_integration.theta)
-    moved = np.column_stack([
-        path_integration.x + c * pts[:, 0] - s * pts[:, 1],
-        path_integration.y + s * pts[:, 0] + c * pts[:, 1],
-    ])
+    moved = np.column_stack(
+        [
+            path_integration.x + c * pts[:, 0] - s * pts[:, 1],
+            path_integration.y + s * pts[:, 0] + c * pts[:, 1],
+        ]
+    )
     d_mm = 1000.0 * np.hypot(*(moved - aff.local_points).T)
     dth_deg = np.degrees(np.abs(wrap_angle(aff.poses[:, 2] - path_integration.theta)))
     length_mm = 1000.0 * current.lengths_m[aff.surface]
     range_mm = 1000.0 * np.hypot(pts[:, 0], pts[:, 1])
     return (
-        length_mm * np.maximum(400.0 - d_mm, 0.0) * np.maximum(5.0 - dth_deg, 0.0)
+        length_mm
+        * np.maximum(400.0 - d_mm, 0.0)
+        * np.maximum(5.0 - dth_deg, 0.0)
         / np.maximum(range_mm, 2000.0)
     )
 
@@ -253,10 +259,7 @@ def triangulate(
     consistent = (
         np.hypot(aff.poses[:, 0] - path_integration.x, aff.poses[:, 1] - path_integration.y)
         <= k * gate_m
-    ) & (
-        np.abs(wrap_angle(aff.poses[:, 2] - path_integration.theta))
-        <= k * np.radians(gate_deg)
-    )
+    ) & (np.abs(wrap_angle(aff.poses[:, 2] - path_integration.theta)) <= k * np.radians(gate_deg))
     if not consistent.all():
         aff = Affordances(*(field[consistent] for field in aff))
     poses = aff.poses
@@ -286,7 +289,11 @@ def triangulate(
         offset = float(dev[np.abs(dev) <= consensus].mean())
     else:
         fused = _weighted_heading_offset(
-            local, current, path_integration, float(poses[best, 2]), consensus,
+            local,
+            current,
+            path_integration,
+            float(poses[best, 2]),
+            consensus,
             k * float(np.radians(gate_deg)),
         )
         offset = 0.0 if fused is None else fused[0]
@@ -323,8 +330,12 @@ def heading_from_directions(
     gate_deg = params.max_pi_deviation_deg if params.max_pi_deviation_deg is not None else gate[1]
     k = max(int(steps), 1)
     fused = _weighted_heading_offset(
-        local, current, path_integration, path_integration.theta,
-        float(np.radians(params.heading_consensus_deg)), k * float(np.radians(gate_deg)),
+        local,
+        current,
+        path_integration,
+        path_integration.theta,
+        float(np.radians(params.heading_consensus_deg)),
+        k * float(np.radians(gate_deg)),
     )
     if fused is None or fused[1] < max(int(min_agreeing), 1):
         return None

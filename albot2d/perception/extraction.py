@@ -426,8 +426,14 @@ def extract_surfaces(
     occluded = _occlusion(hit, r, x, y, prev_joined, next_joined, a, b, (nx, ny, c), params)
     if params.corner_max_shift_m > 0.0:
         segs = refine_corners(
-            segs, a, b, (nx, ny, c), next_joined, scan.angles,
-            min_angle_deg=params.corner_min_angle_deg, max_shift_m=params.corner_max_shift_m,
+            segs,
+            a,
+            b,
+            (nx, ny, c),
+            next_joined,
+            scan.angles,
+            min_angle_deg=params.corner_min_angle_deg,
+            max_shift_m=params.corner_max_shift_m,
         )
     uncertain = None
     if math.isfinite(params.max_endpoint_gap_m):

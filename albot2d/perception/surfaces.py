@@ -62,8 +62,13 @@ class Surfaces:
     def __repr__(self) -> str:
         from albot2d.reprs import compact_fields
 
-        return compact_fields("Surfaces", segments=self.segments, occluded=self.occluded,
-                              beams=self.beams, uncertain=self.uncertain)
+        return compact_fields(
+            "Surfaces",
+            segments=self.segments,
+            occluded=self.occluded,
+            beams=self.beams,
+            uncertain=self.uncertain,
+        )
 
     def __post_init__(self) -> None:
         segs = as_segments(self.segments)

@@ -232,7 +232,9 @@ def match_fitness(
     mid = 0.5 * (seg[:, :2] + seg[:, 2:])
     range_mm = 1000.0 * np.hypot(mid[:, 0], mid[:, 1])
     return (
-        length_mm * (400.0 - 1000.0 * distance_m) * (5.0 - np.degrees(angle_rad))
+        length_mm
+        * (400.0 - 1000.0 * distance_m)
+        * (5.0 - np.degrees(angle_rad))
         / np.maximum(range_mm, 2000.0)
     )
 
@@ -326,8 +328,10 @@ def match_surfaces(
                 math.radians(params.match_angle_deg), params.match_distance_m,
             )  # fmt: skip
         if backend == "numba":
-            raise ValueError("backend='numba' needs numba (the fast extra) and the paper's "
-                             "matching settings (corresponding, distance, no fallback/floor)")
+            raise ValueError(
+                "backend='numba' needs numba (the fast extra) and the paper's "
+                "matching settings (corresponding, distance, no fallback/floor)"
+            )
     angle = undirected_angle_difference(
         segment_angles(predicted.segments)[:, None], segment_angles(view.segments)[None, :]
     )

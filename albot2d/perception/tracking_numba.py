@@ -41,8 +41,9 @@ def match_kernel(pseg, pocc, vseg, vocc, cand, pang, vang, max_angle, max_dist):
             dist = np.inf
             for e in range(2):
                 if not pocc[i, e] and not vocc[j, e]:
-                    h = np.hypot(pseg[i, 2 * e] - vseg[j, 2 * e],
-                                 pseg[i, 2 * e + 1] - vseg[j, 2 * e + 1])
+                    h = np.hypot(
+                        pseg[i, 2 * e] - vseg[j, 2 * e], pseg[i, 2 * e + 1] - vseg[j, 2 * e + 1]
+                    )
                     if h < dist:
                         dist = h
             if not dist < max_dist:

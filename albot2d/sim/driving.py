@@ -42,7 +42,12 @@ from albot2d.sim.odometry import StepKind
 from albot2d.validation import check_finite, check_non_negative, check_positive, check_positive_int
 
 __all__ = [
-    "PROFILES", "DrivingProfile", "Step", "TourController", "get_profile", "merge_straight",
+    "PROFILES",
+    "DrivingProfile",
+    "Step",
+    "TourController",
+    "get_profile",
+    "merge_straight",
 ]
 
 # Splitting tolerance: a turn of exactly k·turn_step (within float noise) takes k steps.
@@ -89,8 +94,15 @@ class DrivingProfile:
     merge_offset_m: float = 0.0
 
     def __post_init__(self) -> None:
-        check_positive(self, "move_step_m", "turn_step_deg", "speed_m_s", "turn_rate_deg_s",
-                       "heading_tolerance_deg", "waypoint_tolerance_m")
+        check_positive(
+            self,
+            "move_step_m",
+            "turn_step_deg",
+            "speed_m_s",
+            "turn_rate_deg_s",
+            "heading_tolerance_deg",
+            "waypoint_tolerance_m",
+        )
         check_non_negative(self, "stop_pause_s", "turn_view_min_deg", "merge_offset_m")
         check_finite(self, "induced_step_m")
         check_finite(self, "induced_step_deg")
@@ -113,16 +125,27 @@ _DATASET1 = DrivingProfile("dataset1", move_step_m=0.10, turn_step_deg=1.0)
 PROFILES: dict[str, DrivingProfile] = {
     "dataset1": _DATASET1,
     "dataset2": dataclasses.replace(
-        _DATASET1, name="dataset2", induced_step_m=0.10, induced_step_deg=1.0,
+        _DATASET1,
+        name="dataset2",
+        induced_step_m=0.10,
+        induced_step_deg=1.0,
         induced_along_motion=True,
     ),
     "dataset3": DrivingProfile("dataset3", move_step_m=1.0, turn_step_deg=10.0),
     "start_stop": DrivingProfile(
-        "start_stop", move_step_m=3.0, turn_step_deg=60.0, view_after_turn=True,
-        stop_pause_s=1.0, turn_view_min_deg=10.0, merge_offset_m=0.05,
+        "start_stop",
+        move_step_m=3.0,
+        turn_step_deg=60.0,
+        view_after_turn=True,
+        stop_pause_s=1.0,
+        turn_view_min_deg=10.0,
+        merge_offset_m=0.05,
     ),
     "start_stop_v1": DrivingProfile(
-        "start_stop_v1", move_step_m=3.0, turn_step_deg=180.0, view_after_turn=False,
+        "start_stop_v1",
+        move_step_m=3.0,
+        turn_step_deg=180.0,
+        view_after_turn=False,
         stop_pause_s=1.0,
     ),
 }
@@ -154,8 +177,9 @@ def merge_straight(waypoints: np.ndarray, max_offset_m: float) -> np.ndarray:
     anchor = 0
     j = 1
     while j < len(waypoints) - 1:
-        if _within(waypoints[anchor], waypoints[j + 1], waypoints[anchor + 1 : j + 1],
-                   max_offset_m):
+        if _within(
+            waypoints[anchor], waypoints[j + 1], waypoints[anchor + 1 : j + 1], max_offset_m
+        ):
             j += 1
             continue
         kept.append(j)

@@ -100,8 +100,9 @@ class PhysicsParams:
         check_in_range(self, "step_s", MIN_STEP_S, MAX_STEP_S)
         check_in_range(self, "velocity_retained_per_s", 0.0, 1.0)
         check_in_range(self, "person_speed_jitter", 0.0, 0.99)
-        check_non_negative(self, "person_yield_distance_m", "person_max_sidestep_m",
-                           "person_patience_s")
+        check_non_negative(
+            self, "person_yield_distance_m", "person_max_sidestep_m", "person_patience_s"
+        )
         check_in_range(self, "person_clearance_m", 0.0, 1.0)
         check_positive(self, "push_overlap_limit_m")
         check_in_range(self, "contact_slop_m", 0.0, 0.01)
@@ -125,8 +126,14 @@ class _Walker:
     ``speed``, and the ``offset`` (world-frame metres) from its path point when it has
     stepped aside (a world vector, so it carries smoothly round the path's corners)."""
 
-    def __init__(self, index: int, obstacle: DynamicObstacle, body: pymunk.Body,
-                 rng: np.random.Generator, jitter: float) -> None:
+    def __init__(
+        self,
+        index: int,
+        obstacle: DynamicObstacle,
+        body: pymunk.Body,
+        rng: np.random.Generator,
+        jitter: float,
+    ) -> None:
         self.body = body
         self.rng = rng
         self.jitter = jitter
@@ -141,7 +148,8 @@ class _Walker:
         if not MIN_WALK_PATH_M <= self.total < math.inf:
             raise InputError(
                 f"dynamic_obstacles[{index}]: a walking person's path must be at least "
-                f"{MIN_WALK_PATH_M} m long (MIN_WALK_PATH_M) and finite, got {self.total:.3g} m")
+                f"{MIN_WALK_PATH_M} m long (MIN_WALK_PATH_M) and finite, got {self.total:.3g} m"
+            )
         self.s = self._project(obstacle.pose)
         self.direction = 1.0
         self.speed = self._leg_speed()
@@ -178,8 +186,12 @@ class _Walker:
         self.speed = self._leg_speed()
         self.waited_s = 0.0
 
-    def pose(self, s: float | None = None, direction: float | None = None,
-             offset: tuple[float, float] | None = None) -> tuple[float, float, float]:
+    def pose(
+        self,
+        s: float | None = None,
+        direction: float | None = None,
+        offset: tuple[float, float] | None = None,
+    ) -> tuple[float, float, float]:
         s = self.s if s is None else s
         direction = self.direction if direction is None else direction
         ox, oy = self.offset if offset is None else offset
@@ -196,16 +208,24 @@ class Dynamics:
     ``observer(robot_pose, poses)`` (optional) is called after every physics sub-step.
     """
 
-    def __init__(self, world: World, space: pymunk.Space, rng: np.random.Generator,
-                 params: PhysicsParams | None = None, *,
-                 observer: SubstepObserver | None = None) -> None:
+    def __init__(
+        self,
+        world: World,
+        space: pymunk.Space,
+        rng: np.random.Generator,
+        params: PhysicsParams | None = None,
+        *,
+        observer: SubstepObserver | None = None,
+    ) -> None:
         self.params = params if params is not None else PhysicsParams()
         self.space = space
         self.observer = observer
         count = len(world.dynamic_obstacles)
         if count > MAX_MOVING_OBSTACLES:
-            raise InputError(f"the world has {count} dynamic_obstacles; at most "
-                             f"{MAX_MOVING_OBSTACLES} are simulated (MAX_MOVING_OBSTACLES)")
+            raise InputError(
+                f"the world has {count} dynamic_obstacles; at most "
+                f"{MAX_MOVING_OBSTACLES} are simulated (MAX_MOVING_OBSTACLES)"
+            )
         space.damping = self.params.velocity_retained_per_s
         space.collision_slop = self.params.contact_slop_m
         bodies = obstacle_bodies(space)
@@ -226,8 +246,9 @@ class Dynamics:
                     shape.unsafe_set_radius(self.params.person_clearance_m)
             walks = obstacle.kind == "person" and obstacle.speed_m_s > 0.0
             if walks and len(obstacle.path) >= 2:
-                self._walkers.append(_Walker(index, obstacle, body, rng,
-                                             self.params.person_speed_jitter))
+                self._walkers.append(
+                    _Walker(index, obstacle, body, rng, self.params.person_speed_jitter)
+                )
         for walker in self._walkers:
             self._place(walker.body, *walker.pose())
 
@@ -362,8 +383,7 @@ class Dynamics:
             for side in (away, -away):
                 shifted = (ox - side * side_m * hy, oy + side * side_m * hx)
                 if math.hypot(*shifted) <= self.params.person_max_sidestep_m:
-                    candidates += [(s, direction, shifted),
-                                   (walker.s, walker.direction, shifted)]
+                    candidates += [(s, direction, shifted), (walker.s, walker.direction, shifted)]
         candidates += [(s, direction, (ox * shrink, oy * shrink)), (s, direction, (ox, oy))]
         distance = math.hypot(rx, ry)
         if gap_before < self.params.person_yield_distance_m and distance > 0.0:
@@ -375,8 +395,9 @@ class Dynamics:
             x, y, heading = walker.pose(cs, cd, offset)
             self._place(body, x, y, heading)
             off_path = offset != (0.0, 0.0)
-            if self._may_stand(body, robot, math.hypot(x - x0, y - y0), gap_before,
-                               depth_before, off_path):
+            if self._may_stand(
+                body, robot, math.hypot(x - x0, y - y0), gap_before, depth_before, off_path
+            ):
                 if cd == direction and cs == s:
                     walker.s, walker.direction, walker.speed = s, direction, speed
                 walker.offset = offset
@@ -385,9 +406,15 @@ class Dynamics:
         self._place(body, x0, y0, angle0)
         walker.waited_s += h
 
-    def _may_stand(self, body: pymunk.Body, robot: KinematicRobot, step_m: float,
-                   gap_before: float, depth_before: tuple[float, float],
-                   off_path: bool) -> bool:
+    def _may_stand(
+        self,
+        body: pymunk.Body,
+        robot: KinematicRobot,
+        step_m: float,
+        gap_before: float,
+        depth_before: tuple[float, float],
+        off_path: bool,
+    ) -> bool:
         """Whether a person just placed ``step_m`` from where it stood may be there.
 
         Its pymunk shapes are rounded by ``person_clearance_m``, so a gap ≥ 0 to them
@@ -450,7 +477,8 @@ class Dynamics:
             c, s = math.cos(body.angle), math.sin(body.angle)
             x, y = body.position
             pts = ring.reshape(-1, 2)
-            world_pts = np.column_stack([x + c * pts[:, 0] - s * pts[:, 1],
-                                         y + s * pts[:, 0] + c * pts[:, 1]])
+            world_pts = np.column_stack(
+                [x + c * pts[:, 0] - s * pts[:, 1], y + s * pts[:, 0] + c * pts[:, 1]]
+            )
             parts.append(world_pts.reshape(-1, 4))
         return np.vstack(parts)

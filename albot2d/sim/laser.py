@@ -182,9 +182,7 @@ class Laser:
         noise_backend: str = "auto",
     ) -> None:
         if noise_backend not in ("auto", "numpy", "numba"):
-            raise InputError(
-                f"noise_backend must be auto, numpy or numba, got {noise_backend!r}"
-            )
+            raise InputError(f"noise_backend must be auto, numpy or numba, got {noise_backend!r}")
         self.params = params if params is not None else LaserParams()
         self.noise = noise if noise is not None else LaserNoise()
         if isinstance(static_segments, RayCaster):

@@ -72,8 +72,12 @@ class OdometryNoise:
 
     def __post_init__(self) -> None:
         check_non_negative(self, "alpha1", "alpha2", "alpha3", "alpha4")
-        for name in ("distance_scale_error", "heading_drift_deg_per_m", "induced_step_m",
-                     "induced_step_deg"):
+        for name in (
+            "distance_scale_error",
+            "heading_drift_deg_per_m",
+            "induced_step_m",
+            "induced_step_deg",
+        ):
             check_finite(self, name)
         check_finite(self, "turn_scale_error")
         if self.turn_scale_error <= -1.0:
@@ -103,8 +107,9 @@ class OdometryNoise:
 
     @property
     def is_zero(self) -> bool:
-        return not (self.is_random or self.is_biased or self.induced_step_m
-                    or self.induced_step_deg)
+        return not (
+            self.is_random or self.is_biased or self.induced_step_m or self.induced_step_deg
+        )
 
 
 NOISE_PRESETS: dict[str, OdometryNoise] = {
@@ -113,16 +118,31 @@ NOISE_PRESETS: dict[str, OdometryNoise] = {
     # A round-number middle setting: a few percent of random error, a 2 % wheel base error
     # on turns and a small drift (no single source; "pioneer3dx" is the derived preset).
     "typical": OdometryNoise(
-        alpha1=0.05, alpha2=0.01, alpha3=0.03, alpha4=0.005,
-        distance_scale_error=0.01, heading_drift_deg_per_m=0.1, turn_scale_error=0.02,
+        alpha1=0.05,
+        alpha2=0.01,
+        alpha3=0.03,
+        alpha4=0.005,
+        distance_scale_error=0.01,
+        heading_drift_deg_per_m=0.1,
+        turn_scale_error=0.02,
     ),
     "high": OdometryNoise(
-        alpha1=0.1, alpha2=0.05, alpha3=0.1, alpha4=0.02,
-        distance_scale_error=0.03, heading_drift_deg_per_m=0.5, turn_scale_error=0.05,
+        alpha1=0.1,
+        alpha2=0.05,
+        alpha3=0.1,
+        alpha4=0.02,
+        distance_scale_error=0.03,
+        heading_drift_deg_per_m=0.5,
+        turn_scale_error=0.05,
     ),
     "pioneer3dx": OdometryNoise(
-        alpha1=0.01, alpha2=0.005, alpha3=0.01, alpha4=0.001,
-        distance_scale_error=0.01, heading_drift_deg_per_m=0.15, turn_scale_error=0.01,
+        alpha1=0.01,
+        alpha2=0.005,
+        alpha3=0.01,
+        alpha4=0.001,
+        distance_scale_error=0.01,
+        heading_drift_deg_per_m=0.15,
+        turn_scale_error=0.01,
     ),
 }
 """Odometry noise presets. ``none``/``low``/``typical``/``high`` are round numbers spanning
@@ -192,8 +212,12 @@ def _decompose(increment: Pose) -> tuple[float, float, float]:
     return rot1, trans, add_angle(increment.theta, -rot1)
 
 
-def perturb_increment(increment: Pose, noise: OdometryNoise, rng: np.random.Generator | None,
-                      kind: StepKind | None = None) -> Pose:
+def perturb_increment(
+    increment: Pose,
+    noise: OdometryNoise,
+    rng: np.random.Generator | None,
+    kind: StepKind | None = None,
+) -> Pose:
     """The increment odometry reports for the true ``increment`` (see the module docstring).
 
     ``rng`` is needed only when ``noise.is_random``; it then draws exactly three normals.
@@ -210,11 +234,13 @@ def perturb_increment(increment: Pose, noise: OdometryNoise, rng: np.random.Gene
         if rng is None:
             raise ValueError("perturb_increment: random odometry noise needs an rng")
         a_rot1, a_trans, a_rot2 = abs(rot1), abs(trans), abs(rot2)
-        std = np.array([
-            noise.alpha1 * a_rot1 + noise.alpha2 * a_trans,
-            noise.alpha3 * a_trans + noise.alpha4 * (a_rot1 + a_rot2),
-            noise.alpha1 * a_rot2 + noise.alpha2 * a_trans,
-        ])
+        std = np.array(
+            [
+                noise.alpha1 * a_rot1 + noise.alpha2 * a_trans,
+                noise.alpha3 * a_trans + noise.alpha4 * (a_rot1 + a_rot2),
+                noise.alpha1 * a_rot2 + noise.alpha2 * a_trans,
+            ]
+        )
         e_rot1, e_trans, e_rot2 = (rng.standard_normal(3) * std).tolist()
         rot1, trans, rot2 = rot1 + e_rot1, trans + e_trans, rot2 + e_rot2
     rot1 *= 1.0 + noise.turn_scale_error
@@ -229,8 +255,9 @@ def perturb_increment(increment: Pose, noise: OdometryNoise, rng: np.random.Gene
     return Pose(trans * math.cos(rot1), trans * math.sin(rot1), add_angle(rot1, rot2))
 
 
-def _induce_exact(increment: Pose, noise: OdometryNoise, induced_m: float,
-                  induced_rad: float) -> Pose:
+def _induce_exact(
+    increment: Pose, noise: OdometryNoise, induced_m: float, induced_rad: float
+) -> Pose:
     """Only the induced error: exact arithmetic for pure moves and turns."""
     if induced_m:
         x, y = increment.x, increment.y
@@ -266,8 +293,12 @@ class OdometryReading(NamedTuple):
 class Odometry:
     """Integrates reported increments: ``pose ← pose ⊕ reported`` from ``start``."""
 
-    def __init__(self, noise: OdometryNoise | None = None, rng: np.random.Generator | None = None,
-                 start: Pose | None = None) -> None:
+    def __init__(
+        self,
+        noise: OdometryNoise | None = None,
+        rng: np.random.Generator | None = None,
+        start: Pose | None = None,
+    ) -> None:
         self.noise = noise if noise is not None else OdometryNoise()
         if self.noise.is_random and rng is None:
             raise ValueError("Odometry: random noise needs an rng")

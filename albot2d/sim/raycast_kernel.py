@@ -63,8 +63,9 @@ class BeamFan:
             order=order,
             mid_rad=mid,
             half_span_rad=half,
-            ext_rel=readonly(np.concatenate([centred - _TWO_PI, centred, centred + _TWO_PI]),
-                             copy=False),
+            ext_rel=readonly(
+                np.concatenate([centred - _TWO_PI, centred, centred + _TWO_PI]), copy=False
+            ),
             ext_dir=readonly(np.concatenate([directions, directions, directions]), copy=False),
         )
 

@@ -95,8 +95,9 @@ def _arc_increment(v: float, omega: float, h: float) -> Pose:
 class KinematicRobot:
     """A disc robot on a pymunk space. Create one per space; it adds its own body and shape."""
 
-    def __init__(self, space: pymunk.Space, params: RobotParams | None = None,
-                 pose: Pose | None = None) -> None:
+    def __init__(
+        self, space: pymunk.Space, params: RobotParams | None = None, pose: Pose | None = None
+    ) -> None:
         self.params = params if params is not None else RobotParams()
         self.space = space
         self.body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
@@ -201,8 +202,13 @@ class KinematicRobot:
         self.sync_body()
         return MoveResult(self._pose, 0.0, angle, False, increment)
 
-    def move(self, distance_m: float, *, substeps: int = 1,
-             on_substep: Callable[[Pose, Pose], None] | None = None) -> MoveResult:
+    def move(
+        self,
+        distance_m: float,
+        *,
+        substeps: int = 1,
+        on_substep: Callable[[Pose, Pose], None] | None = None,
+    ) -> MoveResult:
         """Drive straight by ``distance_m`` (negative: backwards), stopping at contact.
 
         With ``substeps`` > 1 the move is made in that many equal parts and
@@ -255,8 +261,13 @@ class KinematicRobot:
         """The paper's linear motion: turn ``angle_rad`` then move ``distance_m``."""
         turned = self.turn(angle_rad)
         moved = self.move(distance_m)
-        return MoveResult(moved.pose, moved.distance_m, turned.turned_rad, moved.collided,
-                          turned.increment.compose(moved.increment))
+        return MoveResult(
+            moved.pose,
+            moved.distance_m,
+            turned.turned_rad,
+            moved.collided,
+            turned.increment.compose(moved.increment),
+        )
 
     def drive(self, v_m_s: float, omega_rad_s: float, dt_s: float) -> MoveResult:
         """Follow the unicycle arc of constant (v, ω) for ``dt_s`` seconds in collision-checked
@@ -288,8 +299,9 @@ class KinematicRobot:
         increment = total if total is not None else Pose()
         return MoveResult(self._pose, distance, turned, collided, increment)
 
-    def _slide(self, anchor: Pose, before: Pose | None, increment: Pose
-               ) -> tuple[Pose, float, Pose]:
+    def _slide(
+        self, anchor: Pose, before: Pose | None, increment: Pose
+    ) -> tuple[Pose, float, Pose]:
         """Move along the straight chord from the current pose (``anchor ⊕ before``) to
         ``anchor ⊕ before ⊕ increment``, stopping short of contact.
 

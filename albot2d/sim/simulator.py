@@ -95,15 +95,17 @@ class Simulator:
         controller = TourController(waypoints, prof)
         return self._run(controller, prof, start if start is not None else self.world.start)
 
-    def _run(self, controller: TourController, profile: DrivingProfile,
-             start: Pose) -> Iterator[Frame]:
+    def _run(
+        self, controller: TourController, profile: DrivingProfile, start: Pose
+    ) -> Iterator[Frame]:
         laser_rng = make_rng(self._seeds["laser"])
         odometry_rng = make_rng(self._seeds["odometry"])
         obstacle_rng = make_rng(self._seeds["dynamic_obstacles"])
         space = build_space(self.world)
         robot = KinematicRobot(space, self.robot_params, start)
-        dynamics = Dynamics(self.world, space, obstacle_rng, self.physics,
-                            observer=self.physics_observer)
+        dynamics = Dynamics(
+            self.world, space, obstacle_rng, self.physics, observer=self.physics_observer
+        )
         noise = dataclasses.replace(
             self.odometry_noise,
             induced_step_m=self.odometry_noise.induced_step_m + profile.induced_step_m,
@@ -117,9 +119,16 @@ class Simulator:
         def frame(index: int, t: float, increment: Pose, collided: bool) -> Frame:
             extra = dynamics.outlines() if dynamics.active else None
             scan = self._laser.scan(robot.pose, laser_rng, timestamp=t, extra_segments=extra)
-            return Frame(index=index, timestamp=t, scan=scan, odom_pose=odometry.pose,
-                         odom_increment=increment, true_pose=robot.pose, collided=collided,
-                         obstacle_poses=dynamics.poses() if dynamics.active else None)
+            return Frame(
+                index=index,
+                timestamp=t,
+                scan=scan,
+                odom_pose=odometry.pose,
+                odom_increment=increment,
+                true_pose=robot.pose,
+                collided=collided,
+                obstacle_poses=dynamics.poses() if dynamics.active else None,
+            )
 
         t = 0.0
         index = 0
@@ -145,8 +154,9 @@ class Simulator:
             yield frame(index + 1, t, pending, collided)
 
     @staticmethod
-    def _execute(step: Step, duration: float, robot: KinematicRobot,
-                 dynamics: Dynamics) -> MoveResult:
+    def _execute(
+        step: Step, duration: float, robot: KinematicRobot, dynamics: Dynamics
+    ) -> MoveResult:
         """Run one step on the true robot while moving obstacles move for ``duration``."""
         if step.kind == "turn":
             result = robot.turn(step.amount)

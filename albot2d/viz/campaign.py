@@ -32,16 +32,27 @@ PANELS = (
     ("homing: worst distance error per episode", "homing_distance_error_max_m", None, "m"),
     ("RPE rotation (mean per episode)", "rpe_rot_deg", "odometry_rpe_rot_deg", "deg"),
     ("RPE translation (mean per episode)", "rpe_trans_m", "odometry_rpe_trans_m", "m"),
-    ("worst heading error per episode", "heading_error_max_deg", "odometry_heading_error_max_deg",
-     "deg"),
-    ("mean heading error per episode", "heading_error_mean_deg",
-     "odometry_heading_error_mean_deg", "deg"),
+    (
+        "worst heading error per episode",
+        "heading_error_max_deg",
+        "odometry_heading_error_max_deg",
+        "deg",
+    ),
+    (
+        "mean heading error per episode",
+        "heading_error_mean_deg",
+        "odometry_heading_error_mean_deg",
+        "deg",
+    ),
 )
 
 
 def _values(records: Sequence[Mapping[str, Any]], name: str) -> np.ndarray:
-    out = [r["metrics"][name] for r in records
-           if isinstance(r.get("metrics", {}).get(name), int | float)]
+    out = [
+        r["metrics"][name]
+        for r in records
+        if isinstance(r.get("metrics", {}).get(name), int | float)
+    ]
     return np.asarray(out, dtype=np.float64)
 
 
@@ -68,12 +79,21 @@ def plot_campaign_histograms(
         top = max(float(v.max()) for _, v, _ in present)
         bins = np.linspace(0.0, top if top > 0 else 1.0, BINS + 1)
         for label, values, color in present:
-            ax.hist(values, bins=bins, color=color, alpha=0.6,
-                    label=f"{label} (median {np.median(values):.3g})")
+            ax.hist(
+                values,
+                bins=bins,
+                color=color,
+                alpha=0.6,
+                label=f"{label} (median {np.median(values):.3g})",
+            )
         ax.set_ylabel("episodes")
         cmp = comparison.get(mine) if odometry is not None else None
-        summary = (f"{mapper}: better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']},"
-                 f"\ntied in {cmp['ties']} of {cmp['episodes']} episodes" if cmp else None)
+        summary = (
+            f"{mapper}: better in {cmp['mapper_better']}, worse in {cmp['mapper_worse']},"
+            f"\ntied in {cmp['ties']} of {cmp['episodes']} episodes"
+            if cmp
+            else None
+        )
         ax.legend(fontsize=8, title=summary, title_fontsize=8)
     fig.suptitle(f"fuzzing campaign: {len(records)} episodes, {mapper}")
     return fig

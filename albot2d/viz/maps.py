@@ -92,8 +92,11 @@ def _draw_world(ax: Axes, world: World | None) -> None:
     from matplotlib.collections import LineCollection
 
     if world is not None and len(world.obstacle_segments):
-        ax.add_collection(LineCollection(line_segments(world.obstacle_segments),
-                                         colors=WORLD_COLOR, linewidths=0.8, zorder=1))
+        ax.add_collection(
+            LineCollection(
+                line_segments(world.obstacle_segments), colors=WORLD_COLOR, linewidths=0.8, zorder=1
+            )
+        )
 
 
 def plot_map(
@@ -122,8 +125,9 @@ def plot_map(
         ax = new_figure(PANEL_IN * 1.6, PANEL_IN * 1.6).add_subplot()
     _draw_world(ax, world)
     segs = anchor_segments(start_pose, np.asarray(segments, np.float64).reshape(-1, 4))
-    lines = LineCollection(line_segments(segs), linewidths=1.6, cmap=MAP_CMAP, zorder=3,
-                           label=MAP_SURFACES_LABEL)
+    lines = LineCollection(
+        line_segments(segs), linewidths=1.6, cmap=MAP_CMAP, zorder=3, label=MAP_SURFACES_LABEL
+    )
     if map_ids is not None and len(segs):
         lines.set_array(np.asarray(map_ids, dtype=np.float64))
         lo, hi = id_range if id_range is not None else (int(np.min(map_ids)), int(np.max(map_ids)))
@@ -135,15 +139,23 @@ def plot_map(
     if world is not None and len(world.obstacle_segments):
         ax.plot([], [], "-", color=WORLD_COLOR, lw=0.8, label="true walls")
     if true_path is not None and len(true_path):
-        ax.plot(*true_path[:, :2].T, "-", color=TRUE_PATH_COLOR, lw=0.8, alpha=0.5, zorder=2,
-                label="true path")
+        ax.plot(
+            *true_path[:, :2].T,
+            "-",
+            color=TRUE_PATH_COLOR,
+            lw=0.8,
+            alpha=0.5,
+            zorder=2,
+            label="true path",
+        )
         parts.append(true_path[:, :2])
     if est_path is not None and len(est_path):
         from albot2d.viz.paths import draw_direction_arrows
 
         path = anchor_path(start_pose, np.asarray(est_path, np.float64).reshape(-1, 3))
-        ax.plot(*path[:, :2].T, "-", color=EST_PATH_COLOR, lw=1.0, zorder=4,
-                label="estimated path (→)")
+        ax.plot(
+            *path[:, :2].T, "-", color=EST_PATH_COLOR, lw=1.0, zorder=4, label="estimated path (→)"
+        )
         draw_direction_arrows(ax, path, color=EST_PATH_COLOR, count=8, size=9.0, zorder=4)
         ax.plot(*path[0, :2], "*", color=START_COLOR, ms=12, zorder=5, label="start")
         ax.plot(*path[-1, :2], "o", color=EST_PATH_COLOR, ms=6, zorder=5, label="robot")
@@ -161,8 +173,11 @@ def map_surfaces(ax: Axes) -> LineCollection:
     """The surfaces' LineCollection that ``plot_map`` drew last on ``ax``."""
     from matplotlib.collections import LineCollection
 
-    drawn = [c for c in ax.collections
-             if isinstance(c, LineCollection) and c.get_label() == MAP_SURFACES_LABEL]
+    drawn = [
+        c
+        for c in ax.collections
+        if isinstance(c, LineCollection) and c.get_label() == MAP_SURFACES_LABEL
+    ]
     if not drawn:
         raise ValueError("ax: plot_map has not drawn a map on these axes")
     return drawn[-1]
@@ -189,8 +204,9 @@ def plot_route(
     poses = anchor_path(start_pose, route.compose_chain()) if len(route) else np.zeros((0, 3))
     views = [transform_segments(p, m.view.segments) for p, m in zip(poses, route, strict=True)]
     segs = np.vstack(views) if views else np.zeros((0, 4))
-    ax.add_collection(LineCollection(line_segments(segs), colors=VIEW_COLOR, linewidths=0.5,
-                                     alpha=0.5, zorder=2))
+    ax.add_collection(
+        LineCollection(line_segments(segs), colors=VIEW_COLOR, linewidths=0.5, alpha=0.5, zorder=2)
+    )
     if true_path is not None and len(true_path):
         ax.plot(*true_path[:, :2].T, "-", color=TRUE_PATH_COLOR, lw=0.8, alpha=0.4, zorder=2)
     handles = []
@@ -201,8 +217,16 @@ def plot_route(
             sel = methods == method
             if sel.any():
                 ax.plot(*poses[sel, :2].T, "o", color=color, ms=3, zorder=4)
-                handles.append(Line2D([], [], color=color, marker="o", ls="",
-                                      label=f"{method.replace('_', ' ')} ({int(sel.sum())})"))
+                handles.append(
+                    Line2D(
+                        [],
+                        [],
+                        color=color,
+                        marker="o",
+                        ls="",
+                        label=f"{method.replace('_', ' ')} ({int(sel.sum())})",
+                    )
+                )
     if len(poses):
         ax.plot(*poses[0, :2], "*", color=START_COLOR, ms=12, zorder=5)
     handles.append(Line2D([], [], color=VIEW_COLOR, lw=1, label="remembered views' surfaces"))

@@ -38,8 +38,9 @@ _REGION_COLOURS = {"corridor": "tab:blue", "hall": "tab:orange", "room": "tab:gr
 _METHOD_COLOURS = {"triangulation": "tab:blue", "path_integration": "tab:red", "": "0.5"}
 
 
-def _panels(fig: Figure | None, n: int, ncols: int | None = None,
-            size: float = 4.5) -> tuple[Figure, list[Axes]]:
+def _panels(
+    fig: Figure | None, n: int, ncols: int | None = None, size: float = 4.5
+) -> tuple[Figure, list[Axes]]:
     """``n`` panels on ``fig`` (a new figure of ``size``-inch panels when None)."""
     ncols = ncols or n
     nrows = int(np.ceil(n / ncols))

@@ -52,9 +52,21 @@ def draw_direction_arrows(
     for head, tail in zip(heads, tails, strict=True):
         if np.allclose(head, tail):
             continue
-        ax.annotate("", xy=tuple(head), xytext=tuple(tail), zorder=zorder, annotation_clip=True,
-                    arrowprops={"arrowstyle": "-|>", "color": color, "lw": 0.0,
-                                "mutation_scale": size, "shrinkA": 0.0, "shrinkB": 0.0})
+        ax.annotate(
+            "",
+            xy=tuple(head),
+            xytext=tuple(tail),
+            zorder=zorder,
+            annotation_clip=True,
+            arrowprops={
+                "arrowstyle": "-|>",
+                "color": color,
+                "lw": 0.0,
+                "mutation_scale": size,
+                "shrinkA": 0.0,
+                "shrinkB": 0.0,
+            },
+        )
 
 
 def plot_paths(
@@ -83,10 +95,19 @@ def plot_paths(
         ax.plot(*odom_xy.T, "--", color=ODOM_PATH_COLOR, lw=1.2, zorder=7)
         ax.plot(*odom_xy[-1], "o", color=ODOM_PATH_COLOR, ms=5, zorder=7)
         draw_direction_arrows(ax, odom_xy, color=ODOM_PATH_COLOR)
-    handles.append(Line2D([], [], color=TRUE_PATH_COLOR, lw=1.4, marker=">",
-                          label="true path (→ direction, ● end)"))
-    handles.append(Line2D([], [], color=ODOM_PATH_COLOR, lw=1.2, ls="--", marker=">",
-                          label="odometry"))
+    handles.append(
+        Line2D(
+            [],
+            [],
+            color=TRUE_PATH_COLOR,
+            lw=1.4,
+            marker=">",
+            label="true path (→ direction, ● end)",
+        )
+    )
+    handles.append(
+        Line2D([], [], color=ODOM_PATH_COLOR, lw=1.2, ls="--", marker=">", label="odometry")
+    )
     if collided is not None and len(true_xy):
         hits = true_xy[np.asarray(collided, dtype=bool)]
         if len(hits):

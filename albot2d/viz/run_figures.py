@@ -64,9 +64,7 @@ PAPER_BEARING_DEG = 7.0
 PAPER_DISTANCE_M = 3.0
 
 
-def plot_homing(
-    mappers: Mapping[str, Mapping[str, Any]], *, fig: Figure | None = None
-) -> Figure:
+def plot_homing(mappers: Mapping[str, Mapping[str, Any]], *, fig: Figure | None = None) -> Figure:
     """Homing at each stop against odometer distance: errors when the truth is known
     (with the paper's ±7° / ±3 m band), else each mapper's estimates. Two panels on
     ``fig`` (a new figure when None); returns the figure."""
@@ -79,8 +77,14 @@ def plot_homing(
         keys = ("bearing_error_deg", "distance_error_m")
         labels = ("bearing error to start (deg, + = too far left)", "distance error to start (m)")
         for ax, band, unit in ((ax_b, PAPER_BEARING_DEG, "°"), (ax_d, PAPER_DISTANCE_M, " m")):
-            ax.axhspan(-band, band, color="#c8e6c9", alpha=0.6, zorder=0,
-                       label=f"paper's Albot₁ (±{band:g}{unit})")
+            ax.axhspan(
+                -band,
+                band,
+                color="#c8e6c9",
+                alpha=0.6,
+                zorder=0,
+                label=f"paper's Albot₁ (±{band:g}{unit})",
+            )
             ax.axhline(0.0, color="#616161", lw=0.8)
     else:
         keys = ("bearing_est_deg", "distance_est_m")
@@ -99,9 +103,11 @@ def plot_homing(
             ax.legend(fontsize=8)
     if not any(entries.values()):
         ax_b.set_title("no homing stops (the run never got far from its start)", fontsize=10)
-    fig.suptitle("Orientation to the start at each stop: error against the truth (paper Table 1)"
-                 if with_truth else
-                 "Orientation to the start at each stop: estimates (no ground truth)")
+    fig.suptitle(
+        "Orientation to the start at each stop: error against the truth (paper Table 1)"
+        if with_truth
+        else "Orientation to the start at each stop: estimates (no ground truth)"
+    )
     return fig
 
 
@@ -120,8 +126,9 @@ def plot_estimated_paths(result: ExperimentResult, *, ax: Axes | None = None) ->
     odom = between_arrays(trace.odom_poses[0], trace.odom_poses)
     # Odometry is drawn wide and light underneath: a mapper that follows it (naive
     # integration does exactly) is drawn on top and said to be identical.
-    ax.plot(*odom[:, :2].T, "-", color=ODOM_COLOR, lw=4.0, alpha=0.6, zorder=2,
-            label="raw odometry")
+    ax.plot(
+        *odom[:, :2].T, "-", color=ODOM_COLOR, lw=4.0, alpha=0.6, zorder=2, label="raw odometry"
+    )
     parts = [odom[:, :2]]
     tab10 = colormaps["tab10"]  # 10 listed colours: tab10(k) is the k-th
     styles = ["-", "--", "-.", ":"]
@@ -129,8 +136,14 @@ def plot_estimated_paths(result: ExperimentResult, *, ax: Axes | None = None) ->
         est = np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3)
         same = est.shape == odom.shape and np.allclose(est[:, :2], odom[:, :2], atol=1e-6)
         color = tab10(k % tab10.N)
-        ax.plot(*est[:, :2].T, styles[k % len(styles)], color=color, lw=1.2, zorder=3 + k,
-                label=f"{name} (= odometry)" if same else name)
+        ax.plot(
+            *est[:, :2].T,
+            styles[k % len(styles)],
+            color=color,
+            lw=1.2,
+            zorder=3 + k,
+            label=f"{name} (= odometry)" if same else name,
+        )
         draw_direction_arrows(ax, est, color=color, count=8, size=9.0, zorder=3 + k)
         parts.append(est[:, :2])
     ax.plot(0.0, 0.0, "*", color=START_COLOR, ms=12, zorder=10, label="start")
@@ -138,8 +151,7 @@ def plot_estimated_paths(result: ExperimentResult, *, ax: Axes | None = None) ->
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.legend(fontsize=8, loc="best", framealpha=0.8)
-    ax.set_title(f"{result.title}\nestimated paths (→ direction; first pose's frame)",
-                 fontsize=10)
+    ax.set_title(f"{result.title}\nestimated paths (→ direction; first pose's frame)", fontsize=10)
     return ax
 
 
@@ -157,9 +169,15 @@ def _panel_size(result: ExperimentResult, extent: Extent | None) -> tuple[float,
     return PANEL_IN, PANEL_IN * aspect + 0.6
 
 
-def _map_panel(ax: Axes, result: ExperimentResult, name: str, row: int | None = None,
-               update: int | None = None, extent: Extent | None = None,
-               title: str | None = None) -> LineCollection:
+def _map_panel(
+    ax: Axes,
+    result: ExperimentResult,
+    name: str,
+    row: int | None = None,
+    update: int | None = None,
+    extent: Extent | None = None,
+    title: str | None = None,
+) -> LineCollection:
     trace = result.trace
     mapper = trace.mappers[name]
     if update is None:
@@ -174,8 +192,17 @@ def _map_panel(ax: Axes, result: ExperimentResult, name: str, row: int | None = 
     true_path = None if trace.true_poses is None else trace.true_poses[:end]
     n_maps = len(np.unique(snap.map_ids))
     default = f"{name}: {len(snap.segments)} surfaces from {n_maps} views"
-    plot_map(snap.segments, map_ids=snap.map_ids, ax=ax, world=result.world, start_pose=start,
-             est_path=est, true_path=true_path, extent=extent, title=title or default)
+    plot_map(
+        snap.segments,
+        map_ids=snap.map_ids,
+        ax=ax,
+        world=result.world,
+        start_pose=start,
+        est_path=est,
+        true_path=true_path,
+        extent=extent,
+        title=title or default,
+    )
     return map_surfaces(ax)
 
 
@@ -184,13 +211,22 @@ def _paths_panel(ax: Axes, result: ExperimentResult, extent: Extent | None) -> N
     if result.world is not None and trace.true_poses is not None:
         from albot2d.viz.paths import plot_paths
 
-        plot_paths(result.world, true_xy=trace.true_poses, odom_xy=trace.odom_poses,
-                   collided=trace.collided, ax=ax)
+        plot_paths(
+            result.world,
+            true_xy=trace.true_poses,
+            odom_xy=trace.odom_poses,
+            collided=trace.collided,
+            ax=ax,
+        )
         legend = ax.get_legend()
         assert legend is not None  # plot_paths always draws one
-        keep = [h for h in legend.legend_handles
-                if h is not None and str(h.get_label()) in (
-                    "walls", "true path (→ direction, ● end)", "odometry", "collision", "start")]
+        keep = [
+            h
+            for h in legend.legend_handles
+            if h is not None
+            and str(h.get_label())
+            in ("walls", "true path (→ direction, ● end)", "odometry", "collision", "start")
+        ]
         legend.remove()
         ax.legend(handles=keep, loc="upper right", fontsize=7, framealpha=0.8)
         ax.set_title("world, true path and odometry", fontsize=10)
@@ -214,8 +250,10 @@ def mapper_extent(result: ExperimentResult, name: str) -> Extent | None:
         # Every remembered view, so the history panels (earlier maps) fit too.
         chain = anchor_path(start, route.compose_chain())
         parts.append(chain[:, :2])
-        parts += [transform_segments(p, m.view.segments).reshape(-1, 2)
-                  for p, m in zip(chain, route, strict=True)]
+        parts += [
+            transform_segments(p, m.view.segments).reshape(-1, 2)
+            for p, m in zip(chain, route, strict=True)
+        ]
     if trace.true_poses is not None:
         parts.append(trace.true_poses[:, :2])
     if result.world is not None:
@@ -281,8 +319,11 @@ def plot_errors_vs_distance(result: ExperimentResult, *, fig: Figure | None = No
     for ax in (ax_h, ax_p):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="upper left")
-    fig.suptitle(f"{result.title}\nerror of each pose estimate against the truth (every "
-                 "trajectory starts at the true start pose, no alignment)", fontsize=9)
+    fig.suptitle(
+        f"{result.title}\nerror of each pose estimate against the truth (every "
+        "trajectory starts at the true start pose, no alignment)",
+        fontsize=9,
+    )
     return fig
 
 
@@ -297,9 +338,13 @@ def render_experiment_figures(
     if result.world is not None and trace.true_poses is not None:
         from albot2d.viz.paths import render_paths_png
 
-        out["paths.png"] = render_paths_png(result.world, true_xy=trace.true_poses,
-                                            odom_xy=trace.odom_poses, collided=trace.collided,
-                                            title=result.title)
+        out["paths.png"] = render_paths_png(
+            result.world,
+            true_xy=trace.true_poses,
+            odom_xy=trace.odom_poses,
+            collided=trace.collided,
+            title=result.title,
+        )
     else:
         fig = new_figure(8.0, 7.0)
         plot_estimated_paths(result, ax=fig.subplots())
@@ -315,7 +360,7 @@ def render_experiment_figures(
     for ax, name in zip(axes[1:], names, strict=False):
         _colorbar(fig, _map_panel(ax, result, name, extent=extent), ax)
         ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
-    for ax in axes[len(names) + 1:]:
+    for ax in axes[len(names) + 1 :]:
         ax.set_visible(False)
     fig.suptitle(result.title)
     out["maps.png"] = png_bytes(fig, dpi)
@@ -339,22 +384,30 @@ def render_experiment_figures(
         axes = np.atleast_1d(fig.subplots(rows, cols)).ravel()
         id_range = (0, max(len(route) - 1, 1))
         for ax, snap in zip(axes, snaps, strict=False):
-            title = (f"view {snap['view']} ({snap['travelled_m']:.0f} m): {snap['surfaces']} "
-                     f"surfaces, {snap['update']} views remembered")
-            lines = _map_panel(ax, result, name, row=snap["row"], update=snap["update"],
-                               extent=ext, title=title)
+            title = (
+                f"view {snap['view']} ({snap['travelled_m']:.0f} m): {snap['surfaces']} "
+                f"surfaces, {snap['update']} views remembered"
+            )
+            lines = _map_panel(
+                ax, result, name, row=snap["row"], update=snap["update"], extent=ext, title=title
+            )
             lines.set_clim(*id_range)
             _colorbar(fig, lines, ax)
             ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
-        for ax in axes[len(snaps):]:
+        for ax in axes[len(snaps) :]:
             ax.set_visible(False)
         fig.suptitle(f"{name}'s global map as it evolves (transient: old parts are deleted)")
         out[f"{name}_history.png"] = png_bytes(fig, dpi)
         fig = new_figure(pw * 1.6, ph * 1.6)
         start = None if trace.true_poses is None else trace.true_poses[0]
-        plot_route(route, ax=fig.subplots(), world=result.world, start_pose=start,
-                   true_path=trace.true_poses,
-                   title=f"{name}'s route map: {len(route)} remembered views of {trace.n_frames}")
+        plot_route(
+            route,
+            ax=fig.subplots(),
+            world=result.world,
+            start_pose=start,
+            true_path=trace.true_poses,
+            title=f"{name}'s route map: {len(route)} remembered views of {trace.n_frames}",
+        )
         out[f"{name}_route.png"] = png_bytes(fig, dpi)
     fig = plot_homing(result.report["mappers"], fig=new_figure(11.0, 4.5))
     out["homing.png"] = png_bytes(fig, dpi)

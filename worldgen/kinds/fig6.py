@@ -253,8 +253,9 @@ def _room_visit(
         else:
             continue
         middle = abs(0.5 * (room[0] + room[2]) - cx)
-        choices.append((abs(abs(cy - sy) - _ROOM_DOOR_FROM_S_M), float(cx), float(cy), inward,
-                        float(middle)))
+        choices.append(
+            (abs(abs(cy - sy) - _ROOM_DOOR_FROM_S_M), float(cx), float(cy), inward, float(middle))
+        )
     if not choices:
         return None
     free = shapely.difference(shapely.union_all(floor), shapely.union_all(clutter))

@@ -93,8 +93,10 @@ def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str
     share = sum(more) / len(more) if more else None
     ours["path_integrations_more_with_dataset2_share"] = share
     checks.append(share is not None and share > 0.5)
-    causes = {d: _pi_causes(jobs[run], _PI_MARK, seeds)
-              for d, run in (("dataset1", "fig6_dataset1"), ("dataset2", "fig6_dataset2"))}
+    causes = {
+        d: _pi_causes(jobs[run], _PI_MARK, seeds)
+        for d, run in (("dataset1", "fig6_dataset1"), ("dataset2", "fig6_dataset2"))
+    }
     ours["path_integration_causes"] = causes
     same = [a["marks"].get(_PI_MARK, {}).get("true_path_sha256") is not None
             and a["marks"][_PI_MARK]["true_path_sha256"]

@@ -226,9 +226,7 @@ def run_job(
     trace = result.trace
     truth, world = trace.true_poses, result.world
     assert truth is not None and world is not None  # the paper's runs are all simulated
-    end = _snapshot(
-        state["mappers"], truth[-1], state["travelled"], int(trace.frame_indices[-1])
-    )
+    end = _snapshot(state["mappers"], truth[-1], state["travelled"], int(trace.frame_indices[-1]))
     last_waypoint = _last_waypoint(world, run)
     for mark in run.marks:
         # The end; a --quick run cut short: the marks it never reached are taken at its
@@ -244,8 +242,10 @@ def run_job(
     for name in mappers:
         poses = trajectory_of(name, made[name], trace.n_frames)
         end_error = end_pose_error(trace, poses)
-        results[name] = {"counts": counts_section(trace, made[name]).to_dict(),
-                         "end_pose_error": None if end_error is None else end_error.to_dict()}
+        results[name] = {
+            "counts": counts_section(trace, made[name]).to_dict(),
+            "end_pose_error": None if end_error is None else end_error.to_dict(),
+        }
     homing = homing_section(trace, "albot1")
     revisits = revisits_section(albot1, REVISIT_GAP_MAPS)
     results["albot1"] |= {
@@ -296,9 +296,7 @@ def run_job(
     x = ALBOT_X if albot_x else "naive"
     wanted = {mark: tuple(x if m == "x" else m for m in names)
               for mark, names in run.quality.items()}  # fmt: skip
-    summary["map_quality_at_marks"] = _quality_at_marks(
-        state["snaps"], wanted, world, truth[0]
-    )
+    summary["map_quality_at_marks"] = _quality_at_marks(state["snaps"], wanted, world, truth[0])
     if keep_figures:
         summary["figures"] = {
             "world_walls": np.asarray(world.walls),
