@@ -4,6 +4,7 @@ figure of a run drawn without a warning: tests/test_cli_run.py."""
 
 from __future__ import annotations
 
+import dataclasses
 import io
 from pathlib import Path
 
@@ -14,6 +15,7 @@ pytest.importorskip("matplotlib")
 
 from albot2d.evaluation import RunSpec, run_experiment
 from albot2d.evaluation.experiment import ExperimentResult
+from albot2d.evaluation.homing import HomingResult
 from albot2d.viz import error_curves, plot_errors_vs_distance, plot_estimated_paths, plot_homing
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -56,9 +58,21 @@ def test_replay_paths_show_odometry_under_naive_and_no_truth_title(
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert labels[:4] == ["raw odometry", "albot1", "naive (= odometry)", "truth"]
     assert len(ax.texts) >= 8  # direction arrows along the paths (annotations)
+
+    def without_truth(h: HomingResult) -> HomingResult:
+        return dataclasses.replace(h, bearing_true_deg=None, distance_true_m=None)
+
     no_truth = {
-        name: {"homing": [dict(e, bearing_error_deg=None) for e in m["homing"]]}
-        for name, m in result.report["mappers"].items()
+        name: [
+            dataclasses.replace(
+                stop,
+                homing=dataclasses.replace(
+                    stop.homing, bearing_true_deg=None, distance_true_m=None
+                ),
+            )
+            for stop in scores.homing
+        ]
+        for name, scores in result.scores.mappers.items()
     }
     fig = plot_homing(no_truth)
     assert "Table 1" not in fig.get_suptitle() and "no ground truth" in fig.get_suptitle()

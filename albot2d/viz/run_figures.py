@@ -1,6 +1,6 @@
 """The figures of an experiment (``albot2d run``/``replay``) (the optional ``viz`` extra).
 
-- ``plot_homing(mappers, *, fig=None) -> Figure``: homing errors (or, on real logs,
+- ``plot_homing(stops, *, fig=None) -> Figure``: homing errors (or, on real logs,
   estimates) at each stop; a figure-level composite (two panels).
 - ``plot_estimated_paths(result, *, ax=None) -> Axes``: raw odometry and every mapper's
   estimated path in the first pose's frame (logs without ground truth).
@@ -18,7 +18,7 @@ matplotlib is imported inside the functions; figures use the Agg canvas directly
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -46,6 +46,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from albot2d.evaluation.experiment import ExperimentResult
+    from albot2d.evaluation.results import HomingStop
 
 __all__ = [
     "error_curves",
@@ -64,14 +65,14 @@ PAPER_BEARING_DEG = 7.0
 PAPER_DISTANCE_M = 3.0
 
 
-def plot_homing(mappers: Mapping[str, Mapping[str, Any]], *, fig: Figure | None = None) -> Figure:
+def plot_homing(stops: Mapping[str, Sequence[HomingStop]], *, fig: Figure | None = None) -> Figure:
     """Homing at each stop against odometer distance: errors when the truth is known
     (with the paper's ±7° / ±3 m band), else each mapper's estimates. Two panels on
     ``fig`` (a new figure when None); returns the figure."""
     if fig is None:
         fig = new_figure(11.0, 4.5)
-    entries = {name: m["homing"] for name, m in mappers.items()}
-    with_truth = any(e and e[0]["bearing_error_deg"] is not None for e in entries.values())
+    entries = {name: list(rows) for name, rows in stops.items()}
+    with_truth = any(e and e[0].homing.bearing_error_deg is not None for e in entries.values())
     ax_b, ax_d = fig.subplots(1, 2)
     if with_truth:
         keys = ("bearing_error_deg", "distance_error_m")
@@ -92,9 +93,9 @@ def plot_homing(mappers: Mapping[str, Mapping[str, Any]], *, fig: Figure | None 
     for name, rows in entries.items():
         if not rows:
             continue
-        x = [r["travelled_m"] for r in rows]
+        x = [r.travelled_m for r in rows]
         for ax, key in zip((ax_b, ax_d), keys, strict=True):
-            ax.plot(x, [r[key] for r in rows], "o-", ms=4, lw=1.2, label=name)
+            ax.plot(x, [getattr(r.homing, key) for r in rows], "o-", ms=4, lw=1.2, label=name)
     for ax, label in zip((ax_b, ax_d), labels, strict=True):
         ax.set_xlabel("distance travelled (odometer, m)")
         ax.set_ylabel(label)
@@ -378,18 +379,18 @@ def render_experiment_figures(
         route = route_of(trace.mappers[name])
         if route is None:
             continue
-        snaps = result.report["mappers"][name].get("snapshots") or []
+        snaps = result.scores.mappers[name].snapshots or ()
         rows, cols = _grid(len(snaps))
         fig = new_figure(pw * cols, ph * rows + 0.5)
         axes = np.atleast_1d(fig.subplots(rows, cols)).ravel()
         id_range = (0, max(len(route) - 1, 1))
         for ax, snap in zip(axes, snaps, strict=False):
             title = (
-                f"view {snap['view']} ({snap['travelled_m']:.0f} m): {snap['surfaces']} "
-                f"surfaces, {snap['update']} views remembered"
+                f"view {snap.view} ({snap.travelled_m:.0f} m): {snap.surfaces} "
+                f"surfaces, {snap.update} views remembered"
             )
             lines = _map_panel(
-                ax, result, name, row=snap["row"], update=snap["update"], extent=ext, title=title
+                ax, result, name, row=snap.row, update=snap.update, extent=ext, title=title
             )
             lines.set_clim(*id_range)
             _colorbar(fig, lines, ax)
@@ -409,6 +410,7 @@ def render_experiment_figures(
             title=f"{name}'s route map: {len(route)} remembered views of {trace.n_frames}",
         )
         out[f"{name}_route.png"] = png_bytes(fig, dpi)
-    fig = plot_homing(result.report["mappers"], fig=new_figure(11.0, 4.5))
+    homing = {name: scores.homing for name, scores in result.scores.mappers.items()}
+    fig = plot_homing(homing, fig=new_figure(11.0, 4.5))
     out["homing.png"] = png_bytes(fig, dpi)
     return out
