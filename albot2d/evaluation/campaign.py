@@ -43,6 +43,7 @@ import numpy as np
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
 from albot2d.evaluation.campaign_lock import CampaignLock
+from albot2d.evaluation.campaign_stream import EpisodeLog, read_episodes, scan_episodes
 from albot2d.evaluation.campaign_summary import summarise
 from albot2d.evaluation.episode import EpisodeOutcome, EpisodeSpec, crash_outcome, run_episode
 from albot2d.validation import check_at_most
@@ -68,7 +69,6 @@ HISTOGRAMS_NAME = "histograms.png"
 REPRODUCERS_DIR = "reproducers"
 _FORMAT = "albot2d-campaign"
 _FORMAT_VERSION = 1
-STATUSES = ("ok", "violation", "crash")
 
 
 # The longest tour an episode may drive (a 100 km tour takes hours per episode).
@@ -180,81 +180,6 @@ class CampaignInterrupted(KeyboardInterrupt):
         self.total = total
 
 
-def _scan_episodes(path: Path) -> tuple[list[tuple[int, dict[str, Any]]], int, int]:
-    """(line number, record) of every whole line, the byte length of the whole part and the
-    number of bytes after it (a damaged tail: a line cut off by a killed writer, or the
-    zero bytes a crash can leave at the end of a file). Anything else that is not an
-    episode record, or an episode twice, is an error naming the line."""
-    data = path.read_bytes()
-    # Whole lines end with a newline; a writer that was killed leaves at most a cut-off
-    # last line. Lines of zero bytes at the end are left by a crash of the machine.
-    keep = data.rfind(b"\n") + 1
-    while keep > 0:
-        previous = data.rfind(b"\n", 0, keep - 1) + 1
-        if data[previous:keep].strip(b"\x00\n"):
-            break
-        keep = previous
-    records: list[tuple[int, dict[str, Any]]] = []
-    lines_of: dict[int, int] = {}
-    for number, line in enumerate(data[:keep].split(b"\n")[:-1], start=1):
-        if not line.strip():
-            continue
-        try:
-            record = json.loads(line)
-        except ValueError:
-            record = None
-        index = record.get("episode") if isinstance(record, dict) else None
-        if (
-            not isinstance(index, int)
-            or isinstance(index, bool)
-            or index < 0
-            or record.get("status") not in STATUSES
-        ):
-            raise InputError(
-                f"{path}:{number}: not an episode record; the file is damaged "
-                "(move it away to start afresh)"
-            )
-        if index in lines_of:
-            raise InputError(
-                f"{path}:{number}: episode {index} again (first on line "
-                f"{lines_of[index]}); the file is damaged (two writers?)"
-            )
-        lines_of[index] = number
-        records.append((number, record))
-    return records, keep, len(data) - keep
-
-
-def read_episodes(path: str | os.PathLike[str]) -> tuple[dict[int, dict[str, Any]], int]:
-    """The episode records in an ``episodes.jsonl`` and the byte length of its whole part.
-
-    A damaged tail (a last line cut off by a killed writer) is left out, to be redone; a
-    broken line anywhere else, or an episode twice, is an error naming the line.
-    """
-    p = Path(path)
-    if not p.exists():
-        return {}, 0
-    records, keep, _ = _scan_episodes(p)
-    return {r["episode"]: r for _, r in records}, keep
-
-
-class _EpisodeLog:
-    """Appends one line per episode to episodes.jsonl, on disk before the next."""
-
-    def __init__(self, path: Path, keep_bytes: int) -> None:
-        self._file = open(path, "ab")  # noqa: SIM115 (closed in close())
-        self._file.truncate(keep_bytes)  # drop a line cut off by an interruption
-        self._file.seek(keep_bytes)
-
-    def write(self, record: Mapping[str, Any]) -> None:
-        line = json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n"
-        self._file.write(line.encode("utf-8"))
-        self._file.flush()
-        os.fsync(self._file.fileno())
-
-    def close(self) -> None:
-        self._file.close()
-
-
 def _crash_outcome(params: Mapping[str, Any], index: int, exc: BaseException) -> EpisodeOutcome:
     """A crash outside ``run_episode`` (drawing the episode, a dead worker)."""
     import traceback
@@ -346,7 +271,7 @@ def _check_folder(out: Path, params: CampaignParams, resume: bool) -> tuple[dict
         )
     if not episodes_path.exists():
         return {}, 0
-    records, keep, _ = _scan_episodes(episodes_path)
+    records, keep, _ = scan_episodes(episodes_path)
     for number, record in records:
         k = record["episode"]
         if record.get("seed") != {"entropy": params.seed, "spawn_key": [k]}:
@@ -485,7 +410,7 @@ def _run_episodes(
     """Run ``todo`` on ``backend``, writing each episode down; returns the wall time."""
     bar = _progress(params.episodes, len(done), progress)
     failures = sum(r["status"] != "ok" for r in done.values())
-    log = _EpisodeLog(out / EPISODES_NAME, keep)
+    log = EpisodeLog(out / EPISODES_NAME, keep)
     t0 = time.perf_counter()
     with _Interrupts(on_note) as interrupts:
         # After a first Ctrl-C the backend is handed no more episodes.
