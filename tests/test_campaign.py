@@ -24,7 +24,8 @@ from albot2d.evaluation.campaign import (
     run_campaign,
 )
 from albot2d.evaluation.campaign_summary import COMPARED_METRICS, format_summary, summarise
-from albot2d.evaluation.episode import EpisodeSpec, episode_seed, replay_reproducer, run_episode
+from albot2d.evaluation.episode import EpisodeSpec, episode_seed, run_episode
+from albot2d.evaluation.reproducer import replay_reproducer
 from worldgen.generate import generate
 from worldgen.params import PARAMS_BY_KIND
 

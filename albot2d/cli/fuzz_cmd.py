@@ -262,7 +262,7 @@ def _replay_isolated(doc: dict[str, Any], where: str) -> tuple[int | None, dict[
 
 
 def _replay_child(doc: dict[str, Any], where: str, send: Any) -> None:
-    from albot2d.evaluation.episode import reproduce_episode
+    from albot2d.evaluation.reproducer import reproduce_episode
 
     send.send(reproduce_episode(doc, where=where)[0].record)
 
@@ -283,7 +283,7 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     invariant check, write its report and figures to ``--out`` (unless it crashes), say
     whether the run and the failure came out the same; exit 1 when it still fails."""
     from albot2d.cli import common
-    from albot2d.evaluation.episode import reproduce_episode, reproducer_spec
+    from albot2d.evaluation.reproducer import reproduce_episode, reproducer_spec
 
     where = args.reproduce
     recorded = doc["reproducer"].get("episode")
