@@ -8,15 +8,11 @@ views (``benchmarks.test_mapping``'s building-density map of 10k surfaces); the
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 import pytest
 
-from albot2d.geometry import Pose
-from albot2d.mapping import GlobalMap
 from albot2d.mapping.deletion import GlobalMapParams
-from benchmarks.test_mapping import a_view, filled_map
+from benchmarks.test_mapping import filled_map, time_updates
 
 
 @pytest.mark.benchmark(group="deletion rule")
@@ -25,15 +21,5 @@ def test_update_by_rule(benchmark, rule: str) -> None:  # type: ignore[no-untype
     rng = np.random.default_rng(0)
     filled, walk = filled_map(10_000, rng)
     filled.params = GlobalMapParams.preset(rule)
-    views = [a_view(rng, walk) for _ in range(16)]
-    rounds = iter(range(10**9))
-
-    def setup():  # type: ignore[no-untyped-def]
-        segs, pose = views[next(rounds) % len(views)]
-        return (copy.deepcopy(filled), segs, pose), {}
-
-    def update(g: GlobalMap, segs: np.ndarray, pose: Pose) -> None:
-        g.add_view(segs, g.last_map_id + 1, pose)  # type: ignore[operator]
-
-    benchmark.pedantic(update, setup=setup, rounds=32, iterations=1)
+    time_updates(benchmark, filled, rng, walk)
     benchmark.extra_info["rule"] = rule

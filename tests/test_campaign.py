@@ -26,17 +26,11 @@ from albot2d.evaluation.campaign import (
 from albot2d.evaluation.campaign_summary import COMPARED_METRICS, format_summary, summarise
 from albot2d.evaluation.episode import EpisodeSpec, episode_seed, run_episode
 from albot2d.evaluation.reproducer import replay_reproducer
+from tests.campaign_helpers import SMALL
 from worldgen.generate import generate
 from worldgen.params import PARAMS_BY_KIND
 
 ROOT = Path(__file__).resolve().parents[1]
-SMALL = {
-    "kinds": ("rooms", "corridors", "open"),
-    "world_size_min_m": 12.0,
-    "world_size_max_m": 16.0,
-    "tour_length_min_m": 12.0,
-    "tour_length_max_m": 18.0,
-}
 
 PLUGINS = '''
 import os

@@ -20,15 +20,7 @@ from albot2d.evaluation.campaign import (
     run_campaign,
 )
 from albot2d.evaluation.campaign_lock import LOCK_NAME, CampaignLock
-
-ROOT = Path(__file__).resolve().parents[1]
-SMALL = {
-    "kinds": ("rooms", "corridors", "open"),
-    "world_size_min_m": 12.0,
-    "world_size_max_m": 16.0,
-    "tour_length_min_m": 12.0,
-    "tour_length_max_m": 18.0,
-}
+from tests.campaign_helpers import SMALL
 
 
 def test_a_damaged_line_inside_the_file_is_an_error(tmp_path: Path) -> None:

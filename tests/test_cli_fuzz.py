@@ -59,23 +59,8 @@ def test_fuzz_writes_the_stream_summary_and_histograms(
     assert not (out / "reproducers").exists()
 
     # --resume with more episodes runs only the new ones.
-    assert (
-        main(
-            [
-                "fuzz",
-                "--episodes",
-                "5",
-                "--workers",
-                "1",
-                *SMALL,
-                "--resume",
-                "--no-figures",
-                "--out",
-                str(out),
-            ]
-        )
-        == 0
-    )
+    resume_to_5 = ("fuzz", "--episodes", "5", "--workers", "1", *SMALL, "--resume", "--no-figures")
+    assert main([*resume_to_5, "--out", str(out)]) == 0
     assert "ran 2 here" in capsys.readouterr().out
     lines = (out / "episodes.jsonl").read_text().splitlines()
     assert sorted(json.loads(line)["episode"] for line in lines) == [0, 1, 2, 3, 4]
@@ -84,14 +69,7 @@ def test_fuzz_writes_the_stream_summary_and_histograms(
     assert (
         main(
             [
-                "fuzz",
-                "--episodes",
-                "5",
-                "--workers",
-                "1",
-                *SMALL,
-                "--resume",
-                "--no-figures",
+                *resume_to_5,
                 "--json",
                 "--out",
                 str(out),

@@ -26,19 +26,15 @@ def simulate(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     )  # fmt: skip
 
 
+# A short, low-noise dataset 3 run through a rooms world (seed 4).
+ROOMS_RUN = ("--kind", "rooms", "--seed", "4", "--profile", "dataset3", "--tour-length", "15",
+             "--noise", "low")  # fmt: skip
+
+
 def test_simulate_writes_a_run_that_reads_back(tmp_path: Path) -> None:
     out = tmp_path / "run"
     proc = simulate(
-        "--kind",
-        "rooms",
-        "--seed",
-        "4",
-        "--profile",
-        "dataset3",
-        "--tour-length",
-        "15",
-        "--noise",
-        "low",
+        *ROOMS_RUN,
         "--out",
         str(out),
         cwd=tmp_path,
@@ -62,16 +58,7 @@ def test_simulate_writes_a_run_that_reads_back(tmp_path: Path) -> None:
     # Same arguments again: identical files (deterministic runs).
     again = tmp_path / "again"
     proc = simulate(
-        "--kind",
-        "rooms",
-        "--seed",
-        "4",
-        "--profile",
-        "dataset3",
-        "--tour-length",
-        "15",
-        "--noise",
-        "low",
+        *ROOMS_RUN,
         "--no-png",
         "--out",
         str(again),
