@@ -14,14 +14,14 @@ from typing import Any
 
 import albot2d.mapping.albot1 as albot1
 import albot2d.mapping.global_map as global_map
-from albot2d.evaluation.experiment import RunSpec, build_world, make_simulator, plan_tour
+from albot2d.evaluation.setup import RunSpec, build_run, make_simulator
 from albot2d.perception import extract_surfaces
-from albot2d.sim.driving import get_profile
 
 STAGES = [  # (module or class, function, label); indented labels are parts of the one above
     (global_map.GlobalMap, "add_view", "global-map update (add_view)"),
     (global_map, "view_polygon", "  view polygon (deletion rule)"),
     (global_map, "touching_mask", "  touching test"),
+    (global_map, "visible_share", "  sight lines (visible_share)"),
     (albot1, "rtsv", "tracking (rtsv)"),
     (albot1, "triangulate", "triangulation"),
 ]
@@ -40,12 +40,10 @@ def _timed(fn: Callable[..., Any], label: str, totals: dict[str, float]) -> Call
 
 
 def main(steps: int = 3000) -> None:
-    spec = RunSpec()
-    world = build_world(spec)
-    tour = plan_tour(world, spec.tour_kind, spec.tour_length_m)
+    run = build_run(RunSpec())  # the default run's world, tour and driving profile
 
     def drive():  # type: ignore[no-untyped-def]
-        return make_simulator(world, spec).drive(tour, get_profile(spec.profile))
+        return make_simulator(run.world, run.spec).drive(run.tour, run.profile)
 
     frames = list(drive())
     mapper = albot1.Albot1()

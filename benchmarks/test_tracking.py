@@ -17,13 +17,10 @@ from albot2d.perception.tracking import match_surfaces, rtsv, start_tracking, tr
 
 @pytest.fixture(scope="module")
 def rtsv_inputs():  # type: ignore[no-untyped-def]
-    from albot2d.evaluation.experiment import RunSpec, build_world, make_simulator, plan_tour
-    from albot2d.sim.driving import get_profile
+    from albot2d.evaluation.setup import RunSpec, build_run
 
-    spec = RunSpec()
-    world = build_world(spec)
-    tour = plan_tour(world, spec.tour_kind, 60.0)
-    frames = make_simulator(world, spec).drive(tour, get_profile("dataset1"))
+    run = build_run(RunSpec(tour_length_m=60.0))
+    frames = run.simulator.drive(run.tour, run.profile)
     out, tracked, prev = [], None, None
     for frame in itertools.islice(frames, 400):
         view = extract_surfaces(frame.scan)

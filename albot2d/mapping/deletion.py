@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -220,27 +221,35 @@ def view_polygon(
     scan order): the surfaces' endpoints joined in order (through the viewpoint when
     ``include_viewpoint``), enlarged as ``enlarge`` says."""
     segs = as_segments(segments)
-    pts = segs.reshape(-1, 2)
-    origin = np.array([[robot.x, robot.y]])
-    if enlarge == "radial" and len(pts):
-        off = pts - origin
+    # Speed (one call per update): shapely's vectorised constructors, not its geometry
+    # classes, whose Python constructors cost more than GEOS's buffer; same geometry.
+    n = 2 * len(segs) + (1 if include_viewpoint else 0)
+    pts = np.empty((n, 2))
+    if include_viewpoint:
+        pts[0, 0] = robot.x
+        pts[0, 1] = robot.y
+    view_pts = pts[1:] if include_viewpoint else pts
+    view_pts[:] = segs.reshape(-1, 2)
+    if enlarge == "radial" and len(view_pts):
+        off = view_pts - np.array([[robot.x, robot.y]])
         norm = np.hypot(off[:, 0], off[:, 1])
         scale = np.where(norm > 1e-9, enlarge_m / np.maximum(norm, 1e-9), 0.0)
-        pts = pts + off * scale[:, None]
-    if include_viewpoint:
-        pts = np.vstack([origin, pts])
-    if len(pts) == 0:
+        view_pts += off * scale[:, None]
+    if n == 0:
         return shapely.Polygon()
     buffer_m = 0.0 if enlarge == "radial" else enlarge_m
-    if len(pts) < 3:
-        poly = shapely.MultiPoint(pts).buffer(max(buffer_m, 1e-6))
+    if n < 3:
+        poly = shapely.buffer(shapely.multipoints(pts), max(buffer_m, 1e-6), quad_segs=_QUAD_SEGS)
     else:
-        poly = shapely.make_valid(shapely.Polygon(pts))
+        poly = shapely.make_valid(shapely.polygons(pts))
         if buffer_m > 0:
-            poly = poly.buffer(buffer_m)
+            poly = shapely.buffer(poly, buffer_m, quad_segs=_QUAD_SEGS)
     if enlarge == "forward":
-        poly = poly.intersection(_front_half_plane(pts, robot, buffer_m))
+        poly = shapely.intersection(poly, _front_half_plane(pts, robot, buffer_m))
     return poly
+
+
+_QUAD_SEGS = 16  # shapely's default for ``Geometry.buffer`` (the module function's is 8)
 
 
 def _front_half_plane(points: FloatArray, robot: Pose, margin_m: float) -> shapely.Geometry:
@@ -248,11 +257,12 @@ def _front_half_plane(points: FloatArray, robot: Pose, margin_m: float) -> shape
     reach = float(np.max(np.hypot(points[:, 0] - robot.x, points[:, 1] - robot.y)))
     r = reach + margin_m + 1.0
     c, s = math.cos(robot.theta), math.sin(robot.theta)
-    local = np.array([[0.0, -r], [r, -r], [r, r], [0.0, r]])
-    world = np.column_stack(
-        [robot.x + c * local[:, 0] - s * local[:, 1], robot.y + s * local[:, 0] + c * local[:, 1]]
-    )
-    return shapely.Polygon(world)
+    x, y = robot.x, robot.y
+    # The corners (0, -r), (r, -r), (r, r), (0, r) in the robot frame, in plain floats
+    # (the same operations, in the same order, as a rotation of the corner array).
+    corners = [(x + c * lx - s * ly, y + s * lx + c * ly)
+               for lx, ly in ((0.0, -r), (r, -r), (r, r), (0.0, r))]  # fmt: skip
+    return shapely.polygons(corners)
 
 
 def facing_mask(segments: FloatArray, robot: Pose, test: FacingTest) -> BoolArray:
@@ -330,19 +340,57 @@ def seen_side_mask(segments: FloatArray, robot: Pose) -> BoolArray:
     return ex * (robot.y - segs[:, 1]) - ey * (robot.x - segs[:, 0]) > 0.0
 
 
+#: ``visible_share(backend=...)``: "auto" takes the compiled kernel when numba imports.
+SHARE_BACKENDS = ("auto", "numpy", "numba")
+
+_numba_share: Callable[..., FloatArray] | None = None
+_numba_missing = False
+
+
+def _compiled_share() -> Callable[..., FloatArray] | None:
+    """The compiled sight-line kernel, loaded on first use (None without numba)."""
+    global _numba_share, _numba_missing
+    if _numba_share is None and not _numba_missing:
+        try:
+            from albot2d.mapping.deletion_numba import visible_share_kernel
+        except ImportError:
+            _numba_missing = True
+        else:
+            _numba_share = visible_share_kernel
+    return _numba_share
+
+
 def visible_share(
-    segments: FloatArray, view: FloatArray, robot: Pose, beyond_m: float, samples: int = 8
+    segments: FloatArray,
+    view: FloatArray,
+    robot: Pose,
+    beyond_m: float,
+    samples: int = 8,
+    *,
+    backend: str = "auto",
 ) -> FloatArray:
     """``(N,)``: the share of ``samples`` points spread along each surface (centres of equal
     pieces) that the robot at ``robot`` sees through the incoming ``view`` (surfaces in the
     same frame): the ray from the viewpoint to the point crosses at least one view surface,
     and the point lies at most ``beyond_m`` beyond the nearest crossing (the view's fan,
     enlarged radially; a point in a gap between view surfaces or hidden behind one is not
-    visible)."""
+    visible). ``backend``: "numpy", "numba" (the ``fast`` extra) or "auto" (numba when it
+    imports); both give the same shares bit for bit."""
+    if backend not in SHARE_BACKENDS:
+        raise ValueError(f"backend must be one of {SHARE_BACKENDS}, got {backend!r}")
     segs = as_segments(segments)
     vsegs = as_segments(view)
     if len(segs) == 0 or len(vsegs) == 0:
         return np.zeros(len(segs))
+    if backend != "numpy":
+        kernel = _compiled_share()
+        if kernel is not None:
+            return kernel(
+                np.ascontiguousarray(segs), np.ascontiguousarray(vsegs),
+                float(robot.x), float(robot.y), float(beyond_m), int(samples),
+            )  # fmt: skip
+        if backend == "numba":
+            raise ValueError("backend='numba' needs numba (the fast extra)")
     frac = (np.arange(samples) + 0.5) / samples
     pts = segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2])
     v = pts.reshape(-1, 2) - np.array([robot.x, robot.y])  # rays to the points (K, 2)

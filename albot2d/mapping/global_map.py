@@ -148,7 +148,11 @@ class GlobalMap:
             older_group = tuple(m for m in group if m != current)
             if older_group:
                 if p.could_see in ("in_view", "visible"):
-                    in_group = np.isin(hit_maps, older_group)
+                    # A set lookup per hit: np.isin's overhead dwarfs a few dozen ids.
+                    members = set(older_group)
+                    in_group = np.fromiter(
+                        (m in members for m in hit_maps.tolist()), bool, len(hit_maps)
+                    )
                     older = hit[in_group & visible]
                 else:
                     ids = self._alive_ids(np.concatenate([self._by_map[m] for m in older_group]))
