@@ -49,6 +49,9 @@ def main(steps: int = 3000) -> None:
     mapper = albot1.Albot1()
     params = mapper.perception()
     views = [extract_surfaces(f.scan, params) for f in frames]
+    warm = albot1.Albot1()  # compiled kernels loaded (or built) before the clock starts
+    for frame, view in zip(frames[:300], views[:300], strict=True):
+        warm.observe_perceived(frame, view)
     totals: dict[str, float] = {}
     for owner, name, label in STAGES:
         setattr(owner, name, _timed(getattr(owner, name), label, totals))
