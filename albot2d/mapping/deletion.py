@@ -202,11 +202,10 @@ DELETION_PRESETS: dict[str, GlobalMapParams] = {
 }
 
 
-def _forward_coords(points: FloatArray, robot: Pose) -> tuple[FloatArray, FloatArray]:
-    """Coordinates of ``(N, 2)`` points along the robot's heading and to its left."""
+def _forward_of_ends(segs: FloatArray, robot: Pose) -> FloatArray:
+    """``(N, 2)``: each endpoint's coordinate along the robot's heading."""
     c, s = math.cos(robot.theta), math.sin(robot.theta)
-    dx, dy = points[:, 0] - robot.x, points[:, 1] - robot.y
-    return c * dx + s * dy, -s * dx + c * dy
+    return c * (segs[:, 0::2] - robot.x) + s * (segs[:, 1::2] - robot.y)
 
 
 def view_polygon(
@@ -268,8 +267,8 @@ def _front_half_plane(points: FloatArray, robot: Pose, margin_m: float) -> shape
 def facing_mask(segments: FloatArray, robot: Pose, test: FacingTest) -> BoolArray:
     """``(N,)``: the surface lies on the robot's facing side (in front of its lateral axis)."""
     segs = as_segments(segments)
-    fwd0, _ = _forward_coords(segs[:, :2], robot)
-    fwd1, _ = _forward_coords(segs[:, 2:], robot)
+    fwd = _forward_of_ends(segs, robot)
+    fwd0, fwd1 = fwd[:, 0], fwd[:, 1]
     if test == "midpoint":
         return (fwd0 + fwd1) > 0.0
     if test == "any_endpoint":
@@ -329,7 +328,7 @@ def group_maps(
                 start = m
             prev = m
         runs.append((start, prev))
-    return tuple(m for lo, hi in runs for m in range(lo, hi + 1) if m in existing)
+    return tuple([m for lo, hi in runs for m in range(lo, hi + 1) if m in existing])
 
 
 def seen_side_mask(segments: FloatArray, robot: Pose) -> BoolArray:

@@ -94,12 +94,13 @@ class GlobalMap:
         removed[: self._n] = self._removed[: self._n]
         self._removed = removed
 
-    def _delete(self, ids: NDArray[np.int64]) -> int:
+    def _mark_deleted(self, ids: NDArray[np.int64]) -> NDArray[np.int64]:
+        """Mark the live ones of ``ids`` removed at this update; returns them (the caller
+        forgets them in the index, once for the whole update)."""
         ids = ids[self._removed[ids] == _NEVER]
         self._removed[ids] = self.n_updates
-        self._index.remove(ids, self._segments[ids])  # speed: queries see live ids only
         self._alive -= len(ids)
-        return len(ids)
+        return ids
 
     def _alive_ids(self, ids: NDArray[np.int64]) -> NDArray[np.int64]:
         return ids[self._removed[ids] == _NEVER]
@@ -121,12 +122,11 @@ class GlobalMap:
         affected: tuple[int, ...] = ()
         group: tuple[int, ...] = ()
         if self._alive and not poly.is_empty:
-            box = np.array(poly.bounds)
+            box = shapely.bounds(poly).tolist()
             if p.forward_ray_m > 0:
                 tip = robot @ Pose(p.forward_ray_m, 0.0, 0.0)
-                box = np.array(
-                    [min(box[0], tip.x), min(box[1], tip.y), max(box[2], tip.x), max(box[3], tip.y)]
-                )
+                box = [min(box[0], tip.x), min(box[1], tip.y),
+                       max(box[2], tip.x), max(box[3], tip.y)]  # fmt: skip
             cand = self._alive_ids(self._index.query_box(*box))
             touch = touching_mask(poly, self._segments[cand], robot, p.forward_ray_m)
             hit = cand[touch]
@@ -143,17 +143,15 @@ class GlobalMap:
             doomed = hit[cur_del]
             n_current = len(doomed)
             touched = hit_maps if p.current_in_group else hit_maps[~is_current]
-            affected = tuple(int(m) for m in np.unique(touched))
+            affected = tuple(np.unique(touched).tolist())
             group = group_maps(affected, p.expand, p.group_gap_maps, self._by_map)
             older_group = tuple(m for m in group if m != current)
             if older_group:
                 if p.could_see in ("in_view", "visible"):
-                    # A set lookup per hit: np.isin's overhead dwarfs a few dozen ids.
-                    members = set(older_group)
-                    in_group = np.fromiter(
-                        (m in members for m in hit_maps.tolist()), bool, len(hit_maps)
-                    )
-                    older = hit[in_group & visible]
+                    # Every hit's map is affected (or the current one) and every affected
+                    # map is in its group (each id ever added is in _by_map), so the hits
+                    # in the older group are exactly those not of the current map.
+                    older = hit[~is_current & visible]
                 else:
                     ids = self._alive_ids(np.concatenate([self._by_map[m] for m in older_group]))
                     gsegs = self._segments[ids]
@@ -171,8 +169,13 @@ class GlobalMap:
             if p.keep_if_all and len(np.unique(doomed)) >= self._alive:
                 doomed = np.zeros(0, np.int64)
                 n_current = 0
-        deleted_older = self._delete(np.unique(doomed[n_current:])) if len(doomed) else 0
-        deleted_current = self._delete(doomed[:n_current]) if n_current else 0
+        deleted_older = deleted_current = 0
+        if len(doomed):
+            older_ids = self._mark_deleted(np.unique(doomed[n_current:]))
+            current_ids = self._mark_deleted(doomed[:n_current])
+            deleted_older, deleted_current = len(older_ids), len(current_ids)
+            gone = np.concatenate([older_ids, current_ids])
+            self._index.remove(gone, self._segments[gone])  # speed: queries see live ids only
         self._append(segs, map_id)
         return UpdateReport(
             self.n_updates, map_id, deleted_current, affected, group, deleted_older, len(segs), poly

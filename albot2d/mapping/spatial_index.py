@@ -60,7 +60,9 @@ class SegmentGridIndex:
 
     def query_box(self, xmin: float, ymin: float, xmax: float, ymax: float) -> NDArray[np.int64]:
         """Sorted unique ids of segments whose cells meet the box (a superset of true hits)."""
-        x0, y0, x1, y1 = self._cell_ranges(np.array([xmin, ymin, xmax, ymax])).tolist()
+        cell = self.cell_m  # math.floor of the same quotients as _cell_ranges' np.floor
+        x0, y0 = math.floor(xmin / cell), math.floor(ymin / cell)
+        x1, y1 = math.floor(xmax / cell), math.floor(ymax / cell)
         found: list[int] = []
         cells = self._cells
         if (x1 - x0 + 1) * (y1 - y0 + 1) > len(cells):
@@ -78,7 +80,5 @@ class SegmentGridIndex:
 
 def _boxes(segments: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(K, 4)`` bounding boxes ``[xmin, ymin, xmax, ymax]`` of ``(K, 4)`` segments."""
-    return np.column_stack([
-        np.minimum(segments[:, 0], segments[:, 2]), np.minimum(segments[:, 1], segments[:, 3]),
-        np.maximum(segments[:, 0], segments[:, 2]), np.maximum(segments[:, 1], segments[:, 3]),
-    ])  # fmt: skip
+    return np.hstack([np.minimum(segments[:, :2], segments[:, 2:]),
+                      np.maximum(segments[:, :2], segments[:, 2:])])  # fmt: skip
