@@ -59,3 +59,104 @@ def test_numba_share_equals_numpy_on_an_office_run() -> None:
                 assert_same(before.segments, view, lm.pose, 0.5, 8)
                 checked += 1
     assert checked > 50
+
+
+# -- the touching test without building P -------------------------------------------------
+def a_view(rng: np.random.Generator, n: int) -> tuple[np.ndarray, Pose]:
+    """A laser-like view: surfaces in scan order over 180°, some meeting at corners (a
+    repeated vertex), seen from a random pose."""
+    robot = Pose(*rng.uniform(-3.0, 3.0, 2), rng.uniform(-np.pi, np.pi))
+    bearings = np.sort(rng.uniform(-np.pi / 2, np.pi / 2, 2 * n))
+    ranges = rng.uniform(0.5, 8.0, 2 * n)
+    pts = np.column_stack([ranges * np.cos(bearings), ranges * np.sin(bearings)])
+    corner = rng.random(n) < 0.3
+    for i in np.flatnonzero(corner[1:]) + 1:
+        pts[2 * i] = pts[2 * i - 1]
+    c, s = np.cos(robot.theta), np.sin(robot.theta)
+    world = np.column_stack([robot.x + c * pts[:, 0] - s * pts[:, 1],
+                             robot.y + s * pts[:, 0] + c * pts[:, 1]])  # fmt: skip
+    return world.reshape(-1, 4), robot
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_quick_touching_is_geos_touching_on_random_views(seed: int) -> None:
+    """The kernel's sure answers agree with GEOS's line test on P; the mask (GEOS for the
+    unsure) equals GEOS's on every surface. Old surfaces are put near P's edge: copies of
+    the view's surfaces pushed ~r out, across the lateral axis, and clutter."""
+    import shapely
+
+    from albot2d.mapping.deletion import (
+        GlobalMapParams,
+        quick_touch_ring,
+        quick_touching_mask,
+        touching_mask,
+        view_polygon,
+    )
+    from albot2d.mapping.deletion_numba import classify_touching
+
+    rng = np.random.default_rng(seed)
+    params = GlobalMapParams()
+    segs, robot = a_view(rng, int(rng.integers(1, 15)))
+    ring = quick_touch_ring(segs, robot, params)
+    assert ring is not None  # a laser view is a simple polygon
+    radial = segs.reshape(-1, 2) - [robot.x, robot.y]
+    radial /= np.maximum(np.hypot(radial[:, :1], radial[:, 1:]), 1e-9)
+    pushed = segs + (radial * rng.uniform(0.45, 0.55, (len(radial), 1))).reshape(-1, 4)
+    side = np.array([-np.sin(robot.theta), np.cos(robot.theta)])
+    across = np.hstack([[robot.x, robot.y] + side * 2.0, [robot.x, robot.y] - side * 2.0])
+    across = across + rng.normal(0.0, 0.3, (20, 4))
+    old = np.vstack([pushed, across, random_segments(rng, 40) * 2.0])
+    poly = view_polygon(segs, robot)
+    geos = shapely.intersects(poly, shapely.linestrings(old.reshape(-1, 2, 2)))
+    r = params.enlarge_m
+    status = classify_touching(np.ascontiguousarray(old), ring, robot.x, robot.y,
+                               np.cos(robot.theta), np.sin(robot.theta),
+                               1.011 * r + 1e-6, 0.997 * r - 1e-6, 1e-6)  # fmt: skip
+    assert not (geos & (status == 0)).any() and not (~geos & (status == 1)).any()
+    assert (status != 2).mean() > 0.5
+    built = []
+
+    def polygon():  # type: ignore[no-untyped-def]
+        built.append(1)
+        return poly
+
+    quick = quick_touching_mask(ring, polygon, old, robot, r)
+    np.testing.assert_array_equal(quick, touching_mask(poly, old, robot))
+    assert len(built) == int((status == 2).any())
+
+
+def test_ring_check_refuses_what_it_cannot_vouch_for() -> None:
+    from albot2d.mapping.deletion_numba import ring_is_clearly_simple
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    bowtie = np.array([[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]])
+    spike = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.0], [1.0, 1.0]])  # folds back
+    touching = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [1.0, 0.0], [0.0, 2.0]])
+    assert ring_is_clearly_simple(square, 1e-6)
+    for ring in (bowtie, spike, touching, square[:2], np.vstack([square, square[-1:]])):
+        assert not ring_is_clearly_simple(ring, 1e-6)
+
+
+def test_global_map_with_and_without_quick_touching_agree_on_an_office_run() -> None:
+    """Whole runs: every update report (but P, built lazily) and the final map equal the
+    GEOS path's (P built and tested for every update), for two deletion rules."""
+    from albot2d.evaluation.setup import RunSpec, build_run
+    from albot2d.mapping import Albot1, Albot1Params, GlobalMapParams
+
+    run = build_run(RunSpec(tour_length_m=25.0))
+    frames = list(itertools.islice(run.simulator.drive(run.tour, run.profile), 700))
+    for rule in ("visible", "paper"):
+        outputs = []
+        for quick in (True, False):
+            reports: list[tuple] = []  # type: ignore[type-arg]
+            params = Albot1Params(global_map=GlobalMapParams.preset(rule))
+            m = Albot1(params, on_update=lambda rep, lm, out=reports: out.append(tuple(rep[:7])))
+            with pytest.MonkeyPatch.context() as mp:
+                if not quick:
+                    mp.setattr("albot2d.mapping.global_map.quick_touch_ring", lambda *a: None)
+                for frame in frames:
+                    m.observe(frame)
+            snap = m.global_map()
+            outputs.append((reports, snap.segments.tobytes(), snap.map_ids.tobytes()))
+        assert len(outputs[0][0]) > 100
+        assert outputs[0] == outputs[1], rule

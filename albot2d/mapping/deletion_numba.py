@@ -55,3 +55,132 @@ def visible_share_kernel(segs, vsegs, rx, ry, beyond_m, samples):  # type: ignor
                 count += 1
         out[i] = count / samples
     return out
+
+
+# -- the touching test without building P (speed only; see ``deletion.touching_prefilter``) --
+OUT, IN, UNSURE = 0, 1, 2
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _point_seg_dist(px, py, ax, ay, bx, by):  # type: ignore[no-untyped-def]
+    dx, dy = bx - ax, by - ay
+    den = dx * dx + dy * dy
+    t = 0.0
+    if den > 0.0:
+        t = min(max(((px - ax) * dx + (py - ay) * dy) / den, 0.0), 1.0)
+    return np.hypot(px - (ax + t * dx), py - (ay + t * dy))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _orient(ax, ay, bx, by, cx, cy):  # type: ignore[no-untyped-def]
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+
+
+@njit(cache=True, nogil=True)
+def _seg_seg_dist(ax, ay, bx, by, cx, cy, dx, dy):  # type: ignore[no-untyped-def]
+    o1 = _orient(ax, ay, bx, by, cx, cy)
+    o2 = _orient(ax, ay, bx, by, dx, dy)
+    o3 = _orient(cx, cy, dx, dy, ax, ay)
+    o4 = _orient(cx, cy, dx, dy, bx, by)
+    if ((o1 > 0.0 and o2 < 0.0) or (o1 < 0.0 and o2 > 0.0)) and (
+        (o3 > 0.0 and o4 < 0.0) or (o3 < 0.0 and o4 > 0.0)
+    ):
+        return 0.0
+    return min(
+        min(_point_seg_dist(ax, ay, cx, cy, dx, dy), _point_seg_dist(bx, by, cx, cy, dx, dy)),
+        min(_point_seg_dist(cx, cy, ax, ay, bx, by), _point_seg_dist(dx, dy, ax, ay, bx, by)),
+    )
+
+
+@njit(cache=True, nogil=True)
+def _inside(px, py, ring):  # type: ignore[no-untyped-def]
+    """Crossing-number point-in-polygon test (the ring is simple: any rule agrees)."""
+    n = ring.shape[0]
+    inside = False
+    j = n - 1
+    for i in range(n):
+        xi, yi, xj, yj = ring[i, 0], ring[i, 1], ring[j, 0], ring[j, 1]
+        if (yi > py) != (yj > py) and px < (xj - xi) * (py - yi) / (yj - yi) + xi:
+            inside = not inside
+        j = i
+    return inside
+
+
+@njit(cache=True, nogil=True)
+def _dist_to_polygon(ax, ay, bx, by, ring):  # type: ignore[no-untyped-def]
+    """Distance from segment ab to the region of the simple polygon ``ring`` (0 inside)."""
+    if _inside(ax, ay, ring) or _inside(bx, by, ring):
+        return 0.0
+    n = ring.shape[0]
+    best = np.inf
+    for i in range(n):
+        j = (i + 1) % n
+        d = _seg_seg_dist(ax, ay, bx, by, ring[i, 0], ring[i, 1], ring[j, 0], ring[j, 1])
+        if d < best:
+            best = d
+    return best
+
+
+@njit(cache=True, nogil=True)
+def ring_is_clearly_simple(ring, eps):  # type: ignore[no-untyped-def]
+    """The closed polygon through ``ring`` (``(n, 2)``, first vertex not repeated) is simple
+    with room to spare: every edge longer than ``eps``, non-adjacent edges farther apart
+    than ``eps``, adjacent ones not folding back onto each other. False means unsure."""
+    n = ring.shape[0]
+    if n < 3:
+        return False
+    for i in range(n):
+        j = (i + 1) % n
+        if np.hypot(ring[j, 0] - ring[i, 0], ring[j, 1] - ring[i, 1]) <= eps:
+            return False
+    for i in range(n):
+        i1 = (i + 1) % n
+        i2 = (i + 2) % n
+        # adjacent edges i and i+1 share vertex i+1: neither far end may lie on the other
+        if _point_seg_dist(ring[i2, 0], ring[i2, 1], ring[i, 0], ring[i, 1],
+                           ring[i1, 0], ring[i1, 1]) <= eps:  # fmt: skip
+            return False
+        if _point_seg_dist(ring[i, 0], ring[i, 1], ring[i1, 0], ring[i1, 1],
+                           ring[i2, 0], ring[i2, 1]) <= eps:  # fmt: skip
+            return False
+        for k in range(i + 2, n):
+            if i == 0 and k == n - 1:
+                continue  # adjacent through the closing vertex
+            k1 = (k + 1) % n
+            d = _seg_seg_dist(ring[i, 0], ring[i, 1], ring[i1, 0], ring[i1, 1],
+                              ring[k, 0], ring[k, 1], ring[k1, 0], ring[k1, 1])  # fmt: skip
+            if d <= eps:
+                return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def classify_touching(segs, ring, rx, ry, c, s, out_m, in_m, side_m):  # type: ignore[no-untyped-def]
+    """Per surface: ``OUT`` (farther than ``out_m`` from the polygon, or wholly more than
+    ``side_m`` behind the robot's lateral axis), ``IN`` (some part at least ``side_m`` in
+    front of the axis lies within ``in_m`` of the polygon), else ``UNSURE``."""
+    n = segs.shape[0]
+    out = np.empty(n, np.int8)
+    for i in range(n):
+        ax, ay, bx, by = segs[i, 0], segs[i, 1], segs[i, 2], segs[i, 3]
+        fa = c * (ax - rx) + s * (ay - ry)
+        fb = c * (bx - rx) + s * (by - ry)
+        if fa < -side_m and fb < -side_m:
+            out[i] = OUT
+            continue
+        d = _dist_to_polygon(ax, ay, bx, by, ring)
+        if d > out_m:
+            out[i] = OUT
+            continue
+        out[i] = UNSURE
+        if fa < side_m and fb < side_m:
+            continue
+        if fa < side_m:  # keep the part in front of the axis (+ side_m)
+            t = (side_m - fa) / (fb - fa)
+            ax, ay = ax + t * (bx - ax), ay + t * (by - ay)
+        elif fb < side_m:
+            t = (side_m - fb) / (fa - fb)
+            bx, by = bx + t * (ax - bx), by + t * (ay - by)
+        if _dist_to_polygon(ax, ay, bx, by, ring) < in_m:
+            out[i] = IN
+    return out

@@ -23,6 +23,8 @@ which it was added and removed: any past state of the map is a cheap filter
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -35,6 +37,9 @@ from albot2d.mapping.deletion import (
     facing_mask,
     group_maps,
     in_range_mask,
+    quick_touch_box,
+    quick_touch_ring,
+    quick_touching_mask,
     seen_side_mask,
     touching_mask,
     view_polygon,
@@ -58,7 +63,14 @@ class UpdateReport(NamedTuple):
     group: tuple[int, ...]
     deleted_older: int
     added: int
-    polygon: shapely.Geometry
+    #: P, or a function building it on first use (most updates never need P built).
+    polygon_or_maker: shapely.Geometry | Callable[[], shapely.Geometry]
+
+    @property
+    def polygon(self) -> shapely.Geometry:
+        """The enlarged view polygon P of this update."""
+        got = self.polygon_or_maker
+        return got() if callable(got) else got
 
 
 class GlobalMap:
@@ -113,22 +125,33 @@ class GlobalMap:
             raise ValueError(f"map ids must increase: got {map_id} after {self.last_map_id}")
         self.n_updates += 1
         p = self.params
-        poly = view_polygon(
-            segs, robot, p.enlarge_m, p.enlarge, include_viewpoint=p.include_viewpoint
+        make_polygon = functools.cache(
+            lambda: view_polygon(
+                segs, robot, p.enlarge_m, p.enlarge, include_viewpoint=p.include_viewpoint
+            )
         )
+        ring = quick_touch_ring(segs, robot, p)  # None: P built now, tested by GEOS
+        poly = make_polygon() if ring is None else None
         current = self.last_map_id
         doomed = np.zeros(0, np.int64)
         n_current = 0
         affected: tuple[int, ...] = ()
         group: tuple[int, ...] = ()
-        if self._alive and not poly.is_empty:
-            box = shapely.bounds(poly).tolist()
-            if p.forward_ray_m > 0:
-                tip = robot @ Pose(p.forward_ray_m, 0.0, 0.0)
-                box = [min(box[0], tip.x), min(box[1], tip.y),
-                       max(box[2], tip.x), max(box[3], tip.y)]  # fmt: skip
-            cand = self._alive_ids(self._index.query_box(*box))
-            touch = touching_mask(poly, self._segments[cand], robot, p.forward_ray_m)
+        if self._alive and (poly is None or not poly.is_empty):
+            if poly is None:
+                assert ring is not None
+                cand = self._alive_ids(self._index.query_box(*quick_touch_box(ring, p.enlarge_m)))
+                touch = quick_touching_mask(
+                    ring, make_polygon, self._segments[cand], robot, p.enlarge_m
+                )
+            else:
+                box = shapely.bounds(poly).tolist()
+                if p.forward_ray_m > 0:
+                    tip = robot @ Pose(p.forward_ray_m, 0.0, 0.0)
+                    box = [min(box[0], tip.x), min(box[1], tip.y),
+                           max(box[2], tip.x), max(box[3], tip.y)]  # fmt: skip
+                cand = self._alive_ids(self._index.query_box(*box))
+                touch = touching_mask(poly, self._segments[cand], robot, p.forward_ray_m)
             hit = cand[touch]
             hit_maps = self._map_ids[hit]
             hsegs = self._segments[hit]
@@ -178,8 +201,9 @@ class GlobalMap:
             self._index.remove(gone, self._segments[gone])  # speed: queries see live ids only
         self._append(segs, map_id)
         return UpdateReport(
-            self.n_updates, map_id, deleted_current, affected, group, deleted_older, len(segs), poly
-        )
+            self.n_updates, map_id, deleted_current, affected, group, deleted_older, len(segs),
+            make_polygon if poly is None else poly,
+        )  # fmt: skip
 
     def insert(self, segments: NDArray[np.float64], map_id: int) -> None:
         """Add surfaces as one update without deleting anything (naive integration, tests)."""
