@@ -324,11 +324,11 @@ def _compiled_touching() -> tuple[Callable[..., Any], Callable[..., Any]] | None
     global _quick_kernels, _quick_missing
     if _quick_kernels is None and not _quick_missing:
         try:
-            from albot2d.mapping.deletion_numba import classify_touching, ring_is_clearly_simple
+            from albot2d.mapping.deletion_numba import classify_touching, quick_ring
         except ImportError:
             _quick_missing = True
         else:
-            _quick_kernels = (ring_is_clearly_simple, classify_touching)
+            _quick_kernels = (quick_ring, classify_touching)
     return _quick_kernels
 
 
@@ -342,13 +342,9 @@ def quick_touch_ring(
     if (kernels is None or params.enlarge != "forward" or not params.include_viewpoint
             or params.forward_ray_m > 0 or not params.enlarge_m > 0):  # fmt: skip
         return None
-    segs = as_segments(segments)
-    ring = np.empty((2 * len(segs) + 1, 2))
-    ring[0, 0], ring[0, 1] = robot.x, robot.y
-    ring[1:] = segs.reshape(-1, 2)
-    # Surfaces meeting at a corner repeat a vertex: the same polygon without the repeats.
-    ring = ring[(ring != np.roll(ring, 1, axis=0)).any(axis=1)]
-    return ring if kernels[0](ring, 1e-6) else None
+    ring = kernels[0](np.ascontiguousarray(as_segments(segments)), float(robot.x),
+                      float(robot.y), 1e-6)  # fmt: skip
+    return ring if len(ring) else None
 
 
 def quick_touch_box(ring: FloatArray, enlarge_m: float) -> list[float]:

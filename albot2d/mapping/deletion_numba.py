@@ -106,19 +106,70 @@ def _inside(px, py, ring):  # type: ignore[no-untyped-def]
     return inside
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _point_seg_dist2(px, py, ax, ay, bx, by):  # type: ignore[no-untyped-def]
+    dx, dy = bx - ax, by - ay
+    den = dx * dx + dy * dy
+    t = 0.0
+    if den > 0.0:
+        t = min(max(((px - ax) * dx + (py - ay) * dy) / den, 0.0), 1.0)
+    ex, ey = px - (ax + t * dx), py - (ay + t * dy)
+    return ex * ex + ey * ey
+
+
 @njit(cache=True, nogil=True)
-def _dist_to_polygon(ax, ay, bx, by, ring):  # type: ignore[no-untyped-def]
-    """Distance from segment ab to the region of the simple polygon ``ring`` (0 inside)."""
+def _near_polygon(ax, ay, bx, by, ring, lim):  # type: ignore[no-untyped-def]
+    """Whether segment ab comes within ``lim`` of the simple polygon ``ring`` (inside
+    counts); edges whose box is ``lim`` away from the segment's are skipped."""
     if _inside(ax, ay, ring) or _inside(bx, by, ring):
-        return 0.0
+        return True
+    sx0, sx1 = min(ax, bx), max(ax, bx)
+    sy0, sy1 = min(ay, by), max(ay, by)
+    lim2 = lim * lim
     n = ring.shape[0]
-    best = np.inf
     for i in range(n):
         j = (i + 1) % n
-        d = _seg_seg_dist(ax, ay, bx, by, ring[i, 0], ring[i, 1], ring[j, 0], ring[j, 1])
-        if d < best:
-            best = d
-    return best
+        cx, cy, dx, dy = ring[i, 0], ring[i, 1], ring[j, 0], ring[j, 1]
+        if (min(cx, dx) - sx1 >= lim or sx0 - max(cx, dx) >= lim
+                or min(cy, dy) - sy1 >= lim or sy0 - max(cy, dy) >= lim):  # fmt: skip
+            continue
+        o1 = _orient(ax, ay, bx, by, cx, cy)
+        o2 = _orient(ax, ay, bx, by, dx, dy)
+        o3 = _orient(cx, cy, dx, dy, ax, ay)
+        o4 = _orient(cx, cy, dx, dy, bx, by)
+        if ((o1 > 0.0 and o2 < 0.0) or (o1 < 0.0 and o2 > 0.0)) and (
+            (o3 > 0.0 and o4 < 0.0) or (o3 < 0.0 and o4 > 0.0)
+        ):
+            return True
+        if (_point_seg_dist2(ax, ay, cx, cy, dx, dy) < lim2
+                or _point_seg_dist2(bx, by, cx, cy, dx, dy) < lim2
+                or _point_seg_dist2(cx, cy, ax, ay, bx, by) < lim2
+                or _point_seg_dist2(dx, dy, ax, ay, bx, by) < lim2):  # fmt: skip
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def quick_ring(segs, rx, ry, eps):  # type: ignore[no-untyped-def]
+    """The view polygon's vertices (the viewpoint, then the surfaces' endpoints in order,
+    a vertex repeated where surfaces meet dropped: the same polygon), or an empty array
+    when that polygon is not clearly simple (``ring_is_clearly_simple``)."""
+    n = segs.shape[0]
+    ring = np.empty((2 * n + 1, 2))
+    ring[0, 0], ring[0, 1] = rx, ry
+    m = 1
+    for i in range(n):
+        for k in range(2):
+            x, y = segs[i, 2 * k], segs[i, 2 * k + 1]
+            if x != ring[m - 1, 0] or y != ring[m - 1, 1]:
+                ring[m, 0], ring[m, 1] = x, y
+                m += 1
+    if m > 1 and ring[m - 1, 0] == rx and ring[m - 1, 1] == ry:
+        m -= 1
+    ring = ring[:m].copy()
+    if not ring_is_clearly_simple(ring, eps):
+        return np.empty((0, 2))
+    return ring
 
 
 @njit(cache=True, nogil=True)
@@ -156,20 +207,21 @@ def ring_is_clearly_simple(ring, eps):  # type: ignore[no-untyped-def]
 
 @njit(cache=True, nogil=True)
 def classify_touching(segs, ring, rx, ry, c, s, out_m, in_m, side_m):  # type: ignore[no-untyped-def]
-    """Per surface: ``OUT`` (farther than ``out_m`` from the polygon, or wholly more than
+    """Per surface: ``OUT`` (``out_m`` or farther from the polygon, or wholly more than
     ``side_m`` behind the robot's lateral axis), ``IN`` (some part at least ``side_m`` in
     front of the axis lies within ``in_m`` of the polygon), else ``UNSURE``."""
     n = segs.shape[0]
     out = np.empty(n, np.int8)
+    rx0, ry0 = ring[:, 0].min() - out_m, ring[:, 1].min() - out_m
+    rx1, ry1 = ring[:, 0].max() + out_m, ring[:, 1].max() + out_m
     for i in range(n):
         ax, ay, bx, by = segs[i, 0], segs[i, 1], segs[i, 2], segs[i, 3]
-        fa = c * (ax - rx) + s * (ay - ry)
-        fb = c * (bx - rx) + s * (by - ry)
-        if fa < -side_m and fb < -side_m:
+        if max(ax, bx) <= rx0 or min(ax, bx) >= rx1 or max(ay, by) <= ry0 or min(ay, by) >= ry1:
             out[i] = OUT
             continue
-        d = _dist_to_polygon(ax, ay, bx, by, ring)
-        if d > out_m:
+        fa = c * (ax - rx) + s * (ay - ry)
+        fb = c * (bx - rx) + s * (by - ry)
+        if (fa < -side_m and fb < -side_m) or not _near_polygon(ax, ay, bx, by, ring, out_m):
             out[i] = OUT
             continue
         out[i] = UNSURE
@@ -181,6 +233,6 @@ def classify_touching(segs, ring, rx, ry, c, s, out_m, in_m, side_m):  # type: i
         elif fb < side_m:
             t = (side_m - fb) / (fa - fb)
             bx, by = bx + t * (ax - bx), by + t * (ay - by)
-        if _dist_to_polygon(ax, ay, bx, by, ring) < in_m:
+        if in_m > 0.0 and _near_polygon(ax, ay, bx, by, ring, in_m):
             out[i] = IN
     return out
