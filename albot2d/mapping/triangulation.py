@@ -379,6 +379,19 @@ def _sum(values: list[float]) -> float:
     return total
 
 
+def _fit_weights(surfaces: Surfaces, index: list[int]) -> list[float]:
+    """``_fit_weight`` in scalars: max(n · L², 1e-12) with n the beams (1 without)."""
+    segs = surfaces.segments
+    length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1]).tolist()
+    beams = surfaces.beams.tolist()
+    out = []
+    for i in index:
+        b0, b1 = beams[i]
+        n = float(b1 - b0 + 1) if b0 >= 0 else 1.0
+        out.append(max(n * (length[i] * length[i]), 1e-12))
+    return out
+
+
 def _triangulate_small(
     local: Surfaces,
     current: Surfaces,
@@ -465,7 +478,7 @@ def _triangulate_small(
     if ok:
         chosen = th[best]
         dev = [_wrap(dtheta[i] - chosen) for i in ok]
-        fit_l, fit_c = _fit_weight(local, ok).tolist(), _fit_weight(current, ok).tolist()
+        fit_l, fit_c = _fit_weights(local, ok), _fit_weights(current, ok)
         w = [1.0 / (1.0 / a + 1.0 / b) for a, b in zip(fit_l, fit_c, strict=True)]
         offset = _sum([a * b for a, b in zip(dev, w, strict=True)]) / _sum(w)
         agree = [j for j in range(len(ok)) if abs(dev[j] - offset) <= consensus]
