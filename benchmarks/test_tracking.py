@@ -55,3 +55,41 @@ def test_rtsv(benchmark, rtsv_inputs) -> None:  # type: ignore[no-untyped-def]
         return sum(len(rtsv(t, v, inc)[0]) for t, v, inc in rtsv_inputs)
 
     assert benchmark(run) > 100
+
+
+@pytest.fixture(scope="module")
+def triangulations():  # type: ignore[no-untyped-def]
+    """Albot1's triangulate calls over the first 1,500 views of the default run."""
+    from albot2d.evaluation.setup import RunSpec, build_run
+    from albot2d.mapping import Albot1
+
+    calls = []
+    real = __import__("albot2d.mapping.albot1", fromlist=["triangulate"]).triangulate
+
+    def record(*args, **kwargs):  # type: ignore[no-untyped-def]
+        calls.append((args, kwargs))
+        return real(*args, **kwargs)
+
+    run = build_run(RunSpec())
+    m = Albot1()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("albot2d.mapping.albot1.triangulate", record)
+        for frame in itertools.islice(run.simulator.drive(run.tour, run.profile), 1500):
+            m.observe(frame)
+    return calls
+
+
+@pytest.mark.benchmark(group="triangulation (Albot1's calls, 1,500 views)")
+@pytest.mark.parametrize("path", ["scalar", "array"])
+def test_triangulate(benchmark, triangulations, path: str) -> None:  # type: ignore[no-untyped-def]
+    """The scalar path for fewer than 8 surfaces against the array path, side by side."""
+    import albot2d.mapping.triangulation as tri
+
+    with pytest.MonkeyPatch.context() as mp:
+        if path == "array":
+            mp.setattr(tri, "_SMALL", 0)
+
+        def run() -> int:
+            return sum(tri.triangulate(*a, **k) is not None for a, k in triangulations)
+
+        assert benchmark(run) > 100
