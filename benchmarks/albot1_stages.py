@@ -64,9 +64,9 @@ def main(steps: int = 3000) -> None:
     n = len(frames)
     print(f"Albot1: {total / n * 1e6:.0f} µs CPU per view over {n} views")
     for _, _, label in STAGES:
-        print(f"  {label:34s} {totals.get(label, 0.0) / n * 1e6:6.0f} µs/view")
+        print(f"  {label:44s} {totals.get(label, 0.0) / n * 1e6:6.0f} µs/view")
     top = sum(v for k, v in totals.items() if not k.startswith(" "))
-    print(f"  {'rest of the main loop':34s} {(total - top) / n * 1e6:6.0f} µs/view")
+    print(f"  {'rest of the main loop':44s} {(total - top) / n * 1e6:6.0f} µs/view")
     t0 = time.process_time()
     sum(1 for _ in itertools.islice(drive(), steps))
     sim = time.process_time() - t0
