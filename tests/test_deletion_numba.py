@@ -37,7 +37,8 @@ def test_numba_share_equals_numpy_on_random_scenes(seed: int) -> None:
     # Old surfaces: jittered copies of view surfaces (near the beyond_m limit) and clutter.
     near = view + rng.normal(0.0, 0.4, view.shape) * (rng.random((len(view), 1)) < 0.8)
     segs = np.vstack([near, random_segments(rng, int(rng.integers(0, 10)))])
-    robot = Pose(*rng.uniform(-1.0, 1.0, 2), rng.uniform(-np.pi, np.pi))
+    x, y = rng.uniform(-1.0, 1.0, 2)
+    robot = Pose(float(x), float(y), float(rng.uniform(-np.pi, np.pi)))
     assert_same(segs, view, robot, float(rng.uniform(0.0, 1.0)), int(rng.integers(1, 12)))
 
 
@@ -65,7 +66,8 @@ def test_numba_share_equals_numpy_on_an_office_run() -> None:
 def a_view(rng: np.random.Generator, n: int) -> tuple[np.ndarray, Pose]:
     """A laser-like view: surfaces in scan order over 180°, some meeting at corners (a
     repeated vertex), seen from a random pose."""
-    robot = Pose(*rng.uniform(-3.0, 3.0, 2), rng.uniform(-np.pi, np.pi))
+    x, y = rng.uniform(-3.0, 3.0, 2)
+    robot = Pose(float(x), float(y), float(rng.uniform(-np.pi, np.pi)))
     bearings = np.sort(rng.uniform(-np.pi / 2, np.pi / 2, 2 * n))
     ranges = rng.uniform(0.5, 8.0, 2 * n)
     pts = np.column_stack([ranges * np.cos(bearings), ranges * np.sin(bearings)])
@@ -141,16 +143,22 @@ def test_global_map_with_and_without_quick_touching_agree_on_an_office_run() -> 
     """Whole runs: every update report (but P, built lazily) and the final map equal the
     GEOS path's (P built and tested for every update), for two deletion rules."""
     from albot2d.evaluation.setup import RunSpec, build_run
-    from albot2d.mapping import Albot1, Albot1Params, GlobalMapParams
+    from albot2d.mapping import Albot1, Albot1Params, GlobalMapParams, UpdateReport
 
     run = build_run(RunSpec(tour_length_m=25.0))
     frames = list(itertools.islice(run.simulator.drive(run.tour, run.profile), 700))
     for rule in ("visible", "paper"):
         outputs = []
         for quick in (True, False):
-            reports: list[tuple] = []  # type: ignore[type-arg]
+            reports: list[tuple[object, ...]] = []
+
+            def record(
+                rep: UpdateReport, lm: object, out: list[tuple[object, ...]] = reports
+            ) -> None:
+                out.append(tuple(rep[:7]))
+
             params = Albot1Params(global_map=GlobalMapParams.preset(rule))
-            m = Albot1(params, on_update=lambda rep, lm, out=reports: out.append(tuple(rep[:7])))
+            m = Albot1(params, on_update=record)
             with pytest.MonkeyPatch.context() as mp:
                 if not quick:
                     mp.setattr("albot2d.mapping.global_map.quick_touch_ring", lambda *a: None)

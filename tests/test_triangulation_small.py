@@ -33,7 +33,8 @@ def random_pair(rng: np.random.Generator, n: int) -> tuple[Surfaces, Surfaces, P
     segs = np.hstack(
         [a, a + length[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])]
     )
-    true = Pose(*rng.normal(0.0, 0.3, 2), rng.normal(0.0, 0.05))
+    x, y = rng.normal(0.0, 0.3, 2)
+    true = Pose(float(x), float(y), float(rng.normal(0.0, 0.05)))
     seen = Surfaces.from_segments(segs).transformed(true.inverse().as_array()).segments
     seen = seen + rng.normal(0.0, 0.02, seen.shape)
     flip = rng.random(n) < 0.3  # the same surface seen with its ends swapped

@@ -20,7 +20,7 @@ __all__ = ["visible_share_kernel"]
 
 
 @njit(cache=True, nogil=True)
-def visible_share_kernel(segs, vsegs, rx, ry, beyond_m, samples):  # type: ignore[no-untyped-def]
+def visible_share_kernel(segs, vsegs, rx, ry, beyond_m, samples):
     """``(N,)`` share of each surface's ``samples`` points seen through the view surfaces."""
     n, m = segs.shape[0], vsegs.shape[0]
     out = np.zeros(n)
@@ -62,7 +62,7 @@ OUT, IN, UNSURE = 0, 1, 2
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _point_seg_dist(px, py, ax, ay, bx, by):  # type: ignore[no-untyped-def]
+def _point_seg_dist(px, py, ax, ay, bx, by):
     dx, dy = bx - ax, by - ay
     den = dx * dx + dy * dy
     t = 0.0
@@ -72,12 +72,12 @@ def _point_seg_dist(px, py, ax, ay, bx, by):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _orient(ax, ay, bx, by, cx, cy):  # type: ignore[no-untyped-def]
+def _orient(ax, ay, bx, by, cx, cy):
     return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
 
 
 @njit(cache=True, nogil=True)
-def _seg_seg_dist(ax, ay, bx, by, cx, cy, dx, dy):  # type: ignore[no-untyped-def]
+def _seg_seg_dist(ax, ay, bx, by, cx, cy, dx, dy):
     o1 = _orient(ax, ay, bx, by, cx, cy)
     o2 = _orient(ax, ay, bx, by, dx, dy)
     o3 = _orient(cx, cy, dx, dy, ax, ay)
@@ -93,7 +93,7 @@ def _seg_seg_dist(ax, ay, bx, by, cx, cy, dx, dy):  # type: ignore[no-untyped-de
 
 
 @njit(cache=True, nogil=True)
-def _inside(px, py, ring):  # type: ignore[no-untyped-def]
+def _inside(px, py, ring):
     """Crossing-number point-in-polygon test (the ring is simple: any rule agrees)."""
     n = ring.shape[0]
     inside = False
@@ -107,7 +107,7 @@ def _inside(px, py, ring):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _point_seg_dist2(px, py, ax, ay, bx, by):  # type: ignore[no-untyped-def]
+def _point_seg_dist2(px, py, ax, ay, bx, by):
     dx, dy = bx - ax, by - ay
     den = dx * dx + dy * dy
     t = 0.0
@@ -118,7 +118,7 @@ def _point_seg_dist2(px, py, ax, ay, bx, by):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True)
-def _near_polygon(ax, ay, bx, by, ring, lim):  # type: ignore[no-untyped-def]
+def _near_polygon(ax, ay, bx, by, ring, lim):
     """Whether segment ab comes within ``lim`` of the simple polygon ``ring`` (inside
     counts); edges whose box is ``lim`` away from the segment's are skipped."""
     if _inside(ax, ay, ring) or _inside(bx, by, ring):
@@ -150,7 +150,7 @@ def _near_polygon(ax, ay, bx, by, ring, lim):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True)
-def quick_ring(segs, rx, ry, eps):  # type: ignore[no-untyped-def]
+def quick_ring(segs, rx, ry, eps):
     """The view polygon's vertices (the viewpoint, then the surfaces' endpoints in order,
     a vertex repeated where surfaces meet dropped: the same polygon), or an empty array
     when that polygon is not clearly simple (``ring_is_clearly_simple``)."""
@@ -173,7 +173,7 @@ def quick_ring(segs, rx, ry, eps):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True)
-def ring_is_clearly_simple(ring, eps):  # type: ignore[no-untyped-def]
+def ring_is_clearly_simple(ring, eps):
     """The closed polygon through ``ring`` (``(n, 2)``, first vertex not repeated) is simple
     with room to spare: every edge longer than ``eps``, non-adjacent edges farther apart
     than ``eps``, adjacent ones not folding back onto each other. False means unsure."""
@@ -206,7 +206,7 @@ def ring_is_clearly_simple(ring, eps):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True, nogil=True)
-def classify_touching(segs, ring, rx, ry, c, s, out_m, in_m, side_m):  # type: ignore[no-untyped-def]
+def classify_touching(segs, ring, rx, ry, c, s, out_m, in_m, side_m):
     """Per surface: ``OUT`` (``out_m`` or farther from the polygon, or wholly more than
     ``side_m`` behind the robot's lateral axis), ``IN`` (some part at least ``side_m`` in
     front of the axis lies within ``in_m`` of the polygon), else ``UNSURE``."""
