@@ -69,6 +69,13 @@ class TriangulationParams:
       one of highest ``"fitness"`` (the authors' code: the surface's length, how well its
       corner and direction agree with path integration, and its range; see
       ``albot2d.perception.tracking.match_fitness``).
+    - ``position_endpoint``: which endpoint pairs may give a position: ``"both"`` (an end
+      precisely located in both observations: unoccluded and not ``uncertain``, the
+      paper's "occluding points" read strictly) or ``"current_real"`` (the authors' code,
+      ``mfisOp.cpp``: the key point of the view's surface, an end unoccluded in the current
+      view, whatever it was in the local map; the code has no ``uncertain`` flag). With
+      ``"current_real"`` every tracked surface affords a position, so path integration is
+      left only for views with no tracked surface, as in the code.
     """
 
     use_outlier_heuristic: bool = True
@@ -78,6 +85,7 @@ class TriangulationParams:
     max_pi_deviation_m: float | None = None
     max_pi_deviation_deg: float | None = None
     choose: Literal["nearest_to_pi", "fitness"] = "nearest_to_pi"
+    position_endpoint: Literal["both", "current_real"] = "both"
 
     def __post_init__(self) -> None:
         check_non_negative(self, "heading_consensus_deg")
@@ -95,6 +103,11 @@ class TriangulationParams:
         if self.choose not in ("nearest_to_pi", "fitness"):
             raise InputError(
                 f"TriangulationParams.choose must be nearest_to_pi or fitness, got {self.choose!r}"
+            )
+        if self.position_endpoint not in ("both", "current_real"):
+            raise InputError(
+                "TriangulationParams.position_endpoint must be both or current_real, "
+                f"got {self.position_endpoint!r}"
             )
 
 
@@ -147,6 +160,8 @@ def pose_affordances(
     loc_pts = np.where(flipped[:, None, None], loc_pts[:, ::-1, :], loc_pts)
     loc_ok = np.where(flipped[:, None], loc_ok[:, ::-1], loc_ok)
     usable = loc_ok & current.localisable  # (n, 2): a precisely located real end in both
+    if params.position_endpoint == "current_real":  # the authors' code: real in the view
+        usable = ~current.occluded
 
     dist = np.hypot(cur_pts[..., 0], cur_pts[..., 1])
     if params.prefer_nearer_endpoint:

@@ -1,0 +1,66 @@
+"""Which endpoints may give a triangulated position (``TriangulationParams.position_endpoint``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from albot2d.errors import InputError
+from albot2d.geometry import Pose
+from albot2d.mapping.albot1 import Albot1Params
+from albot2d.mapping.triangulation import TriangulationParams, pose_affordances, triangulate
+from albot2d.perception.surfaces import Surfaces
+
+WALLS = np.array([[3.0, -2.0, 3.0, 2.0], [1.0, 2.0, 2.5, 2.0], [1.0, -2.0, 2.5, -2.0]])
+TRUTH = Pose(0.3, 0.1, math.radians(4.0))
+ODOMETRIC = Pose(0.32, 0.05, math.radians(1.0))
+
+
+def _pair(uncertain_local: bool, occluded_local: bool) -> tuple[Surfaces, Surfaces]:
+    """The same three walls in the local map and, exactly, from ``TRUTH``; the view sees
+    every end unoccluded but uncertain (ends seen at grazing angles)."""
+    n = len(WALLS)
+    beams = np.full((n, 2), -1)
+    local = Surfaces(
+        WALLS, np.full((n, 2), occluded_local), beams, np.full((n, 2), uncertain_local)
+    )
+    moved = Surfaces.from_segments(WALLS).transformed(TRUTH.inverse().as_array())
+    current = Surfaces(moved.segments, np.zeros((n, 2), bool), beams, np.ones((n, 2), bool))
+    return local, current
+
+
+def test_the_strict_reading_needs_a_precise_end_in_both_views() -> None:
+    local, current = _pair(uncertain_local=False, occluded_local=False)
+    strict = TriangulationParams()
+    assert strict.position_endpoint == "both"
+    assert len(pose_affordances(local, current, ODOMETRIC.theta, strict).poses) == 0
+    assert triangulate(local, current, ODOMETRIC, strict) is None
+
+
+@pytest.mark.parametrize("occluded_local", [False, True])
+def test_the_codes_reading_takes_an_end_real_in_the_current_view(occluded_local: bool) -> None:
+    # whatever the local map's end was (here even occluded), an end real in the view counts
+    local, current = _pair(uncertain_local=True, occluded_local=occluded_local)
+    code = TriangulationParams(position_endpoint="current_real")
+    aff = pose_affordances(local, current, ODOMETRIC.theta, code)
+    assert len(aff.poses) == 3
+    np.testing.assert_allclose(aff.poses, np.tile(TRUTH.as_array(), (3, 1)), atol=1e-9)
+    pose = triangulate(local, current, ODOMETRIC, code)
+    assert pose is not None
+    np.testing.assert_allclose(pose.as_array(), TRUTH.as_array(), atol=1e-9)
+
+
+def test_an_occluded_end_in_the_view_never_gives_a_position() -> None:
+    local, current = _pair(uncertain_local=False, occluded_local=False)
+    current = Surfaces(current.segments, np.ones((3, 2), bool), current.beams, current.uncertain)
+    code = TriangulationParams(position_endpoint="current_real")
+    assert len(pose_affordances(local, current, ODOMETRIC.theta, code).poses) == 0
+
+
+def test_the_original_preset_uses_the_codes_reading_and_bad_values_are_refused() -> None:
+    assert Albot1Params.preset("original").triangulation.position_endpoint == "current_real"
+    assert Albot1Params.preset("paper").triangulation.position_endpoint == "both"
+    with pytest.raises(InputError, match="position_endpoint"):
+        TriangulationParams(position_endpoint="key")  # type: ignore[arg-type]
