@@ -83,3 +83,14 @@ def test_recording_changes_nothing_and_path_integration_is_exact_without_noise()
 def test_cli_rejects_an_unknown_preset(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--preset", "bogus", "--max-frames", "5"]) == 2
     assert "bogus" in capsys.readouterr().out
+
+
+def test_cli_overrides_nested_fields(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(
+        ["--max-frames", "40", "--param", "triangulation.position_endpoint=current_real",
+         "--param", "min_tracked=3", "--windows", "1"]
+    )  # fmt: skip
+    assert code == 0
+    assert "local maps" in capsys.readouterr().out
+    assert main(["--param", "triangulation.position_endpoint=nearest"]) == 2
+    assert main(["--param", "min_tracked"]) == 2

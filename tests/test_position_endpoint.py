@@ -64,3 +64,13 @@ def test_the_original_preset_uses_the_codes_reading_and_bad_values_are_refused()
     assert Albot1Params.preset("paper").triangulation.position_endpoint == "both"
     with pytest.raises(InputError, match="position_endpoint"):
         TriangulationParams(position_endpoint="key")  # type: ignore[arg-type]
+
+
+def test_the_option_by_mapper_name() -> None:
+    from albot2d.mapping.registry import mapper_factory
+
+    made = mapper_factory("albot1[position_endpoint=current_real]")()
+    assert made.params.triangulation.position_endpoint == "current_real"  # type: ignore[attr-defined]
+    assert made.params.triangulation.choose == "nearest_to_pi"  # type: ignore[attr-defined]
+    with pytest.raises(InputError, match="position_endpoint"):
+        mapper_factory("albot1[position_endpoint=nearest]")()

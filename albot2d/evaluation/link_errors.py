@@ -383,6 +383,24 @@ def _parse_value(text: str) -> Any:
     return {"true": True, "false": False}.get(text, text)
 
 
+def _with_overrides(params: Albot1Params, items: Sequence[str]) -> Albot1Params:
+    """``KEY=VALUE`` or ``GROUP.KEY=VALUE`` (e.g. ``triangulation.position_endpoint=…``)."""
+    import dataclasses
+
+    for item in items:
+        key, eq, text = item.partition("=")
+        if not eq:
+            raise ValueError(f"--param {item!r}: give KEY=VALUE")
+        group, _, field_name = key.rpartition(".")
+        value = _parse_value(text)
+        if group:
+            inner = dataclasses.replace(getattr(params, group), **{field_name: value})
+            params = dataclasses.replace(params, **{group: inner})
+        else:
+            params = dataclasses.replace(params, **{field_name: value})
+    return params
+
+
 def _format(summary: dict[str, dict[str, float]]) -> str:
     cols = ["links", "heading_mean_deg", "heading_abs_deg", "heading_sum_deg",
             "position_mean_m", "pi_heading_abs_deg", "pi_heading_sum_deg",
@@ -404,7 +422,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--tour-length", type=float, default=100.0)
     parser.add_argument("--preset", default="paper")
     parser.add_argument(
-        "--param", action="append", default=[], help="Albot1Params KEY=VALUE override"
+        "--param",
+        action="append",
+        default=[],
+        help="Albot1Params override: KEY=VALUE or GROUP.KEY=VALUE",
     )
     parser.add_argument("--windows", type=float, nargs="*", default=[100.0])
     parser.add_argument("--max-frames", type=int, default=None)
@@ -417,11 +438,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             seed=args.seed, profile=args.profile, noise=args.noise, tour_kind=args.tour_kind,
             tour_length_m=args.tour_length, mappers=("albot1",),
         )  # fmt: skip
-        overrides = dict(kv.split("=", 1) for kv in args.param)
-        params = Albot1Params.preset(
-            args.preset, **{k: _parse_value(v) for k, v in overrides.items()}
-        )
-    except (InputError, ValueError, TypeError) as exc:
+        params = _with_overrides(Albot1Params.preset(args.preset), args.param)
+    except (InputError, ValueError, TypeError, AttributeError) as exc:
         print(f"link_errors: {exc}")
         return 2
     mapper, truth, travelled = record_run(spec, params, max_frames=args.max_frames)

@@ -58,12 +58,13 @@ BUILTIN_MAPPERS: dict[str, Callable[[], Mapper]] = {
 _REQUIRED = ("observe", "pose", "global_map", "trajectory", "counts", "timings_ms")
 
 
-_ALBOT1_OPTIONS = ("preset", "deletion", "min_tracked")
+_ALBOT1_OPTIONS = ("preset", "deletion", "min_tracked", "position_endpoint")
 
 
 def _albot1_variant(spec: str) -> Callable[[], Mapper]:
-    """``albot1[preset=original,deletion=v1,min_tracked=3]``: Albot1 with named options, so
-    readings of the paper can be compared side by side in one run."""
+    """``albot1[preset=original,deletion=v1,min_tracked=3,position_endpoint=current_real]``:
+    Albot1 with named options, so readings of the paper can be compared side by side in
+    one run."""
     body = spec[len("albot1[") : -1]
     options: dict[str, str] = {}
     for item in filter(None, (part.strip() for part in body.split(","))):
@@ -87,6 +88,13 @@ def _albot1_variant(spec: str) -> Callable[[], Mapper]:
                 f"mapper {spec!r}: min_tracked must be an integer, got {options['min_tracked']!r}"
             ) from None
     params = Albot1Params.preset(options.get("preset", "paper"), **overrides)
+    if "position_endpoint" in options:
+        import dataclasses
+
+        triangulation = dataclasses.replace(
+            params.triangulation, position_endpoint=options["position_endpoint"]
+        )
+        params = dataclasses.replace(params, triangulation=triangulation)
 
     def make() -> Mapper:
         mapper = Albot1(params)
