@@ -47,6 +47,12 @@ def test_window_budget_splits_a_known_chain_by_kind() -> None:
     assert budget["triangulation"]["position_m"] == pytest.approx(4 * math.sin(math.radians(0.5)))
     assert budget["pi_no_tracked"]["heading_deg"] == pytest.approx(0.0, abs=1e-12)
     assert budget["pi_no_tracked"]["position_m"] == pytest.approx(0.1)
+    # headings alone: the 1° turn; positions alone: the 0.1 m step
+    assert budget["all: headings only"]["position_m"] == pytest.approx(
+        4 * math.sin(math.radians(0.5))
+    )
+    assert budget["all: positions only"]["position_m"] == pytest.approx(0.1)
+    assert budget["all: positions only"]["heading_deg"] == pytest.approx(0.0, abs=1e-12)
     # a window holding only maps 3-4 sees just the link between them, which is exact
     late = window_budget(mapper, links, truth, end_m=4.0, window_m=1.5)
     assert late["all"]["position_m"] == pytest.approx(0.0, abs=1e-12)

@@ -19,9 +19,9 @@ each alternative would have given:
   endpoints' own error), and the best single affordance's position error (an oracle: how
   much a better choice could gain).
 
-``window_budget`` splits the relative-pose error accumulated over a window of travel by
-link kind, exactly, by composing counterfactual chains in which only the links of one
-kind carry their error (the rest set to the truth).
+``window_budget`` splits the relative-pose error accumulated over a window of travel into
+what the links' headings and positions contribute, and by link kind, by composing
+counterfactual chains in which only those errors are kept (the rest set to the truth).
 
 Run from the command line (small runs; see ``--help``)::
 
@@ -314,7 +314,9 @@ def window_budget(
 ) -> dict[str, dict[str, float]]:
     """The error of the last local map's pose relative to the first one within the window
     of travel ``(end_m − window_m, end_m]`` (heading °, position m), with all links as
-    estimated (``all``) and with only the links of one kind carrying their error."""
+    estimated (``all``), with only the links' headings or only their positions estimated
+    (``all: headings only`` / ``all: positions only``), and with only the links of one kind
+    carrying their error."""
     maps = mapper.route.maps
     inside = [i for i, link in enumerate(links) if end_m - window_m < link.travelled_m <= end_m]
     if len(inside) < 2:
@@ -332,15 +334,22 @@ def window_budget(
     kinds = [links[i].kind for i in range(first + 1, last + 1)]
     truth_end = _chain(true)[-1]
 
-    def error(mask: NDArray[np.bool_]) -> dict[str, float]:
-        end = _chain(np.where(mask[:, None], est, true))[-1]
+    def error(mask: NDArray[np.bool_], columns: slice = slice(0, 3)) -> dict[str, float]:
+        links = true.copy()
+        links[mask, columns] = est[mask, columns]
+        end = _chain(links)[-1]
         return {
             "links": float(mask.sum()),
             "heading_deg": math.degrees(float(wrap_angle(end[2] - truth_end[2]))),
             "position_m": float(np.hypot(*(end[:2] - truth_end[:2]))),
         }
 
-    out = {"all": error(np.ones(len(kinds), bool))}
+    every = np.ones(len(kinds), bool)
+    out = {
+        "all": error(every),
+        "all: headings only": error(every, slice(2, 3)),
+        "all: positions only": error(every, slice(0, 2)),
+    }
     for kind in sorted(set(kinds)):
         out[kind] = error(np.array([k == kind for k in kinds]))
     return out
