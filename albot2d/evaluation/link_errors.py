@@ -425,6 +425,9 @@ def _format(summary: dict[str, dict[str, float]]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--seeds", type=int, default=1, help="pool the link table over seeds SEED..SEED+N-1"
+    )
     parser.add_argument("--profile", default="dataset1")
     parser.add_argument("--noise", default="typical")
     parser.add_argument("--tour-kind", default="loop")
@@ -436,28 +439,47 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=[],
         help="Albot1Params override: KEY=VALUE or GROUP.KEY=VALUE",
     )
-    parser.add_argument("--windows", type=float, nargs="*", default=[100.0])
+    parser.add_argument(
+        "--windows", type=float, nargs="*", default=[100.0], help="window ends (first seed)"
+    )
     parser.add_argument("--max-frames", type=int, default=None)
     args = parser.parse_args(argv)
     from albot2d.errors import InputError
     from albot2d.evaluation.setup import RunSpec
 
     try:
-        spec = RunSpec(
-            seed=args.seed, profile=args.profile, noise=args.noise, tour_kind=args.tour_kind,
-            tour_length_m=args.tour_length, mappers=("albot1",),
-        )  # fmt: skip
+        specs = [
+            RunSpec(
+                seed=seed,
+                profile=args.profile,
+                noise=args.noise,
+                tour_kind=args.tour_kind,
+                tour_length_m=args.tour_length,
+                mappers=("albot1",),
+            )
+            for seed in range(args.seed, args.seed + max(args.seeds, 1))
+        ]
         params = _with_overrides(Albot1Params.preset(args.preset), args.param)
     except (InputError, ValueError, TypeError, AttributeError) as exc:
         print(f"link_errors: {exc}")
         return 2
-    mapper, truth, travelled = record_run(spec, params, max_frames=args.max_frames)
-    links = link_errors(mapper, truth, travelled)
-    print(f"{len(truth)} views, {len(links)} local maps, {travelled[-1]:.0f} m")
-    print(_format(kind_summary(links)))
-    for end in args.windows:
-        budget = window_budget(mapper, links, truth, end_m=end)
-        print(f"30 m window ending at {end:.0f} m:")
+    pooled: list[LinkError] = []
+    views = metres = 0.0
+    budgets = []
+    for i, spec in enumerate(specs):
+        mapper, truth, travelled = record_run(spec, params, max_frames=args.max_frames)
+        links = link_errors(mapper, truth, travelled)
+        pooled += links
+        views += len(truth)
+        metres += float(travelled[-1])
+        if i == 0:
+            budgets = [
+                (end, window_budget(mapper, links, truth, end_m=end)) for end in args.windows
+            ]
+    print(f"{len(specs)} run(s): {views:.0f} views, {len(pooled)} local maps, {metres:.0f} m")
+    print(_format(kind_summary(pooled)))
+    for end, budget in budgets:
+        print(f"30 m window ending at {end:.0f} m (seed {args.seed}):")
         for kind, row in budget.items():
             print(f"  {kind:22s} links {row['links']:5.0f}  heading {row['heading_deg']:+7.2f}°"
                   f"  position {row['position_m']:6.2f} m")  # fmt: skip
