@@ -58,7 +58,13 @@ BUILTIN_MAPPERS: dict[str, Callable[[], Mapper]] = {
 _REQUIRED = ("observe", "pose", "global_map", "trajectory", "counts", "timings_ms")
 
 
-_ALBOT1_OPTIONS = ("preset", "deletion", "min_tracked", "position_endpoint")
+_ALBOT1_OPTIONS = (
+    "preset",
+    "deletion",
+    "min_tracked",
+    "position_endpoint",
+    "match_candidates",
+)
 
 
 def _albot1_variant(spec: str) -> Callable[[], Mapper]:
@@ -88,13 +94,13 @@ def _albot1_variant(spec: str) -> Callable[[], Mapper]:
                 f"mapper {spec!r}: min_tracked must be an integer, got {options['min_tracked']!r}"
             ) from None
     params = Albot1Params.preset(options.get("preset", "paper"), **overrides)
-    if "position_endpoint" in options:
-        import dataclasses
+    # options of a nested parameter group: (option, group field of Albot1Params)
+    for option, group in (("position_endpoint", "triangulation"), ("match_candidates", "tracking")):
+        if option in options:
+            import dataclasses
 
-        triangulation = dataclasses.replace(
-            params.triangulation, position_endpoint=options["position_endpoint"]
-        )
-        params = dataclasses.replace(params, triangulation=triangulation)
+            inner = dataclasses.replace(getattr(params, group), **{option: options[option]})
+            params = dataclasses.replace(params, **{group: inner})
 
     def make() -> Mapper:
         mapper = Albot1(params)

@@ -1,4 +1,6 @@
-"""Which endpoints may give a triangulated position (``TriangulationParams.position_endpoint``)."""
+"""Readings of the authors' code and of algorithm #1 as printed, as named options:
+which endpoints give a triangulated position (``TriangulationParams.position_endpoint``)
+and which view surfaces RTSV may recognise (``TrackingParams.match_candidates``)."""
 
 from __future__ import annotations
 
@@ -74,3 +76,29 @@ def test_the_option_by_mapper_name() -> None:
     assert made.params.triangulation.choose == "nearest_to_pi"  # type: ignore[attr-defined]
     with pytest.raises(InputError, match="position_endpoint"):
         mapper_factory("albot1[position_endpoint=nearest]")()
+
+
+def test_rtsv_candidates_all_recognises_a_wall_now_seen_edge_on() -> None:
+    """A wall tracked from the local map, now seen under 2° (not trackable in the new
+    view): lost with the reading's trackable candidates, recognised with algorithm #1's
+    "each S_ci in V_c"."""
+    from albot2d.mapping.registry import mapper_factory
+    from albot2d.perception import rtsv, start_tracking
+    from albot2d.perception.tracking import TrackingParams, trackable_mask, view_angles_rad
+
+    # a wall 1 m long whose near end (a real corner) is at (2, 1): seen broadside first
+    local = Surfaces.from_segments(np.array([[2.0, 1.0, 2.0, 2.0]]), np.array([[False, True]]))
+    # the robot moves to (1.98, 0) turned so the wall lies almost along its line of sight
+    move = Pose(1.98, 0.0, math.radians(90.0))
+    seen = local.transformed(move.inverse().as_array())
+    assert np.degrees(view_angles_rad(seen))[0] < 1.0 and not trackable_mask(seen)[0]
+    for mode, survives in (("trackable", 0), ("all", 1)):
+        params = TrackingParams(match_candidates=mode)  # type: ignore[arg-type]
+        tracked = start_tracking(local, params)
+        assert len(tracked) == 1
+        after, _ = rtsv(tracked, seen, move, params)
+        assert len(after) == survives
+    made = mapper_factory("albot1[match_candidates=all]")()
+    assert made.params.tracking.match_candidates == "all"  # type: ignore[attr-defined]
+    with pytest.raises(InputError, match="match_candidates"):
+        TrackingParams(match_candidates="some")  # type: ignore[arg-type]
