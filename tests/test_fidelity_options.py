@@ -1,6 +1,6 @@
-"""Readings of the authors' code and of algorithm #1 as printed, as named options:
-which endpoints give a triangulated position (``TriangulationParams.position_endpoint``)
-and which view surfaces RTSV may recognise (``TrackingParams.match_candidates``)."""
+"""Named options from the error budget: which endpoints give a triangulated position
+(``TriangulationParams.position_endpoint``, the authors' code's reading) and which view
+surfaces RTSV may recognise (``TrackingParams.match_candidates``, an ablation)."""
 
 from __future__ import annotations
 
@@ -80,8 +80,8 @@ def test_the_option_by_mapper_name() -> None:
 
 def test_rtsv_candidates_all_recognises_a_wall_now_seen_edge_on() -> None:
     """A wall tracked from the local map, now seen under 2° (not trackable in the new
-    view): lost with the reading's trackable candidates, recognised with algorithm #1's
-    "each S_ci in V_c"."""
+    view): lost with the paper's trackable candidates, recognised by the ``all``
+    ablation."""
     from albot2d.mapping.registry import mapper_factory
     from albot2d.perception import rtsv, start_tracking
     from albot2d.perception.tracking import TrackingParams, trackable_mask, view_angles_rad

@@ -80,11 +80,15 @@ class TrackingParams:
     - ``fitness_floor``: when the best match's fitness is below this, no surface counts as
       tracked (the authors' code: 80, forcing an update); 0 disables it.
     - ``match_candidates``: which surfaces of the new view a tracked surface may be
-      recognised as: ``"trackable"`` (the reading and the authors' code, whose candidates
-      are the view's target objects) or ``"all"`` (algorithm #1 as printed: "for each
-      S_ci in V_c", e.g. a wall now seen edge-on, under 3°, or shortened below 40 cm by an
-      occluder). Only the new view's candidates change; a local map still starts tracking
-      its trackable surfaces.
+      recognised as: ``"trackable"`` (the paper: Appendix 1 defines V_c for RTSV as the
+      view's surfaces "that satisfy the above three criteria (i.e. those that don't, have
+      been removed)"; the authors' code matches against the view's target objects too) or
+      ``"all"``, an ablation that is *not* a reading of the paper: every surface of the
+      view, e.g. a wall now seen edge-on (under 3°) or shortened below 40 cm by an
+      occluder, so a tracked surface is not lost only because its new observation fails a
+      criterion ("some of the tracked surfaces could be missed … Albot₁ will lose track of
+      these surfaces earlier than expected", the paper says of its RTSV). A local map
+      still starts tracking only its trackable surfaces.
     """
 
     min_length_m: float = 0.40
@@ -391,7 +395,7 @@ def rtsv(
     ``increment`` is the odometry motion from the previous view to this one
     (``prev⁻¹ ⊕ current``, in the previous view's frame). ``candidates`` (bool over
     ``view``) overrides which view surfaces may match; by default the trackable ones
-    (every one with ``TrackingParams.match_candidates="all"``).
+    (every one with the ``TrackingParams.match_candidates="all"`` ablation).
     Survivors keep their ``ids`` and ``local`` geometry; ``current`` becomes the matched
     observation in ``view``.
     """
