@@ -1,5 +1,5 @@
 """Named options from the error budget: which endpoints give a triangulated position
-(``TriangulationParams.position_endpoint``, the authors' code's reading) and which view
+(``TriangulationParams.position_endpoint``, the authors' code's readings) and which view
 surfaces RTSV may recognise (``TrackingParams.match_candidates``, an ablation)."""
 
 from __future__ import annotations
@@ -61,8 +61,32 @@ def test_an_occluded_end_in_the_view_never_gives_a_position() -> None:
     assert len(pose_affordances(local, current, ODOMETRIC.theta, code).poses) == 0
 
 
+@pytest.mark.parametrize("reverse_current", [False, True])
+def test_the_programs_reading_takes_the_tracked_surfaces_key_end(reverse_current: bool) -> None:
+    """Key end real in the local map (end 0; end 1 occluded); in the view every end is
+    occluded, so only ``local_key`` affords a position, and the right one even when the
+    view lists the wall's ends the other way round (a flipped direction)."""
+    n = len(WALLS)
+    beams = np.full((n, 2), -1)
+    occ = np.tile([False, True], (n, 1))
+    local = Surfaces(WALLS, occ, beams, np.zeros((n, 2), bool))
+    moved = Surfaces.from_segments(WALLS).transformed(TRUTH.inverse().as_array()).segments
+    if reverse_current:
+        moved = moved[:, [2, 3, 0, 1]]
+    current = Surfaces(moved, np.ones((n, 2), bool), beams, np.zeros((n, 2), bool))
+    for mode, expected in (("both", 0), ("current_real", 0), ("local_key", 3)):
+        params = TriangulationParams(position_endpoint=mode)  # type: ignore[arg-type]
+        aff = pose_affordances(local, current, ODOMETRIC.theta, params)
+        assert len(aff.poses) == expected
+    aff = pose_affordances(
+        local, current, ODOMETRIC.theta, TriangulationParams(position_endpoint="local_key")
+    )
+    np.testing.assert_allclose(aff.poses, np.tile(TRUTH.as_array(), (n, 1)), atol=1e-9)
+    np.testing.assert_allclose(aff.local_points, WALLS[:, :2])  # end 0: the real one
+
+
 def test_the_original_preset_uses_the_codes_reading_and_bad_values_are_refused() -> None:
-    assert Albot1Params.preset("original").triangulation.position_endpoint == "current_real"
+    assert Albot1Params.preset("original").triangulation.position_endpoint == "local_key"
     assert Albot1Params.preset("paper").triangulation.position_endpoint == "both"
     with pytest.raises(InputError, match="position_endpoint"):
         TriangulationParams(position_endpoint="key")  # type: ignore[arg-type]
