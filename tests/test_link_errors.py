@@ -100,3 +100,42 @@ def test_cli_overrides_nested_fields(capsys: pytest.CaptureFixture[str]) -> None
     assert "local maps" in capsys.readouterr().out
     assert main(["--param", "triangulation.position_endpoint=nearest"]) == 2
     assert main(["--param", "min_tracked"]) == 2
+
+
+def test_each_kind_of_path_integration_is_told_apart() -> None:
+    """Hand-built tracked walls: none left, ends imprecise in both views, every
+    affordance beyond the gate, and the heading taken from the walls' directions."""
+    from albot2d.mapping.albot1 import Albot1Params
+    from albot2d.perception import TrackedSurfaces, start_tracking
+    from albot2d.perception.tracking import TrackingParams
+
+    walls = np.array([[3.0, -2.0, 3.0, 2.0], [1.0, 2.0, 2.5, 2.0], [1.0, -2.0, 2.5, -2.0]])
+    n = len(walls)
+    occ = np.zeros((n, 2), bool)
+    beams = np.full((n, 2), -1)
+    truth = Pose(0.3, 0.1, math.radians(4.0))
+    odometric = Pose(0.32, 0.05, math.radians(1.0))
+
+    def tracked_pair(uncertain: bool, seen_from: Pose) -> TrackedSurfaces:
+        flags = np.full((n, 2), uncertain)
+        view = Surfaces(walls, occ, beams, flags)
+        moved = view.transformed(seen_from.inverse().as_array())
+        tracked = start_tracking(view, TrackingParams(min_view_angle_deg=0.0))
+        return TrackedSurfaces(
+            tracked.ids, tracked.local, Surfaces(moved.segments, occ, beams, flags)
+        )
+
+    def kind(mapper: RecordingAlbot1, tracked: TrackedSurfaces) -> str:
+        mapper._triangulate_or_move_using_pi(tracked, odometric, 1)
+        return mapper.localisations[-1].kind  # type: ignore[union-attr]
+
+    paper = RecordingAlbot1()
+    assert kind(paper, TrackedSurfaces.empty()) == "pi_no_tracked"
+    assert kind(paper, tracked_pair(True, truth)) == "pi_no_endpoint"
+    assert kind(paper, tracked_pair(False, truth)) == "triangulation"
+    # the walls say the view is 2 m from where odometry puts it: beyond 0.4 m per step
+    assert kind(paper, tracked_pair(False, Pose(2.3, 0.1, truth.theta))) == "pi_gated"
+    fallback = RecordingAlbot1(Albot1Params(heading_fallback_surfaces=1))
+    assert kind(fallback, tracked_pair(True, truth)) == "pi_surface_heading"
+    record = paper.localisations[2]
+    assert record is not None and record.tracked == 3 and record.consistent == 3
