@@ -106,9 +106,10 @@ class Albot1Params:
     ``Albot1Params.preset("paper")`` (the defaults) and ``preset("original")`` (the
     authors' C++ code where it differs from the paper: key-endpoint matching with a fitness
     floor, no 3° viewing-angle test, update at < 3, heuristic 2 by fitness with the chosen
-    surface's own heading, every view localised with the odometry fallback, and the code's
-    global-map deletion rule) select consistent sets; ``preset("start_stop")`` is the paper
-    with ``heading_fallback_surfaces=1``, the reading for start–stop driving (moves of
+    surface's own heading and its position from the tracked surface's key end, every
+    view localised with the odometry fallback, and the code's global-map deletion rule)
+    select consistent sets; ``preset("start_stop")`` is the paper with
+    ``heading_fallback_surfaces=1``, the reading for start–stop driving (moves of
     ~3 m, whose odometric heading is less precise than one tracked wall's direction);
     keyword overrides apply on top.
     """
@@ -151,7 +152,9 @@ class Albot1Params:
                     match_order="fitness",
                     fitness_floor=80.0,
                 ),
-                triangulation=TriangulationParams(choose="fitness", heading="selected"),
+                triangulation=TriangulationParams(
+                    choose="fitness", heading="selected", position_endpoint="local_key"
+                ),
                 global_map=GlobalMapParams.preset("original"),
                 min_tracked=3,
                 localise_every_view=True,

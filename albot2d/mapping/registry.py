@@ -58,12 +58,19 @@ BUILTIN_MAPPERS: dict[str, Callable[[], Mapper]] = {
 _REQUIRED = ("observe", "pose", "global_map", "trajectory", "counts", "timings_ms")
 
 
-_ALBOT1_OPTIONS = ("preset", "deletion", "min_tracked")
+_ALBOT1_OPTIONS = (
+    "preset",
+    "deletion",
+    "min_tracked",
+    "position_endpoint",
+    "match_candidates",
+)
 
 
 def _albot1_variant(spec: str) -> Callable[[], Mapper]:
-    """``albot1[preset=original,deletion=v1,min_tracked=3]``: Albot1 with named options, so
-    readings of the paper can be compared side by side in one run."""
+    """``albot1[preset=original,deletion=v1,min_tracked=3,position_endpoint=current_real]``:
+    Albot1 with named options, so readings of the paper can be compared side by side in
+    one run."""
     body = spec[len("albot1[") : -1]
     options: dict[str, str] = {}
     for item in filter(None, (part.strip() for part in body.split(","))):
@@ -87,6 +94,13 @@ def _albot1_variant(spec: str) -> Callable[[], Mapper]:
                 f"mapper {spec!r}: min_tracked must be an integer, got {options['min_tracked']!r}"
             ) from None
     params = Albot1Params.preset(options.get("preset", "paper"), **overrides)
+    # options of a nested parameter group: (option, group field of Albot1Params)
+    for option, group in (("position_endpoint", "triangulation"), ("match_candidates", "tracking")):
+        if option in options:
+            import dataclasses
+
+            inner = dataclasses.replace(getattr(params, group), **{option: options[option]})
+            params = dataclasses.replace(params, **{group: inner})
 
     def make() -> Mapper:
         mapper = Albot1(params)

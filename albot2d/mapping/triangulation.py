@@ -48,7 +48,7 @@ from numpy.typing import NDArray
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, segment_angles, wrap_angle
 from albot2d.perception.surfaces import Surfaces
-from albot2d.perception.tracking import TrackingParams
+from albot2d.perception.tracking import TrackingParams, key_endpoints
 from albot2d.validation import check_non_negative
 
 __all__ = [
@@ -72,6 +72,15 @@ class TriangulationParams:
       one of highest ``"fitness"`` (the authors' code: the surface's length, how well its
       corner and direction agree with path integration, and its range; see
       ``albot2d.perception.tracking.match_fitness``).
+    - ``position_endpoint``: which endpoint pairs may give a position: ``"both"`` (an end
+      precisely located in both observations: unoccluded and not ``uncertain``, the
+      paper's "occluding points" read strictly); ``"local_key"`` (the authors' programs,
+      ``Mapping.cpp:recognizeTargetObjects``: the tracked surface's key point, its end
+      unoccluded in the local map, the nearer if both, whatever it is in the current view;
+      the code has no ``uncertain`` flag); or ``"current_real"`` (the code's older
+      ``mfisOp.cpp`` path: an end unoccluded in the current view, whatever it was in the
+      local map). With either code reading every tracked surface affords a position, so
+      path integration is left for views with no tracked surface, as in the code.
     """
 
     use_outlier_heuristic: bool = True
@@ -81,6 +90,7 @@ class TriangulationParams:
     max_pi_deviation_m: float | None = None
     max_pi_deviation_deg: float | None = None
     choose: Literal["nearest_to_pi", "fitness"] = "nearest_to_pi"
+    position_endpoint: Literal["both", "local_key", "current_real"] = "both"
 
     def __post_init__(self) -> None:
         check_non_negative(self, "heading_consensus_deg")
@@ -98,6 +108,11 @@ class TriangulationParams:
         if self.choose not in ("nearest_to_pi", "fitness"):
             raise InputError(
                 f"TriangulationParams.choose must be nearest_to_pi or fitness, got {self.choose!r}"
+            )
+        if self.position_endpoint not in ("both", "local_key", "current_real"):
+            raise InputError(
+                "TriangulationParams.position_endpoint must be both, local_key or "
+                f"current_real, got {self.position_endpoint!r}"
             )
 
 
@@ -150,6 +165,13 @@ def pose_affordances(
     loc_pts = np.where(flipped[:, None, None], loc_pts[:, ::-1, :], loc_pts)
     loc_ok = np.where(flipped[:, None], loc_ok[:, ::-1], loc_ok)
     usable = loc_ok & current.localisable  # (n, 2): a precisely located real end in both
+    if params.position_endpoint == "current_real":  # the code's mfisOp.cpp: real in the view
+        usable = ~current.occluded
+    elif params.position_endpoint == "local_key":  # the code's programs: the tracked key end
+        rows = np.arange(n)
+        key = key_endpoints(local)  # in the local observation's own endpoint order
+        usable = np.zeros((n, 2), bool)
+        usable[rows, np.where(flipped, 1 - key, key)] = ~local.occluded[rows, key]
 
     dist = np.hypot(cur_pts[..., 0], cur_pts[..., 1])
     if params.prefer_nearer_endpoint:

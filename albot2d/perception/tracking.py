@@ -79,6 +79,16 @@ class TrackingParams:
       max(range_mm, 2000), see ``match_fitness``).
     - ``fitness_floor``: when the best match's fitness is below this, no surface counts as
       tracked (the authors' code: 80, forcing an update); 0 disables it.
+    - ``match_candidates``: which surfaces of the new view a tracked surface may be
+      recognised as: ``"trackable"`` (the paper: Appendix 1 defines V_c for RTSV as the
+      view's surfaces "that satisfy the above three criteria (i.e. those that don't, have
+      been removed)"; the authors' code matches against the view's target objects too) or
+      ``"all"``, an ablation that is *not* a reading of the paper: every surface of the
+      view, e.g. a wall now seen edge-on (under 3°) or shortened below 40 cm by an
+      occluder, so a tracked surface is not lost only because its new observation fails a
+      criterion ("some of the tracked surfaces could be missed … Albot₁ will lose track of
+      these surfaces earlier than expected", the paper says of its RTSV). A local map
+      still starts tracking only its trackable surfaces.
     """
 
     min_length_m: float = 0.40
@@ -89,6 +99,7 @@ class TrackingParams:
     match_endpoint: Literal["corresponding", "key"] = "corresponding"
     match_order: Literal["distance", "fitness"] = "distance"
     fitness_floor: float = 0.0
+    match_candidates: Literal["trackable", "all"] = "trackable"
 
     def __post_init__(self) -> None:
         check_non_negative(self, "min_length_m", "fitness_floor")
@@ -100,6 +111,11 @@ class TrackingParams:
         if self.match_order not in ("distance", "fitness"):
             raise InputError(
                 f"TrackingParams.match_order must be distance or fitness, got {self.match_order!r}"
+            )
+        if self.match_candidates not in ("trackable", "all"):
+            raise InputError(
+                "TrackingParams.match_candidates must be trackable or all, "
+                f"got {self.match_candidates!r}"
             )
         check_in_range(self, "min_view_angle_deg", 0.0, 180.0)
         check_in_range(self, "match_angle_deg", 0.0, 90.0)
@@ -378,12 +394,15 @@ def rtsv(
 
     ``increment`` is the odometry motion from the previous view to this one
     (``prev⁻¹ ⊕ current``, in the previous view's frame). ``candidates`` (bool over
-    ``view``) overrides which view surfaces may match; by default the trackable ones.
+    ``view``) overrides which view surfaces may match; by default the trackable ones
+    (every one with the ``TrackingParams.match_candidates="all"`` ablation).
     Survivors keep their ``ids`` and ``local`` geometry; ``current`` becomes the matched
     observation in ``view``.
     """
     params = TrackingParams() if params is None else params
     cand = trackable_mask(view, params) if candidates is None else np.asarray(candidates, bool)
+    if candidates is None and params.match_candidates == "all":  # algorithm #1 as printed
+        cand = np.ones(len(view), bool)
     predicted = tracked.current.transformed(increment.inverse().as_array())
     ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
     # ti are distinct indices into a valid tracker state: its invariants hold by
