@@ -70,21 +70,50 @@ def _visible_share(
 ) -> FloatArray:
     """The share of the surfaces' sample points seen from the viewpoint: the sight line
     through the point meets a view surface, the nearest meeting at most ``beyond_m`` short
-    of the point (or beyond it)."""
+    of the point (or beyond it).
+
+    Both halves are shapely predicates on the prepared view surfaces (six times cheaper
+    than constructing each meeting and measuring its distance): the whole sight line meets
+    the view, and its piece from the viewpoint to ``beyond_m`` short of the point does not
+    (a meeting there is nearer than the rule allows)."""
     frac = (np.arange(samples) + 0.5) / samples
     pts = segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2])
     pts = pts.reshape(-1, 2)
     o = np.array([robot.x, robot.y])
     dist = np.linalg.norm(pts - o, axis=1)
+    unit = (pts - o) / np.maximum(dist, 1e-12)[:, None]
+    origin = np.broadcast_to(o, pts.shape)
+    surfaces = shapely.multilinestrings(view.reshape(-1, 2, 2))
+    shapely.prepare(surfaces)
     # The sight line goes on past the point (a point in front of the view's surfaces is in
     # the free space the laser crossed): as far as the farthest view point, and more.
     reach = float(np.linalg.norm(view.reshape(-1, 2) - o, axis=1).max()) + 1.0
-    far = o + (pts - o) * ((reach + dist) / np.maximum(dist, 1e-12))[:, None]
-    sight = shapely.linestrings(np.stack([np.broadcast_to(o, pts.shape), far], axis=1))
-    meets = shapely.intersection(sight, shapely.multilinestrings(view.reshape(-1, 2, 2)))
-    near = shapely.distance(shapely.points(o), meets)  # NaN where the sight line meets none
-    seen = ~shapely.is_empty(meets) & (dist - near <= beyond_m)
-    return seen.reshape(len(segs), samples).mean(axis=1)
+    far = o + unit * (reach + dist)[:, None]
+    meets = shapely.intersects(surfaces, shapely.linestrings(np.stack([origin, far], axis=1)))
+    short = dist - beyond_m
+    ahead = np.flatnonzero(meets & (short > 0.0))  # a nearer meeting is possible
+    blocked = np.zeros(len(pts), dtype=bool)
+    if len(ahead):
+        stop = o + unit[ahead] * short[ahead, None]
+        blocked[ahead] = shapely.intersects(
+            surfaces, shapely.linestrings(np.stack([origin[ahead], stop], axis=1))
+        )
+    return (meets & ~blocked).reshape(len(segs), samples).mean(axis=1)
+
+
+def _touching(poly: shapely.Geometry, segs: FloatArray) -> NDArray[np.bool_]:
+    """Which surfaces touch ``poly``: only those whose bounding box meets the polygon's are
+    asked (a map holds hundreds of surfaces, a view polygon is a few metres across)."""
+    x0, y0, x1, y1 = poly.bounds
+    out = np.zeros(len(segs), dtype=bool)
+    near = np.flatnonzero(
+        (np.minimum(segs[:, 0], segs[:, 2]) <= x1) & (np.maximum(segs[:, 0], segs[:, 2]) >= x0)
+        & (np.minimum(segs[:, 1], segs[:, 3]) <= y1) & (np.maximum(segs[:, 1], segs[:, 3]) >= y0)
+    )  # fmt: skip
+    if len(near):
+        shapely.prepare(poly)
+        out[near] = shapely.intersects(poly, shapely.linestrings(segs[near].reshape(-1, 2, 2)))
+    return out
 
 
 def check_update_deleted_facing_overlap(
@@ -110,7 +139,7 @@ def check_update_deleted_facing_overlap(
     segs = snap.segments[older]
     ids = snap.map_ids[older]
     poly = _view_polygon(view, robot, params.enlarge_m, params.enlarge, params.include_viewpoint)
-    hits = shapely.intersects(poly, shapely.linestrings(segs.reshape(-1, 2, 2)))
+    hits = _touching(poly, segs)
     seeable = hits & _facing(segs, robot, params.facing_test)
     if params.seen_side == "front":  # the robot on the left of the directed surface
         d = segs[:, 2:] - segs[:, :2]
