@@ -6,14 +6,16 @@ from the constructed sight-line meetings."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 import pytest
 import shapely
+import shapely.affinity
 
 from albot2d.evaluation.campaign import CampaignParams
-from albot2d.evaluation.deletion_invariant import _visible_share
+from albot2d.evaluation.deletion_invariant import _ahead, _seen_samples
 from albot2d.evaluation.episode import EpisodeSpec
 from albot2d.evaluation.episode_metrics import complete_scores, episode_metrics
 from albot2d.evaluation.experiment import ExperimentResult, run_experiment
@@ -132,6 +134,21 @@ def test_visible_share_equals_the_constructed_meetings(seed: int) -> None:
     half = rng.uniform(0.1, 1.0, 40)[:, None] * np.column_stack([np.cos(heading), np.sin(heading)])
     segs = np.hstack([centre - half, centre + half])
     for beyond_m in (0.0, 0.5):
-        share = _visible_share(segs, view, robot, beyond_m, 8)
-        assert np.array_equal(share, _visible_share_by_meetings(segs, view, robot, beyond_m, 8))
+        expected = _visible_share_by_meetings(segs, view, robot, beyond_m, 8)
+        share = _seen_samples(segs, view, robot, beyond_m, 8).mean(axis=1)
+        assert np.array_equal(share, expected)
+        for least in (0.5, 1.0):  # surfaces that cannot reach the share are left out early
+            some = _seen_samples(segs, view, robot, beyond_m, 8, least_share=least).mean(axis=1)
+            assert np.array_equal(some >= least, expected >= least)
     assert 0.0 < share.mean() < 1.0  # some seen, some not: the test can tell them apart
+    assert 0 < np.count_nonzero(share == 1.0) < len(share)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_half_plane_square_is_the_affine_transform_of_the_robot_frame_one(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for x, y, theta, big in rng.uniform([-50, -50, -4, 1], [50, 50, 4, 200], (50, 4)):
+        square = shapely.Polygon([(0, -big), (big, -big), (big, big), (0, big)])
+        c, s = math.cos(theta), math.sin(theta)
+        moved = shapely.affinity.affine_transform(square, [c, -s, s, c, x, y])
+        assert shapely.equals_exact(_ahead(Pose(x, y, theta), big), moved, tolerance=0.0)

@@ -10,7 +10,6 @@ import math
 
 import numpy as np
 import shapely
-import shapely.affinity
 from numpy.typing import NDArray
 
 from albot2d.evaluation.invariant_base import InvariantError, fail
@@ -36,6 +35,16 @@ def _facing(segs: FloatArray, robot: Pose, test: str) -> NDArray[np.bool_]:
     return (fwd0 + fwd1) > 0.0
 
 
+def _ahead(robot: Pose, big: float) -> shapely.Geometry:
+    """The square ``x >= 0`` of the robot's frame, ``big`` a side, in the map's frame: the
+    corners moved as ``shapely.affinity.affine_transform`` moves them (the same floats),
+    without its per-geometry overhead."""
+    x = np.array([0.0, big, big, 0.0, 0.0])
+    y = np.array([-big, -big, big, big, -big])
+    c, s = math.cos(robot.theta), math.sin(robot.theta)
+    return shapely.polygons(np.stack([c * x + -s * y + robot.x, s * x + c * y + robot.y]).T)
+
+
 def _view_polygon(
     view: FloatArray, robot: Pose, enlarge_m: float, mode: str, through_viewpoint: bool
 ) -> shapely.Geometry:
@@ -58,19 +67,23 @@ def _view_polygon(
     poly = poly.buffer(enlarge_m)
     if mode == "forward":  # keep x >= 0 in the robot frame
         big = 10.0 * (1.0 + float(np.abs(pts - o).max()) + enlarge_m)
-        ahead = shapely.Polygon([(0, -big), (big, -big), (big, big), (0, big)])
-        c, s = math.cos(robot.theta), math.sin(robot.theta)
-        ahead = shapely.affinity.affine_transform(ahead, [c, -s, s, c, robot.x, robot.y])
-        poly = poly.intersection(ahead)
+        poly = poly.intersection(_ahead(robot, big))
     return poly
 
 
-def _visible_share(
-    segs: FloatArray, view: FloatArray, robot: Pose, beyond_m: float, samples: int
-) -> FloatArray:
-    """The share of the surfaces' sample points seen from the viewpoint: the sight line
-    through the point meets a view surface, the nearest meeting at most ``beyond_m`` short
-    of the point (or beyond it).
+def _seen_samples(
+    segs: FloatArray,
+    view: FloatArray,
+    robot: Pose,
+    beyond_m: float,
+    samples: int,
+    least_share: float = 0.0,
+) -> NDArray[np.bool_]:
+    """``(N, samples)``: which of the surfaces' sample points are seen from the viewpoint:
+    the sight line through the point meets a view surface, the nearest meeting at most
+    ``beyond_m`` short of the point (or beyond it). A surface whose sight lines meet the
+    view at fewer than ``least_share`` of its points cannot reach that share seen, and is
+    left all unseen without the second test.
 
     Both halves are shapely predicates on the prepared view surfaces (six times cheaper
     than constructing each meeting and measuring its distance): the whole sight line meets
@@ -90,15 +103,17 @@ def _visible_share(
     reach = float(np.linalg.norm(view.reshape(-1, 2) - o, axis=1).max()) + 1.0
     far = o + unit * (reach + dist)[:, None]
     meets = shapely.intersects(surfaces, shapely.linestrings(np.stack([origin, far], axis=1)))
+    meets = meets.reshape(len(segs), samples)
+    meets &= (meets.mean(axis=1) >= least_share)[:, None]
     short = dist - beyond_m
-    ahead = np.flatnonzero(meets & (short > 0.0))  # a nearer meeting is possible
+    ahead = np.flatnonzero(meets.ravel() & (short > 0.0))  # a nearer meeting is possible
     blocked = np.zeros(len(pts), dtype=bool)
     if len(ahead):
         stop = o + unit[ahead] * short[ahead, None]
         blocked[ahead] = shapely.intersects(
             surfaces, shapely.linestrings(np.stack([origin[ahead], stop], axis=1))
         )
-    return (meets & ~blocked).reshape(len(segs), samples).mean(axis=1)
+    return meets & ~blocked.reshape(len(segs), samples)
 
 
 def _touching(poly: shapely.Geometry, segs: FloatArray) -> NDArray[np.bool_]:
@@ -147,9 +162,10 @@ def check_update_deleted_facing_overlap(
         seeable &= d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0] > 0
     if params.could_see == "visible" and seeable.any():
         share = np.zeros(len(segs))
-        share[seeable] = _visible_share(
-            segs[seeable], view, robot, params.enlarge_m, params.visible_samples
-        )
+        share[seeable] = _seen_samples(
+            segs[seeable], view, robot, params.enlarge_m, params.visible_samples,
+            least_share=params.min_visible_share,
+        ).mean(axis=1)  # fmt: skip
         seeable &= (share > 0) & (share >= params.min_visible_share)
     current = report.map_id - 1
     left = (hits if params.current_map == "touch" else seeable) & (ids == current)
