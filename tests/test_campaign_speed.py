@@ -121,7 +121,8 @@ def _visible_share_by_meetings(
 @pytest.mark.parametrize("seed", range(6))
 def test_visible_share_equals_the_constructed_meetings(seed: int) -> None:
     rng = np.random.default_rng(seed)
-    robot = Pose(*rng.uniform(-1.0, 1.0, 2), float(rng.uniform(-np.pi, np.pi)))
+    x, y, theta = rng.uniform([-1.0, -1.0, -np.pi], [1.0, 1.0, np.pi])
+    robot = Pose(float(x), float(y), float(theta))
     # A view: a chain of surfaces around the robot (scan order), with gaps.
     bearings = np.sort(rng.uniform(-1.5, 1.5, 24))
     ranges = rng.uniform(2.0, 6.0, 24)

@@ -9,12 +9,14 @@ workers or the order they finish in.
 
 ``run_episode`` runs the experiment (``run_experiment``, exactly as ``albot2d run`` does
 with the same ``RunSpec``) with the invariant checks attached (``albot2d.evaluation.
-invariants``) and returns an :class:`EpisodeOutcome`: the JSON record for the campaign's
-``episodes.jsonl`` and, for a failing episode, the reproducer document (a report.json that
-``albot2d run --reproduce`` replays, plus the world JSON and the failure). ``run_checked``
-also returns the run itself; ``crash_outcome`` builds the outcome of an episode that
-crashed, also outside ``run_episode`` (a worker process that died), with a reproducer
-that replays like any other; ``albot2d.evaluation.reproducer`` re-runs one with its checks.
+invariants``), scores only the record's metrics (``albot2d.evaluation.episode_metrics``)
+and returns an :class:`EpisodeOutcome`: the JSON record for the campaign's
+``episodes.jsonl`` and, for a failing episode, the reproducer document (a fully scored
+report.json that ``albot2d run --reproduce`` replays, plus the world JSON and the failure).
+``run_checked`` also returns the run itself (scored in full unless asked otherwise);
+``crash_outcome`` builds the outcome of an episode that crashed, also outside
+``run_episode`` (a worker process that died), with a reproducer that replays like any
+other; ``albot2d.evaluation.reproducer`` re-runs one with its checks.
 """
 
 from __future__ import annotations
