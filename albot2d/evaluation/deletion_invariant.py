@@ -10,7 +10,6 @@ import math
 
 import numpy as np
 import shapely
-import shapely.affinity
 from numpy.typing import NDArray
 
 from albot2d.evaluation.invariant_base import InvariantError, fail
@@ -36,6 +35,16 @@ def _facing(segs: FloatArray, robot: Pose, test: str) -> NDArray[np.bool_]:
     return (fwd0 + fwd1) > 0.0
 
 
+def _ahead(robot: Pose, big: float) -> shapely.Geometry:
+    """The square ``x >= 0`` of the robot's frame, ``big`` a side, in the map's frame: the
+    corners moved as ``shapely.affinity.affine_transform`` moves them (the same floats),
+    without its per-geometry overhead."""
+    x = np.array([0.0, big, big, 0.0, 0.0])
+    y = np.array([-big, -big, big, big, -big])
+    c, s = math.cos(robot.theta), math.sin(robot.theta)
+    return shapely.polygons(np.stack([c * x + -s * y + robot.x, s * x + c * y + robot.y]).T)
+
+
 def _view_polygon(
     view: FloatArray, robot: Pose, enlarge_m: float, mode: str, through_viewpoint: bool
 ) -> shapely.Geometry:
@@ -58,33 +67,68 @@ def _view_polygon(
     poly = poly.buffer(enlarge_m)
     if mode == "forward":  # keep x >= 0 in the robot frame
         big = 10.0 * (1.0 + float(np.abs(pts - o).max()) + enlarge_m)
-        ahead = shapely.Polygon([(0, -big), (big, -big), (big, big), (0, big)])
-        c, s = math.cos(robot.theta), math.sin(robot.theta)
-        ahead = shapely.affinity.affine_transform(ahead, [c, -s, s, c, robot.x, robot.y])
-        poly = poly.intersection(ahead)
+        poly = poly.intersection(_ahead(robot, big))
     return poly
 
 
-def _visible_share(
-    segs: FloatArray, view: FloatArray, robot: Pose, beyond_m: float, samples: int
-) -> FloatArray:
-    """The share of the surfaces' sample points seen from the viewpoint: the sight line
-    through the point meets a view surface, the nearest meeting at most ``beyond_m`` short
-    of the point (or beyond it)."""
+def _seen_samples(
+    segs: FloatArray,
+    view: FloatArray,
+    robot: Pose,
+    beyond_m: float,
+    samples: int,
+    least_share: float = 0.0,
+) -> NDArray[np.bool_]:
+    """``(N, samples)``: which of the surfaces' sample points are seen from the viewpoint:
+    the sight line through the point meets a view surface, the nearest meeting at most
+    ``beyond_m`` short of the point (or beyond it). A surface whose sight lines meet the
+    view at fewer than ``least_share`` of its points cannot reach that share seen, and is
+    left all unseen without the second test.
+
+    Both halves are shapely predicates on the prepared view surfaces (six times cheaper
+    than constructing each meeting and measuring its distance): the whole sight line meets
+    the view, and its piece from the viewpoint to ``beyond_m`` short of the point does not
+    (a meeting there is nearer than the rule allows)."""
     frac = (np.arange(samples) + 0.5) / samples
     pts = segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2])
     pts = pts.reshape(-1, 2)
     o = np.array([robot.x, robot.y])
     dist = np.linalg.norm(pts - o, axis=1)
+    unit = (pts - o) / np.maximum(dist, 1e-12)[:, None]
+    origin = np.broadcast_to(o, pts.shape)
+    surfaces = shapely.multilinestrings(view.reshape(-1, 2, 2))
+    shapely.prepare(surfaces)
     # The sight line goes on past the point (a point in front of the view's surfaces is in
     # the free space the laser crossed): as far as the farthest view point, and more.
     reach = float(np.linalg.norm(view.reshape(-1, 2) - o, axis=1).max()) + 1.0
-    far = o + (pts - o) * ((reach + dist) / np.maximum(dist, 1e-12))[:, None]
-    sight = shapely.linestrings(np.stack([np.broadcast_to(o, pts.shape), far], axis=1))
-    meets = shapely.intersection(sight, shapely.multilinestrings(view.reshape(-1, 2, 2)))
-    near = shapely.distance(shapely.points(o), meets)  # NaN where the sight line meets none
-    seen = ~shapely.is_empty(meets) & (dist - near <= beyond_m)
-    return seen.reshape(len(segs), samples).mean(axis=1)
+    far = o + unit * (reach + dist)[:, None]
+    meets = shapely.intersects(surfaces, shapely.linestrings(np.stack([origin, far], axis=1)))
+    meets = meets.reshape(len(segs), samples)
+    meets &= (meets.mean(axis=1) >= least_share)[:, None]
+    short = dist - beyond_m
+    ahead = np.flatnonzero(meets.ravel() & (short > 0.0))  # a nearer meeting is possible
+    blocked = np.zeros(len(pts), dtype=bool)
+    if len(ahead):
+        stop = o + unit[ahead] * short[ahead, None]
+        blocked[ahead] = shapely.intersects(
+            surfaces, shapely.linestrings(np.stack([origin[ahead], stop], axis=1))
+        )
+    return meets & ~blocked.reshape(len(segs), samples)
+
+
+def _touching(poly: shapely.Geometry, segs: FloatArray) -> NDArray[np.bool_]:
+    """Which surfaces touch ``poly``: only those whose bounding box meets the polygon's are
+    asked (a map holds hundreds of surfaces, a view polygon is a few metres across)."""
+    x0, y0, x1, y1 = poly.bounds
+    out = np.zeros(len(segs), dtype=bool)
+    near = np.flatnonzero(
+        (np.minimum(segs[:, 0], segs[:, 2]) <= x1) & (np.maximum(segs[:, 0], segs[:, 2]) >= x0)
+        & (np.minimum(segs[:, 1], segs[:, 3]) <= y1) & (np.maximum(segs[:, 1], segs[:, 3]) >= y0)
+    )  # fmt: skip
+    if len(near):
+        shapely.prepare(poly)
+        out[near] = shapely.intersects(poly, shapely.linestrings(segs[near].reshape(-1, 2, 2)))
+    return out
 
 
 def check_update_deleted_facing_overlap(
@@ -110,7 +154,7 @@ def check_update_deleted_facing_overlap(
     segs = snap.segments[older]
     ids = snap.map_ids[older]
     poly = _view_polygon(view, robot, params.enlarge_m, params.enlarge, params.include_viewpoint)
-    hits = shapely.intersects(poly, shapely.linestrings(segs.reshape(-1, 2, 2)))
+    hits = _touching(poly, segs)
     seeable = hits & _facing(segs, robot, params.facing_test)
     if params.seen_side == "front":  # the robot on the left of the directed surface
         d = segs[:, 2:] - segs[:, :2]
@@ -118,9 +162,10 @@ def check_update_deleted_facing_overlap(
         seeable &= d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0] > 0
     if params.could_see == "visible" and seeable.any():
         share = np.zeros(len(segs))
-        share[seeable] = _visible_share(
-            segs[seeable], view, robot, params.enlarge_m, params.visible_samples
-        )
+        share[seeable] = _seen_samples(
+            segs[seeable], view, robot, params.enlarge_m, params.visible_samples,
+            least_share=params.min_visible_share,
+        ).mean(axis=1)  # fmt: skip
         seeable &= (share > 0) & (share >= params.min_visible_share)
     current = report.map_id - 1
     left = (hits if params.current_map == "touch" else seeable) & (ids == current)

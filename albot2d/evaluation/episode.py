@@ -9,12 +9,14 @@ workers or the order they finish in.
 
 ``run_episode`` runs the experiment (``run_experiment``, exactly as ``albot2d run`` does
 with the same ``RunSpec``) with the invariant checks attached (``albot2d.evaluation.
-invariants``) and returns an :class:`EpisodeOutcome`: the JSON record for the campaign's
-``episodes.jsonl`` and, for a failing episode, the reproducer document (a report.json that
-``albot2d run --reproduce`` replays, plus the world JSON and the failure). ``run_checked``
-also returns the run itself; ``crash_outcome`` builds the outcome of an episode that
-crashed, also outside ``run_episode`` (a worker process that died), with a reproducer
-that replays like any other; ``albot2d.evaluation.reproducer`` re-runs one with its checks.
+invariants``), scores only the record's metrics (``albot2d.evaluation.episode_metrics``)
+and returns an :class:`EpisodeOutcome`: the JSON record for the campaign's
+``episodes.jsonl`` and, for a failing episode, the reproducer document (a fully scored
+report.json that ``albot2d run --reproduce`` replays, plus the world JSON and the failure).
+``run_checked`` also returns the run itself (scored in full unless asked otherwise);
+``crash_outcome`` builds the outcome of an episode that crashed, also outside
+``run_episode`` (a worker process that died), with a reproducer that replays like any
+other; ``albot2d.evaluation.reproducer`` re-runs one with its checks.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ import numpy as np
 from albot2d.errors import InputError
 from albot2d.evaluation import invariants as inv
 from albot2d.evaluation import sim_invariants as sim_inv
+from albot2d.evaluation.episode_metrics import complete_scores, episode_metrics
 from albot2d.evaluation.experiment import (
     ExperimentResult,
     RunSpec,
@@ -276,36 +279,6 @@ class _Checks:
         return metrics
 
 
-def _score_metrics(result: ExperimentResult) -> dict[str, Any]:
-    """An episode's metrics: a flat view of its (only) mapper's and odometry's scores."""
-    (m,) = result.scores.mappers.values()
-    odometry, trace = result.scores.odometry, result.trace
-    counts, home, quality = m.counts, m.homing_summary, m.map.quality
-    return {
-        "frames": trace.n_frames, "travelled_m": float(trace.travelled_m[-1]),
-        "collided_frames": int(trace.collided.sum()), "local_maps": counts.local_maps,
-        "triangulations": counts.triangulations,
-        "path_integrations": counts.path_integrations,
-        "global_map_surfaces": counts.global_map_surfaces,
-        "homing_stops": home.stops,
-        "homing_bearing_error_max_deg": home.bearing_abs_max_deg,
-        "homing_distance_error_max_m": home.distance_abs_max_m,
-        "rpe_trans_m": None if m.rpe is None else m.rpe.overall.trans_m_mean,
-        "rpe_rot_deg": None if m.rpe is None else m.rpe.overall.rot_deg_mean,
-        "odometry_rpe_trans_m": None if odometry.rpe is None else odometry.rpe.overall.trans_m_mean,
-        "odometry_rpe_rot_deg": None if odometry.rpe is None else odometry.rpe.overall.rot_deg_mean,
-        "end_trans_m": None if m.end_pose_error is None else m.end_pose_error.trans_m,
-        "end_rot_deg": None if m.end_pose_error is None else m.end_pose_error.rot_deg,
-        "odometry_end_trans_m": (None if odometry.end_pose_error is None
-                                 else odometry.end_pose_error.trans_m),
-        "odometry_end_rot_deg": (None if odometry.end_pose_error is None
-                                 else odometry.end_pose_error.rot_deg),
-        "map_accuracy_m": quality.accuracy_m_mean,
-        "map_accuracy_p95_m": quality.accuracy_m_p95,
-        "map_completeness": quality.completeness,
-    }  # fmt: skip
-
-
 def _digest(result: ExperimentResult) -> str:
     """SHA-256 of what the run produced (poses and map): equal digests, equal episodes."""
     trace = result.trace
@@ -383,14 +356,21 @@ def crash_outcome(
 
 def run_episode(spec: EpisodeSpec, params: EvaluationParams | None = None) -> EpisodeOutcome:
     """Run one episode with every applicable invariant checked; never raises for a failure
-    of the run itself (a crash is recorded with its traceback)."""
-    return run_checked(spec, params)[0]
+    of the run itself (a crash is recorded with its traceback). Only the record's metrics
+    are scored, unless the episode fails (its reproducer is a fully scored report)."""
+    return run_checked(spec, params, full_report=False)[0]
 
 
 def run_checked(
-    spec: EpisodeSpec, params: EvaluationParams | None = None, **hooks: Any
+    spec: EpisodeSpec,
+    params: EvaluationParams | None = None,
+    *,
+    full_report: bool = True,
+    **hooks: Any,
 ) -> tuple[EpisodeOutcome, ExperimentResult | None]:
-    """``run_episode``, also returning the run itself (``None`` when it crashed)."""
+    """``run_episode``, also returning the run itself (``None`` when it crashed), scored in
+    full (``albot2d run --reproduce`` writes its report) unless ``full_report`` is false:
+    then only a failing episode's run is (``episode_metrics.complete_scores``)."""
     params = params or EvaluationParams()
     record = spec.describe()
     checks = _Checks(spec)
@@ -403,10 +383,13 @@ def run_checked(
             on_start=checks.on_start,
             on_frame=checks.chain(hooks.pop("on_frame", None)),
             on_mappers=checks.on_mappers,
+            score=full_report,
             **hooks,
         )
-        metrics = _score_metrics(result)
+        metrics = episode_metrics(result, params)
         metrics |= checks.finish(result)
+        if checks.violations:  # the reproducer is a fully scored report
+            result = complete_scores(result, params)
     except Exception as exc:  # any failure is a finding, not the end of the campaign
         error = {
             "type": type(exc).__name__,
