@@ -30,9 +30,7 @@ def random_pair(rng: np.random.Generator, n: int) -> tuple[Surfaces, Surfaces, P
     a = rng.uniform(-5.0, 5.0, (n, 2))
     ang = rng.uniform(-np.pi, np.pi, n)
     length = rng.uniform(0.3, 4.0, n)
-    segs = np.hstack(
-        [a, a + length[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])]
-    )
+    segs = np.hstack([a, a + length[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])])
     x, y = rng.normal(0.0, 0.3, 2)
     true = Pose(float(x), float(y), float(rng.normal(0.0, 0.05)))
     seen = Surfaces.from_segments(segs).transformed(true.inverse().as_array()).segments
