@@ -21,7 +21,7 @@ thread keeps runs bit-for-bit reproducible.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -29,7 +29,13 @@ from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.frames import Frame
-from albot2d.geometry import Pose, between_arrays, compose_arrays, transform_points
+from albot2d.geometry import (
+    Pose,
+    between_arrays,
+    compose_arrays,
+    transform_points,
+    wrap_angle,
+)
 from albot2d.mapping.baselines import ViewIntegrator as _ViewIntegrator
 from albot2d.mapping.global_map import MapSnapshot
 from albot2d.mapping.protocol import MapperCounts, StageTimer
@@ -398,7 +404,31 @@ class LoopClosingSLAM:
         target = self._submap(target_ids, j)
         path = abs(self._kf_path_m[i] - self._kf_path_m[j])
         scan = self._kf_points[i]
-        return self.verifier.check(i, j, query, scan, target, guess, path, estimate)
+        check = self.verifier.check(i, j, query, scan, target, guess, path, estimate)
+        if self.params.loops.gate == "chi2" and check.accepted:
+            check = self._chi2_gate(check)
+        return check
+
+    def _chi2_gate(self, check: ClosureCheck) -> ClosureCheck:
+        """Judge a closure that registered well by its innovation: its relative pose
+        against the current estimate's, under the estimate's covariance (the graph's
+        marginals) plus the closure's own (the information it would enter the graph
+        with). A test of individual compatibility: a closure the graph's uncertainty
+        cannot explain is a look-alike place or a registration that slid."""
+        i, j, est = check.i, check.j, self.graph.estimate
+        covariance = self.graph.relative_covariance(i, j)
+        if covariance is None:
+            return replace(check, accepted=False, reason="no covariance for the χ² gate")
+        closure = np.linalg.inv(self.graph.loop_information_matrix(check.information))
+        innovation = between_arrays(check.relative, between_arrays(est[i], est[j]))
+        innovation[2] = wrap_angle(innovation[2])
+        chi2 = float(innovation @ np.linalg.solve(covariance + closure, innovation))
+        limit = self.params.loops.gate_chi2
+        reason = ""
+        if chi2 > limit:
+            reason = (f"χ² gate: innovation {chi2:.1f} > {limit:g} (correction "
+                      f"{check.correction_m:.2f} m / {check.correction_deg:.1f}°)")  # fmt: skip
+        return replace(check, accepted=not reason, reason=reason, chi2=chi2)
 
     def propose_closure(
         self, i: int, j: int, guess: NDArray[np.float64] | None = None
