@@ -406,10 +406,10 @@ class LoopClosingSLAM:
         scan = self._kf_points[i]
         check = self.verifier.check(i, j, query, scan, target, guess, path, estimate)
         if self.params.loops.gate == "chi2" and check.accepted:
-            check = self._chi2_gate(check)
+            check = self.chi2_gate(check)
         return check
 
-    def _chi2_gate(self, check: ClosureCheck) -> ClosureCheck:
+    def chi2_gate(self, check: ClosureCheck) -> ClosureCheck:
         """Judge a closure that registered well by its innovation: its relative pose
         against the current estimate's, under the estimate's covariance (the graph's
         marginals) plus the closure's own (the information it would enter the graph
