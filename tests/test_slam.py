@@ -122,6 +122,7 @@ def test_scans_without_enough_hits_follow_odometry(kiss: ModuleType) -> None:
         ({"layer_heights_m": (0.5, 0.5)}, "layer_heights_m"),
         ({"min_range_m": 40.0}, "min_range_m"),
         ({"fixed_threshold_m": -1.0}, "fixed_threshold_m"),
+        ({"map_update_m": -1.0}, "map_update_m"),
     ],
 )
 def test_bad_params_name_the_field(overrides: dict[str, object], message: str) -> None:

@@ -164,8 +164,9 @@ def test_chi2_gate_rejects_a_closure_the_uncertainty_cannot_explain(
     limit = slam.params.loops.gate_chi2
     assert accepted and all(c.chi2 is not None and c.chi2 <= limit for c in accepted)
     check = accepted[-1]
+    # judged again against the graph it is now part of: still compatible
     again = slam.chi2_gate(replace(check, chi2=None))
-    assert again.accepted and again.chi2 == pytest.approx(check.chi2, rel=0.5)
+    assert again.accepted and again.chi2 is not None and again.chi2 <= limit
     off = compose_arrays(check.relative, np.array([1.0, 0.0, np.radians(10.0)]))
     wrong = slam.chi2_gate(replace(check, relative=off))
     assert not wrong.accepted and wrong.reason.startswith("χ² gate")

@@ -71,13 +71,13 @@ class ScanMatchingParams:
     - ``layer_heights_m``: heights at which each 2D point is copied (see the module doc).
     - ``max_iterations`` / ``convergence``: ICP stopping rules.
     - ``min_points``: fewer hits than this and the scan is placed by odometry alone.
-    - ``min_scan_motion_m`` / ``min_scan_motion_deg``: a scan is registered only once the
-      odometry has moved this far (or turned this much) since the last registered one;
-      the views in between are placed by odometry from it (a motion filter, as GMapping's
-      ``linearUpdate``/``angularUpdate`` and slam_toolbox's ``minimum_travel_*``). Measured
-      on the paper's fig6 route: registering every ~0.1 m view (dataset 1) drifted
-      2–4 m / ~6° over 140 m where every third view drifted 0.1–0.3 m (README). 0: every
-      scan is registered.
+    - ``map_update_m`` / ``map_update_deg``: every scan is registered, but it joins the
+      local map only once the registered pose moved this far (or turned this much) since
+      the last scan that joined it (keyframe-based map insertion, as in LiDAR odometry
+      such as LIO-SAM's 1 m / 0.2 rad). Inserting every scan re-anchors the map to each
+      new scan's error: measured on the paper's fig6 route, inserting every ~0.1 m view
+      (dataset 1) drifted 2–4 m / ~6° over 140 m (README). 0: every scan joins the map
+      (KISS-ICP's own behaviour).
     """
 
     voxel_size_m: float = 0.20
@@ -91,14 +91,14 @@ class ScanMatchingParams:
     max_iterations: int = 500
     convergence: float = 1e-4
     min_points: int = 20
-    min_scan_motion_m: float = 0.5
-    min_scan_motion_deg: float = 10.0
+    map_update_m: float = 0.5
+    map_update_deg: float = 10.0
 
     def __post_init__(self) -> None:
         check_positive(self, "voxel_size_m", "max_range_m", "initial_threshold_m",
                        "convergence")  # fmt: skip
-        check_non_negative(self, "min_range_m", "min_motion_m", "min_scan_motion_m",
-                           "min_scan_motion_deg")  # fmt: skip
+        check_non_negative(self, "min_range_m", "min_motion_m", "map_update_m",
+                           "map_update_deg")  # fmt: skip
         check_positive_int(self, "max_points_per_voxel", "max_iterations", "min_points")
         if self.fixed_threshold_m is not None:
             check_positive(self, "fixed_threshold_m")
@@ -149,9 +149,7 @@ class KissIcpOdometry:
         self.frames = 0
         self.matched = 0
         self.dead_reckoned = 0
-        self.between_scans = 0  # views placed by odometry between two registered scans
-        self.registered = False  # whether the last frame's scan was registered (or anchored)
-        self._since = np.zeros(3)  # odometry since the last registered (or anchored) scan
+        self._inserted: NDArray[np.float64] | None = None  # pose of the last scan mapped
 
     def _config(self, config: Any) -> Any:
         p = self.params
@@ -172,37 +170,46 @@ class KissIcpOdometry:
         """``(N, 2)`` points copied to every layer height: ``(N·layers, 3)``."""
         return lift_points(points, self._heights)
 
-    def _due(self) -> bool:
-        """Whether the odometry moved far enough since the last registered scan."""
-        p, since = self.params, self._since
-        return bool(self.frames == 0
-                    or np.hypot(since[0], since[1]) >= p.min_scan_motion_m
-                    or np.degrees(abs(since[2])) >= p.min_scan_motion_deg)  # fmt: skip
+    def _register_frame(self, lifted: NDArray[np.float64]) -> None:
+        """KISS-ICP's ``register_frame`` step by step, but the scan joins the local map only
+        once the pose moved ``map_update_m`` / ``map_update_deg`` since the last scan that
+        joined it."""
+        icp, p = self._icp, self.params
+        frame = icp.preprocessor.preprocess(lifted, np.zeros(len(lifted)), icp.last_delta)
+        source, downsampled = icp.voxelize(frame)
+        sigma = icp.adaptive_threshold.get_threshold()
+        guess = icp.last_pose @ icp.last_delta
+        new_pose = icp.registration.align_points_to_map(
+            points=source, voxel_map=icp.local_map, initial_guess=guess,
+            max_correspondance_distance=3 * sigma, kernel=sigma,
+        )  # fmt: skip
+        icp.adaptive_threshold.update_model_deviation(np.linalg.inv(guess) @ new_pose)
+        planar = _planar(new_pose)
+        if self._inserted is None:
+            moved = True
+        else:
+            step = between_arrays(self._inserted, planar)
+            moved = bool(np.hypot(step[0], step[1]) >= p.map_update_m
+                         or np.degrees(abs(step[2])) >= p.map_update_deg)  # fmt: skip
+        if moved and np.all(np.isfinite(planar)):
+            icp.local_map.update(downsampled, new_pose)
+            self._inserted = planar
+        icp.last_delta = np.linalg.inv(icp.last_pose) @ new_pose
+        icp.last_pose = new_pose
 
     def register(self, frame: Frame) -> NDArray[np.float64]:
         """The frame's ``(x, y, yaw)`` in the front end's frame."""
         icp = self._icp
-        if self.frames:
-            self._since = compose_arrays(self._since, frame.odom_increment.as_array())
-        # KISS-ICP predicts last_pose @ last_delta: the odometry since the last registered
-        # scan is the prior.
-        delta = _se2_matrix(self._since)
+        # KISS-ICP predicts last_pose @ last_delta: the odometry increment is the prior.
+        delta = _se2_matrix(frame.odom_increment.as_array())
         predicted = _planar(icp.last_pose @ delta)
-        if not self._due():
-            self.frames += 1
-            self.between_scans += 1
-            self.registered = False
-            return predicted
-        self._since = np.zeros(3)
-        self.registered = True
         points = frame.scan.points()
         estimate = None
         if len(points) >= self.params.min_points:
             had_map = not icp.local_map.empty()
             with self.timer.stage("scan_matching"):
                 icp.last_delta = delta
-                lifted = self.lift(points)
-                icp.register_frame(lifted, np.zeros(len(lifted)))
+                self._register_frame(self.lift(points))
             estimate = _planar(icp.last_pose)
             if np.all(np.isfinite(estimate)):
                 self.matched += had_map  # the first scan only starts the map
@@ -247,7 +254,7 @@ class ScanMatchingSLAM(_ViewIntegrator):
         n = len(self._poses)
         fe = self.front_end
         return MapperCounts(n, n, triangulations=fe.matched,
-                            path_integrations=fe.dead_reckoned + fe.between_scans)  # fmt: skip
+                            path_integrations=fe.dead_reckoned)  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
@@ -369,7 +376,7 @@ class LoopClosingSLAM:
     def counts(self) -> MapperCounts:
         fe = self.front_end
         return MapperCounts(len(self._segments), len(self._kf_fe), triangulations=fe.matched,
-                            path_integrations=fe.dead_reckoned + fe.between_scans)  # fmt: skip
+                            path_integrations=fe.dead_reckoned)  # fmt: skip
 
     def timings_ms(self) -> dict[str, float]:
         return self.timer.mean_ms_per(len(self._segments))
@@ -452,8 +459,6 @@ class LoopClosingSLAM:
     def _needs_keyframe(self, fe: NDArray[np.float64]) -> bool:
         if not self._kf_fe:
             return True
-        if not self.front_end.registered:
-            return False  # keyframes are registered scans: their poses come from the sensor
         p = self.params.loops
         motion = between_arrays(self._kf_fe[-1], fe)
         return bool(np.hypot(motion[0], motion[1]) >= p.keyframe_distance_m
