@@ -122,6 +122,7 @@ def test_scans_without_enough_hits_follow_odometry(kiss: ModuleType) -> None:
         ({"layer_heights_m": (0.5, 0.5)}, "layer_heights_m"),
         ({"min_range_m": 40.0}, "min_range_m"),
         ({"fixed_threshold_m": -1.0}, "fixed_threshold_m"),
+        ({"map_update_m": -1.0}, "map_update_m"),
     ],
 )
 def test_bad_params_name_the_field(overrides: dict[str, object], message: str) -> None:
@@ -164,3 +165,34 @@ def test_run_cli_scores_the_slam_mapper(
     assert list(report["mappers"]) == ["albot1", "scan_odometry", "slam"]
     slam = report["mappers"]["slam"]
     assert slam["counts"]["views"] == 60 and slam["rpe"]["relations"] > 0
+
+
+def test_front_end_is_kiss_icps_own_step_unless_map_updates_are_thinned(
+    kiss: ModuleType, office_run: tuple[World, list[Frame]]
+) -> None:
+    """The front end runs KISS-ICP's ``register_frame`` step by step (to thin the map
+    insertions): with the default (every scan joins the map) it gives the library's own
+    poses (to rounding: ~1e-17 rad); with ``map_update_m``/``_deg`` fewer scans join the map and the
+    poses differ."""
+    from kiss_icp.kiss_icp import KissICP
+
+    from albot2d.mapping.protocol import StageTimer
+    from albot2d.mapping.slam_front import KissIcpOdometry, _planar, _se2_matrix
+
+    frames = office_run[1][:120]
+    ours = KissIcpOdometry(ScanMatchingParams(), StageTimer())
+    icp = KissICP(ours._config(ours._icp.config))
+    reference = []
+    for frame in frames:
+        pose = ours.register(frame)
+        icp.last_delta = _se2_matrix(frame.odom_increment.as_array())
+        lifted = ours.lift(frame.scan.points())
+        icp.register_frame(lifted, np.zeros(len(lifted)))
+        icp.last_pose = _se2_matrix(_planar(icp.last_pose))
+        reference.append(_planar(icp.last_pose))
+        np.testing.assert_allclose(pose, reference[-1], rtol=0, atol=1e-12)
+    thinned = KissIcpOdometry(ScanMatchingParams(map_update_m=0.5, map_update_deg=10.0),
+                              StageTimer())  # fmt: skip
+    poses = np.array([thinned.register(f) for f in frames])
+    assert np.all(np.isfinite(poses))
+    assert np.abs(poses - np.array(reference)).max() > 1e-6

@@ -8,6 +8,7 @@ gtsam); the clean error for a missing gtsam is tested either way.
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -131,6 +132,47 @@ def test_robust_kernel_limits_a_false_closure_that_got_through(extra: None) -> N
     assert robust_shift < 0.5 < plain_shift
 
 
+def test_relative_covariance_is_the_chain_propagated(extra: None) -> None:
+    """On a chain of turning moves (no closures) the graph's marginal covariance of one
+    keyframe seen from another is the first-order propagation of the moves' sigmas."""
+    import gtsam
+
+    params = PoseGraphParams(odom_kernel="none")
+    graph = PoseGraph(params)
+    graph.add_keyframe(None, np.zeros(3))
+    move = np.array([1.0, 0.0, 0.1])
+    for _ in range(9):
+        graph.add_keyframe(move, compose_arrays(graph.estimate[-1], move))
+    sigma_m = params.odom_sigma_m + params.odom_sigma_m_per_m
+    sigma = np.array([sigma_m, sigma_m,
+                      np.radians(params.odom_sigma_deg + params.odom_sigma_deg_per_m)])  # fmt: skip
+    # keyframe 8 from keyframe 2: moves 3..8, each perturbed on its right, carried to the end
+    expected, rest = np.zeros((3, 3)), gtsam.Pose2()
+    for _ in range(6):
+        adj = rest.inverse().AdjointMap()
+        expected += adj @ np.diag(sigma**2) @ adj.T
+        rest = gtsam.Pose2(*move).compose(rest)
+    np.testing.assert_allclose(graph.relative_covariance(2, 8), expected, rtol=1e-6, atol=1e-12)
+
+
+def test_chi2_gate_rejects_a_closure_the_uncertainty_cannot_explain(
+    slam: LoopClosingSLAM,
+) -> None:
+    """Every accepted closure passed the χ² gate; the same closure 1 m and 10° away from
+    what the graph allows for (a look-alike place, or ICP that slid) is rejected."""
+    accepted = [c for c in slam.checks if c.accepted]
+    limit = slam.params.loops.gate_chi2
+    assert accepted and all(c.chi2 is not None and c.chi2 <= limit for c in accepted)
+    check = accepted[-1]
+    # judged again against the graph it is now part of: still compatible
+    again = slam.chi2_gate(replace(check, chi2=None))
+    assert again.accepted and again.chi2 is not None and again.chi2 <= limit
+    off = compose_arrays(check.relative, np.array([1.0, 0.0, np.radians(10.0)]))
+    wrong = slam.chi2_gate(replace(check, relative=off))
+    assert not wrong.accepted and wrong.reason.startswith("χ² gate")
+    assert wrong.chi2 is not None and wrong.chi2 > limit
+
+
 def _sigmas(noise: object) -> np.ndarray:
     r = noise.R()  # type: ignore[attr-defined]
     return np.sqrt(np.diag(np.linalg.inv(r.T @ r)))
@@ -210,6 +252,10 @@ def test_bad_loop_params_name_the_field() -> None:
         PoseGraphParams(wheel_kernel="tukey-ish")
     with pytest.raises(InputError, match="loop_max_sigma_ratio"):
         PoseGraphParams(loop_max_sigma_ratio=0.0)
+    with pytest.raises(InputError, match="gate"):
+        LoopClosureParams(gate="wide")
+    with pytest.raises(InputError, match="gate_chi2"):
+        LoopClosureParams(gate_chi2=0.0)
 
 
 def test_missing_gtsam_is_one_clean_error(monkeypatch: pytest.MonkeyPatch) -> None:

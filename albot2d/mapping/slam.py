@@ -5,40 +5,44 @@
   pose graph (``slam_graph``); every view is placed by its keyframe's optimised pose.
 - ``ScanMatchingSLAM`` (``scan_odometry``): the front end alone.
 
-Front end (``KissIcpOdometry``): every scan is registered against a local voxel map by
-KISS-ICP (PRBonn, MIT licence), with the odometry increment as the prediction. Both mappers
-keep every view's surfaces (same surface extraction as ``NaiveIntegration``), so the maps
-are comparable.
-
-KISS-ICP is a 3D pipeline. A 2D scan is lifted to 3D by copying its points to a few fixed
-heights (``layer_heights_m``): walls become vertical planes, so roll and pitch are
-constrained, and z stays put because nearest neighbours stay in their own layer. Deskewing
-is off (a scan is one instant here); the registered 4×4 pose is projected back to SE(2)
-after every scan and written back, so the out-of-plane components cannot accumulate.
-Scans with fewer than ``min_points`` hits are placed by odometry alone. One registration
-thread keeps runs bit-for-bit reproducible.
+Front end (``KissIcpOdometry``, ``slam_front``): every scan is registered against a local
+voxel map by KISS-ICP, with the odometry increment as the prediction. Both mappers keep
+every view's surfaces (same surface extraction as ``NaiveIntegration``), so the maps are
+comparable.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from albot2d.errors import InputError
 from albot2d.frames import Frame
-from albot2d.geometry import Pose, between_arrays, compose_arrays, transform_points
+from albot2d.geometry import (
+    Pose,
+    between_arrays,
+    compose_arrays,
+    transform_points,
+    wrap_angle,
+)
 from albot2d.mapping.baselines import ViewIntegrator as _ViewIntegrator
 from albot2d.mapping.global_map import MapSnapshot
 from albot2d.mapping.protocol import MapperCounts, StageTimer
+from albot2d.mapping.slam_front import (
+    MISSING_EXTRA,
+    KissIcpOdometry,
+    ScanMatchingParams,
+    lift_points,
+)
 from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams
 from albot2d.mapping.slam_loops import ClosureCheck, LoopClosureParams, LoopVerifier
 from albot2d.perception import ExtractionParams, extract_surfaces
-from albot2d.validation import check_non_negative, check_positive, check_positive_int
+from albot2d.validation import check_positive, check_positive_int
 
 __all__ = [
+    "MISSING_EXTRA",
     "KissIcpOdometry",
     "LoopClosingSLAM",
     "ScanMatchingParams",
@@ -47,143 +51,6 @@ __all__ = [
     "lift_points",
     "transform_points_each",
 ]
-
-MISSING_EXTRA = "the slam mapper needs the optional extra: pip install 'albot2d[slam]'"
-
-
-@dataclass(frozen=True, slots=True)
-class ScanMatchingParams:
-    """KISS-ICP settings for indoor 2D scans.
-
-    - ``voxel_size_m``: map voxel size; scans are downsampled to 0.5× and 1.5× of it.
-    - ``max_range_m`` / ``min_range_m``: hits used, and how far map points are kept.
-    - ``max_points_per_voxel``: map points kept per voxel.
-    - ``initial_threshold_m``: correspondence sigma before any motion is seen (the adaptive
-      threshold then follows the deviation of ICP from the odometry prediction).
-    - ``fixed_threshold_m``: use this sigma throughout instead (None: adaptive).
-    - ``min_motion_m``: motion below which a scan does not update the adaptive threshold.
-    - ``layer_heights_m``: heights at which each 2D point is copied (see the module doc).
-    - ``max_iterations`` / ``convergence``: ICP stopping rules.
-    - ``min_points``: fewer hits than this and the scan is placed by odometry alone.
-    """
-
-    voxel_size_m: float = 0.20
-    max_range_m: float = 30.0
-    min_range_m: float = 0.05
-    max_points_per_voxel: int = 20
-    initial_threshold_m: float = 0.5
-    fixed_threshold_m: float | None = None
-    min_motion_m: float = 0.1
-    layer_heights_m: tuple[float, ...] = (-0.5, 0.0, 0.5)
-    max_iterations: int = 500
-    convergence: float = 1e-4
-    min_points: int = 20
-
-    def __post_init__(self) -> None:
-        check_positive(self, "voxel_size_m", "max_range_m", "initial_threshold_m",
-                       "convergence")  # fmt: skip
-        check_non_negative(self, "min_range_m", "min_motion_m")
-        check_positive_int(self, "max_points_per_voxel", "max_iterations", "min_points")
-        if self.fixed_threshold_m is not None:
-            check_positive(self, "fixed_threshold_m")
-        if self.min_range_m >= self.max_range_m:
-            raise InputError(
-                f"ScanMatchingParams.min_range_m ({self.min_range_m}) must be below "
-                f"max_range_m ({self.max_range_m})"
-            )
-        heights = tuple(float(h) for h in self.layer_heights_m)
-        if len(heights) < 2 or len(set(heights)) != len(heights) or not all(np.isfinite(heights)):
-            raise InputError(
-                "ScanMatchingParams.layer_heights_m needs at least 2 distinct finite heights "
-                f"(one layer leaves roll and pitch unconstrained), got {self.layer_heights_m!r}"
-            )
-        object.__setattr__(self, "layer_heights_m", heights)
-
-
-def _se2_matrix(pose: NDArray[np.float64]) -> NDArray[np.float64]:
-    c, s = np.cos(pose[2]), np.sin(pose[2])
-    out = np.eye(4)
-    out[:2, :2] = [[c, -s], [s, c]]
-    out[:2, 3] = pose[:2]
-    return out
-
-
-def _planar(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(x, y, yaw) of a 4×4 pose: its projection onto the plane."""
-    return np.array([matrix[0, 3], matrix[1, 3], np.arctan2(matrix[1, 0], matrix[0, 0])])
-
-
-class KissIcpOdometry:
-    """The scan-matching front end: each frame's pose by KISS-ICP, odometry as the prior.
-
-    Poses are in the front end's own frame (the first frame's pose is the identity). The
-    ``slam`` mapper builds its pose graph on these poses; ``scan_odometry`` uses them as is.
-    """
-
-    def __init__(self, params: ScanMatchingParams, timer: StageTimer) -> None:
-        try:
-            from kiss_icp.config import KISSConfig
-            from kiss_icp.kiss_icp import KissICP
-        except ImportError as exc:
-            raise InputError(MISSING_EXTRA) from exc
-        self.params = params
-        self.timer = timer
-        self._icp: Any = KissICP(self._config(KISSConfig()))
-        self._heights = np.asarray(params.layer_heights_m, dtype=np.float64)
-        self.frames = 0
-        self.matched = 0
-        self.dead_reckoned = 0
-
-    def _config(self, config: Any) -> Any:
-        p = self.params
-        config.data.deskew = False
-        config.data.max_range = p.max_range_m
-        config.data.min_range = p.min_range_m
-        config.mapping.voxel_size = p.voxel_size_m
-        config.mapping.max_points_per_voxel = p.max_points_per_voxel
-        config.registration.max_num_iterations = p.max_iterations
-        config.registration.convergence_criterion = p.convergence
-        config.registration.max_num_threads = 1  # a fixed reduction order: reproducible runs
-        config.adaptive_threshold.initial_threshold = p.initial_threshold_m
-        config.adaptive_threshold.fixed_threshold = p.fixed_threshold_m
-        config.adaptive_threshold.min_motion_th = p.min_motion_m
-        return config
-
-    def lift(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``(N, 2)`` points copied to every layer height: ``(N·layers, 3)``."""
-        return lift_points(points, self._heights)
-
-    def register(self, frame: Frame) -> NDArray[np.float64]:
-        """The frame's ``(x, y, yaw)`` in the front end's frame."""
-        icp = self._icp
-        # KISS-ICP predicts last_pose @ last_delta: the odometry increment is the prior.
-        delta = _se2_matrix(frame.odom_increment.as_array())
-        predicted = _planar(icp.last_pose @ delta)
-        points = frame.scan.points()
-        estimate = None
-        if len(points) >= self.params.min_points:
-            had_map = not icp.local_map.empty()
-            with self.timer.stage("scan_matching"):
-                icp.last_delta = delta
-                lifted = self.lift(points)
-                icp.register_frame(lifted, np.zeros(len(lifted)))
-            estimate = _planar(icp.last_pose)
-            if np.all(np.isfinite(estimate)):
-                self.matched += had_map  # the first scan only starts the map
-            else:
-                estimate = None
-        if estimate is None:
-            estimate = predicted
-            self.dead_reckoned += self.frames > 0
-        icp.last_pose = _se2_matrix(estimate)
-        self.frames += 1
-        return estimate
-
-
-def lift_points(points: NDArray[np.float64], heights: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(N, 2)`` points copied to every height in ``heights``: ``(N·len(heights), 3)``."""
-    n, k = len(points), len(heights)
-    return np.column_stack([np.tile(points, (k, 1)), np.repeat(heights, n)])
 
 
 class ScanMatchingSLAM(_ViewIntegrator):
@@ -368,7 +235,31 @@ class LoopClosingSLAM:
         target = self._submap(target_ids, j)
         path = abs(self._kf_path_m[i] - self._kf_path_m[j])
         scan = self._kf_points[i]
-        return self.verifier.check(i, j, query, scan, target, guess, path, estimate)
+        check = self.verifier.check(i, j, query, scan, target, guess, path, estimate)
+        if self.params.loops.gate == "chi2" and check.accepted:
+            check = self.chi2_gate(check)
+        return check
+
+    def chi2_gate(self, check: ClosureCheck) -> ClosureCheck:
+        """Judge a closure that registered well by its innovation: its relative pose
+        against the current estimate's, under the estimate's covariance (the graph's
+        marginals) plus the closure's own (the information it would enter the graph
+        with). A test of individual compatibility: a closure the graph's uncertainty
+        cannot explain is a look-alike place or a registration that slid."""
+        i, j, est = check.i, check.j, self.graph.estimate
+        covariance = self.graph.relative_covariance(i, j)
+        if covariance is None:
+            return replace(check, accepted=False, reason="no covariance for the χ² gate")
+        closure = np.linalg.inv(self.graph.loop_information_matrix(check.information))
+        innovation = between_arrays(check.relative, between_arrays(est[i], est[j]))
+        innovation[2] = wrap_angle(innovation[2])
+        chi2 = float(innovation @ np.linalg.solve(covariance + closure, innovation))
+        limit = self.params.loops.gate_chi2
+        reason = ""
+        if chi2 > limit:
+            reason = (f"χ² gate: innovation {chi2:.1f} > {limit:g} (correction "
+                      f"{check.correction_m:.2f} m / {check.correction_deg:.1f}°)")  # fmt: skip
+        return replace(check, accepted=not reason, reason=reason, chi2=chi2)
 
     def propose_closure(
         self, i: int, j: int, guess: NDArray[np.float64] | None = None

@@ -111,6 +111,8 @@ class PoseGraph:
         self.optimisations = 0
         self._pending = False
         self._since = 0
+        self._marginals: Any = None
+        self._marginals_key: tuple[int, ...] | None = None
 
     def __len__(self) -> int:
         return len(self._estimate)
@@ -192,7 +194,14 @@ class PoseGraph:
         self._pending = True
 
     def loop_noise(self, information: NDArray[np.float64] | None) -> Any:
-        """A closure's Gaussian noise model. Without ``information`` (or with
+        """A closure's Gaussian noise model (``loop_information_matrix``)."""
+        information = self.loop_information_matrix(information)
+        return self._gtsam.noiseModel.Gaussian.Information(information)
+
+    def loop_information_matrix(
+        self, information: NDArray[np.float64] | None
+    ) -> NDArray[np.float64]:
+        """A closure's 3×3 information matrix. Without ``information`` (or with
         ``loop_information`` off): ``loop_sigma_m``/``loop_sigma_deg`` on every axis. With
         it: the Hessian in units of those sigmas, scaled so its best-constrained direction
         has exactly those sigmas; a direction it constrains ``r`` times less (eigenvalue
@@ -201,17 +210,49 @@ class PoseGraph:
         position and the heading, not the position along it); the scale stays the
         configured one, as a raw ICP Hessian is known to be overconfident (neighbouring
         points' errors are correlated)."""
-        g, p = self._gtsam, self.params
+        p = self.params
         sigmas = np.array([p.loop_sigma_m, p.loop_sigma_m, np.radians(p.loop_sigma_deg)])
+        diagonal = np.diag(sigmas**-2)
         if information is None or not p.loop_information:
-            return g.noiseModel.Diagonal.Sigmas(sigmas)
+            return diagonal
         whitened = sigmas[:, None] * np.asarray(information, dtype=np.float64) * sigmas[None, :]
         values, vectors = np.linalg.eigh(whitened)
         if not (np.all(np.isfinite(values)) and values[-1] > 0):
-            return g.noiseModel.Diagonal.Sigmas(sigmas)
+            return diagonal
         values = np.maximum(values / values[-1], p.loop_max_sigma_ratio**-2)
         shaped = (vectors * values) @ vectors.T
-        return g.noiseModel.Gaussian.Information(shaped / sigmas[:, None] / sigmas[None, :])
+        return np.asarray(shaped / sigmas[:, None] / sigmas[None, :])
+
+    def relative_covariance(self, a: int, b: int) -> NDArray[np.float64] | None:
+        """Covariance (3×3) of keyframe ``b``'s pose in ``a``'s frame under the graph as it
+        stands, linearised at the current estimate (GTSAM ``Marginals``; GTSAM's Pose2
+        local coordinates, a perturbation on the right): how far the current estimate of
+        that relative pose may be off. None if the graph is indeterminate there."""
+        g = self._gtsam
+        key = (int(self._graph.size()), len(self._estimate), self.optimisations)
+        if self._marginals_key != key:
+            try:
+                self._marginals = g.Marginals(self._graph, self._values())
+            except RuntimeError:
+                self._marginals = None
+            self._marginals_key = key
+        if self._marginals is None:
+            return None
+        joint = self._marginals.jointMarginalCovariance([a, b])
+        caa, cab, cbb = joint.at(a, a), joint.at(a, b), joint.at(b, b)
+        # between(x_a, x_b) perturbed: δ = -Ad(rel⁻¹) ξ_a + ξ_b
+        rel = g.Pose2(*self._estimate[a]).between(g.Pose2(*self._estimate[b]))
+        ja = -rel.inverse().AdjointMap()
+        cov = ja @ caa @ ja.T + ja @ cab + cab.T @ ja.T + cbb
+        cov = 0.5 * (cov + cov.T)
+        return cov if np.all(np.isfinite(cov)) else None
+
+    def _values(self) -> Any:
+        g = self._gtsam
+        values = g.Values()
+        for k, pose in enumerate(self._estimate):
+            values.insert(k, g.Pose2(*pose))
+        return values
 
     def optimise(self) -> bool:
         """Levenberg–Marquardt from the current estimate if closures were added since the
@@ -220,9 +261,7 @@ class PoseGraph:
         if not self._pending:
             return False
         g, p = self._gtsam, self.params
-        values = g.Values()
-        for k, pose in enumerate(self._estimate):
-            values.insert(k, g.Pose2(*pose))
+        values = self._values()
         lm = g.LevenbergMarquardtParams()
         lm.setMaxIterations(p.max_iterations)
         lm.setRelativeErrorTol(p.relative_error_tol)

@@ -16,10 +16,15 @@ the closure is about the keyframe's own pose. The result is accepted only if
   ``min_scan_inliers``) lie within ``inlier_distance_m`` of a target point, the ratio
   taken over the points the two maps share (within ``overlap_distance_m`` of a target
   point: a 180° scanner driven back along a corridor sees the other half of it), and
-- the correction it makes to the current estimate stays within the drift allowance
-  (``max_correction_m`` + ``max_correction_per_m`` × path since ``j``,
-  ``max_correction_deg``): ICP that slid along a corridor or snapped onto a look-alike
-  room is rejected here.
+- the closure agrees with the current estimate within its uncertainty (``gate="chi2"``,
+  the default): the closure's innovation (its relative pose against the estimate's) has
+  a Mahalanobis distance² under the estimate's relative-pose covariance (the pose
+  graph's marginals) plus the closure's own covariance of at most ``gate_chi2`` (χ² with
+  3 degrees of freedom). ICP that slid along a corridor or snapped onto a look-alike
+  room is rejected here, and after a long open stretch, where the graph itself says the
+  heading may be several degrees off, a true closure is not. ``gate="fixed"`` is the
+  older reading: a fixed drift allowance (``max_correction_m`` + ``max_correction_per_m``
+  × path since ``j``, ``max_correction_deg``), applied by the verifier itself.
 
 An accepted closure carries the point-to-line Hessian of the scan's registration
 (``registration_information``): the pose graph shapes the closure's information matrix by
@@ -34,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.errors import InputError
 from albot2d.geometry import between_arrays, transform_points, wrap_angle
 from albot2d.validation import (
     check_in_range,
@@ -43,12 +49,16 @@ from albot2d.validation import (
 )
 
 __all__ = [
+    "GATES",
     "ClosureCheck",
     "LoopClosureParams",
     "LoopVerifier",
     "registration_information",
     "voxel_downsample_2d",
 ]
+
+
+GATES = ("chi2", "fixed")
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,9 +81,12 @@ class LoopClosureParams:
       ``overlap_distance_m``: the ratio counts only the points within this distance of the
       other map (the part both saw: with a 180° scanner a corridor driven the other way is
       half new surfaces, neither evidence for nor against the match); None: all points.
+    - ``gate``: ``"chi2"`` (the closure's innovation against the estimate's and its own
+      covariance, at most ``gate_chi2``: 16.27 is χ²₃ at 99.9 %) or ``"fixed"`` (the
+      allowance below).
     - ``max_correction_m`` + ``max_correction_per_m`` × path since ``j``, and
-      ``max_correction_deg`` + ``max_correction_deg_per_m`` × that path: the largest change
-      to the current relative estimate accepted (heading drift grows with the path too).
+      ``max_correction_deg`` + ``max_correction_deg_per_m`` × that path: with
+      ``gate="fixed"``, the largest change to the current relative estimate accepted.
     """
 
     keyframe_distance_m: float = 0.5
@@ -97,12 +110,18 @@ class LoopClosureParams:
     max_correction_per_m: float = 0.01
     max_correction_deg: float = 5.0
     max_correction_deg_per_m: float = 0.0
+    gate: str = "chi2"
+    gate_chi2: float = 16.27
 
     def __post_init__(self) -> None:
+        if self.gate not in GATES:
+            raise InputError(
+                f"LoopClosureParams.gate must be one of {', '.join(GATES)}, got {self.gate!r}"
+            )
         check_positive(self, "keyframe_distance_m", "keyframe_angle_deg", "search_radius_m",
                        "max_search_radius_m", "voxel_size_m", "max_correspondence_m",
                        "kernel_m", "inlier_distance_m", "max_correction_m",
-                       "max_correction_deg")  # fmt: skip
+                       "max_correction_deg", "gate_chi2")  # fmt: skip
         if self.overlap_distance_m is not None:
             check_positive(self, "overlap_distance_m")
         check_non_negative(self, "min_separation_m", "search_radius_per_m",
@@ -119,7 +138,8 @@ class ClosureCheck:
     ``relative`` is ``j``'s pose in ``i``'s frame after registration; ``reason`` is empty
     when accepted, else says which test failed; ``information`` is the registration's
     point-to-line Hessian of keyframe ``i``'s scan (``registration_information``; None if
-    the scan registration was not reached).
+    the scan registration was not reached); ``chi2``: the innovation's Mahalanobis
+    distance² when the χ² gate judged it (None otherwise).
     """
 
     i: int
@@ -132,6 +152,7 @@ class ClosureCheck:
     accepted: bool
     reason: str
     information: NDArray[np.float64] | None = None
+    chi2: float | None = None
 
 
 def voxel_downsample_2d(points: NDArray[np.float64], voxel_m: float) -> NDArray[np.float64]:
@@ -329,7 +350,8 @@ class LoopVerifier:
         correction_deg = float(np.degrees(abs(wrap_angle(change[2]))))
         allowed_m = p.max_correction_m + p.max_correction_per_m * path_m
         allowed_deg = p.max_correction_deg + p.max_correction_deg_per_m * path_m
-        if not reason and (correction_m > allowed_m or correction_deg > allowed_deg):
+        beyond = correction_m > allowed_m or correction_deg > allowed_deg
+        if not reason and p.gate == "fixed" and beyond:
             reason = (
                 f"correction {correction_m:.2f} m / {correction_deg:.1f}° beyond the "
                 f"drift allowance {allowed_m:.2f} m / {allowed_deg:.1f}°"
