@@ -21,6 +21,7 @@ accuracy what is misplaced, rather than both measuring drift.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -45,6 +46,7 @@ from albot2d.validation import check_positive
 __all__ = [
     "EgocentricParams",
     "EgocentricQuality",
+    "egocentric_qualities",
     "egocentric_quality",
     "in_robot_frame",
     "seen_window_local",
@@ -133,6 +135,22 @@ def egocentric_quality(
         walls = in_robot_frame(true_pose, walls_world, reach + 1.0)
         accuracy = float(np.percentile(nearest_segment_distance_bounded(samples, walls), 95))
     return EgocentricQuality(p.window_m, completeness, accuracy, n)
+
+
+def egocentric_qualities(
+    seen_local: FloatArray,
+    maps: Mapping[str, tuple[FloatArray, int]],
+    walls_world: FloatArray,
+    true_pose: FloatArray,
+    params: EgocentricParams | None = None,
+) -> dict[str, EgocentricQuality]:
+    """``egocentric_quality`` of several mappers' maps at one stop: ``maps`` gives each
+    name its map surfaces in its robot frame (``in_robot_frame``) and its surface count."""
+    return {
+        name: egocentric_quality(seen_local, local, walls_world, true_pose, params,
+                                 surfaces=surfaces)
+        for name, (local, surfaces) in maps.items()
+    }  # fmt: skip
 
 
 # Seen points per tree query and (point, surface) pairs per numpy chunk in _covered: a
