@@ -176,8 +176,8 @@ def evo_pose_errors(est: Any, ref: Any) -> tuple[FloatArray, FloatArray]:
       (one batched call instead of one per pose), its norm in degrees. evo first checks
       each matrix is in SO(3) (``lie.is_so3``); so do we, all at once.
     """
-    from evo.core.lie_algebra import LieAlgebraException
-    from scipy.spatial.transform import Rotation
+    # evo's own helper: scipy's Rotation.from_matrix, which takes 1..n matrices
+    from evo.core.lie_algebra import LieAlgebraException, sst_rotation_from_matrix
 
     diff = np.ascontiguousarray(est.positions_xyz - ref.positions_xyz)
     trans = np.sqrt(np.matmul(diff[:, None, :], diff[:, :, None])[:, 0, 0])
@@ -196,7 +196,7 @@ def evo_pose_errors(est: Any, ref: Any) -> tuple[FloatArray, FloatArray]:
         raise LieAlgebraException("matrix is not a valid SO(3) group element")
     if len(rotations) == 0:
         return trans, np.zeros(0)
-    rotvec = Rotation.from_matrix(rotations).as_rotvec().reshape(-1, 3)
+    rotvec = sst_rotation_from_matrix(rotations).as_rotvec().reshape(-1, 3)
     norms = np.sqrt(np.matmul(rotvec[:, None, :], rotvec[:, :, None])[:, 0, 0])
     return trans, np.abs(np.rad2deg(norms))
 
