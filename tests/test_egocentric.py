@@ -88,3 +88,36 @@ def test_a_run_reports_egocentric_quality_revisits_and_updates_by_region() -> No
     # An update is a frame that remembered a view (one frame may remember V(c-1) and V(c)).
     assert 0 < by_region["all"]["updates"] <= albot1["counts"]["local_maps"] - 1
     assert naive["updates_by_region"] is None
+
+
+def test_stops_scored_while_driving_equal_the_kept_inputs_scored_later() -> None:
+    """With the true walls, drive_mappers scores each stop there and then and keeps no map
+    copies (memory follows the map, not stops × map); the scores equal those computed
+    afterwards from the kept window and maps, stop by stop, mapper by mapper."""
+    from albot2d.evaluation.scoring import egocentric_at
+    from albot2d.evaluation.setup import RunSpec, build_run
+    from albot2d.evaluation.trace import HomingParams, Trace, drive_mappers
+
+    spec = RunSpec(kind="office", seed=2, world_params={"width_m": 30.0, "height_m": 24.0},
+                   profile="dataset3", tour_length_m=30.0, max_frames=600)  # fmt: skip
+    setup = build_run(spec)
+    frames = list(setup.simulator.drive(setup.tour, setup.profile))
+    walls = setup.world.obstacle_segments
+    homing = HomingParams(stop_every_m=5.0)
+
+    def drive(with_walls: bool) -> Trace:
+        mappers = {n: f() for n, f in setup.mapper_factories.items()}
+        return drive_mappers(iter(frames), mappers, homing=homing, max_frames=spec.max_frames,
+                             walls=walls if with_walls else None)  # fmt: skip
+
+    kept, scored = drive(False), drive(True)
+    assert len(scored.stops) == len(kept.stops) >= 3
+    for a, b in zip(kept.stops, scored.stops, strict=True):
+        assert a.seen is not None and set(a.maps) == {"albot1", "naive", "truth"}
+        assert b.seen is None and not b.maps and set(b.egocentric) == set(a.maps)
+        for name in a.maps:
+            later = egocentric_at(kept, a, name, walls)
+            assert later is not None and later.completeness is not None
+            assert egocentric_at(scored, b, name, walls) == later
+    # Without the world (a real log's scoring) there is no egocentric quality either way.
+    assert egocentric_at(scored, scored.stops[0], "albot1", None) is None

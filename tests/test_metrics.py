@@ -150,3 +150,40 @@ def test_map_sample_distances_equal_the_nearest_wall_tree_query(
     got = _sample_distances(segs, 0.05, walls)
     assert (got > 0.5).any() and (got < 0.01).any()
     np.testing.assert_allclose(got, expected, rtol=0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_pruning_candidate_walls_changes_no_distance(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Dropping the candidate walls that cannot be nearest to any point of a surface
+    (``_may_be_nearest``) gives the same distances bit for bit as measuring them all,
+    on walls meeting at corners, parallel faces and a map drifted off them."""
+    import importlib
+
+    module = importlib.import_module("albot2d.evaluation.map_quality")
+    rng = np.random.default_rng(seed)
+    # A grid of rooms: two faces 0.15 m apart per wall, so parallel candidates abound.
+    lines = [[x + dx, 0.0, x + dx, 20.0] for x in range(0, 21, 5) for dx in (0.0, 0.15)]
+    lines += [[0.0, y + dy, 20.0, y + dy] for y in range(0, 21, 5) for dy in (0.0, 0.15)]
+    walls = np.array(lines, float)
+    pieces = walls[rng.integers(0, len(walls), 400)]
+    t0, t1 = np.sort(rng.uniform(0.0, 1.0, (2, 400)), axis=0)
+    span = pieces[:, 2:] - pieces[:, :2]
+    segs = np.hstack([pieces[:, :2] + t0[:, None] * span, pieces[:, :2] + t1[:, None] * span])
+    segs = np.vstack([segs + rng.normal(0.0, 0.02, segs.shape),  # along the walls
+                      segs + rng.normal(0.0, 0.6, segs.shape)])  # a drifted map  # fmt: skip
+    kept = []
+
+    def counting(surfaces: np.ndarray, which: np.ndarray, cand: np.ndarray) -> np.ndarray:
+        keep = may_be_nearest(surfaces, which, cand)
+        kept.append((int(keep.sum()), len(keep)))
+        return keep
+
+    may_be_nearest = module._may_be_nearest
+    monkeypatch.setattr(module, "_may_be_nearest", counting)
+    pruned = module._sample_distances(segs, 0.05, walls)
+    monkeypatch.setattr(module, "_may_be_nearest", lambda s, w, c: np.ones(len(w), bool))
+    every = module._sample_distances(segs, 0.05, walls)
+    np.testing.assert_array_equal(pruned, every)
+    assert sum(k for k, _ in kept) < sum(n for _, n in kept)  # some were dropped

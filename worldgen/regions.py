@@ -34,7 +34,13 @@ from albot2d.validation import check_positive, check_positive_int
 if TYPE_CHECKING:
     from worldgen.world import World
 
-__all__ = ["REGION_KINDS", "RegionParams", "isovist_ranges", "region_kind_at"]
+__all__ = [
+    "REGION_KINDS",
+    "RegionParams",
+    "isovist_ranges",
+    "isovist_ranges_many",
+    "region_kind_at",
+]
 
 REGION_KINDS = ("corridor", "room", "hall")
 
@@ -80,6 +86,71 @@ def isovist_ranges(
     return np.minimum(t, max_range_m)
 
 
+# A ray whose direction is within this angle (rad) of a segment's angular span from the
+# point is measured against it; far above the rounding of the span's angles, so every
+# (ray, segment) pair that isovist_ranges' test could accept is measured.
+_ANGLE_MARGIN_RAD = 1e-6
+# A segment whose line passes this close to the point (relative to its length) spans an
+# ill-defined angle from it: every ray is measured against it.
+_COLLINEAR_REL = 1e-9
+# Points per block in isovist_ranges_many (the arrays are points × segments).
+_BLOCK_POINTS = 256
+
+
+def isovist_ranges_many(
+    segments: np.ndarray, points: ArrayLike, rays: int, max_range_m: float
+) -> NDArray[np.float64]:
+    """``isovist_ranges`` of each of the ``(P, 2)`` points, as a ``(P, rays)`` array: the
+    same numbers, bit for bit, ~10x faster on a world of a thousand walls.
+
+    A ray can only hit a segment whose angular span seen from the point contains the ray's
+    direction, and a ray crosses a few of a world's walls, not all: so each segment is
+    measured (with ``isovist_ranges``' own formula, term for term) only against the rays
+    within its span (plus a margin), and the nearest hit per ray is a minimum over those."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    segs = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    if len(segs) == 0:
+        return np.full((len(pts), rays), max_range_m)
+    step = 2.0 * np.pi / rays
+    theta = np.arange(rays) * step
+    d = np.column_stack([np.cos(theta), np.sin(theta)])  # (R, 2), as isovist_ranges
+    e = segs[:, 2:] - segs[:, :2]  # (S, 2)
+    length = np.hypot(e[:, 0], e[:, 1])
+    out = np.empty((len(pts), rays))
+    for b0 in range(0, len(pts), _BLOCK_POINTS):
+        block = pts[b0 : b0 + _BLOCK_POINTS]
+        ax = segs[None, :, 0] - block[:, None, 0]  # (B, S): segments[:, :2] - p
+        ay = segs[None, :, 1] - block[:, None, 1]
+        bx, by = ax + e[None, :, 0], ay + e[None, :, 1]  # the far ends (for the span only)
+        phi_a, phi_b = np.arctan2(ay, ax), np.arctan2(by, bx)
+        sweep = np.mod(phi_b - phi_a + np.pi, 2.0 * np.pi) - np.pi  # signed, (-π, π]
+        start = np.where(sweep >= 0.0, phi_a, phi_b)
+        first = np.ceil((start - _ANGLE_MARGIN_RAD) / step).astype(np.int64)
+        last = np.floor((start + np.abs(sweep) + _ANGLE_MARGIN_RAD) / step).astype(np.int64)
+        # Nearly collinear with the point (or degenerate): measured against every ray.
+        cross = np.abs(ax * e[None, :, 1] - ay * e[None, :, 0])
+        near_line = cross <= _COLLINEAR_REL * np.maximum(length, 1.0)[None, :] ** 2
+        first = np.where(near_line, 0, first)
+        last = np.where(near_line, rays - 1, np.minimum(last, first + rays - 1))
+        count = np.maximum(last - first + 1, 0).ravel()
+        pair_pt, pair_seg = np.divmod(np.repeat(np.arange(count.size), count), len(segs))
+        offset = np.arange(len(pair_pt)) - np.repeat(np.cumsum(count) - count, count)
+        ray = np.mod(first.ravel()[pair_pt * len(segs) + pair_seg] + offset, rays)
+        # isovist_ranges' formula, term for term, on the (ray, segment) pairs
+        a0, a1 = ax[pair_pt, pair_seg], ay[pair_pt, pair_seg]
+        e0, e1 = e[pair_seg, 0], e[pair_seg, 1]
+        d0, d1 = d[ray, 0], d[ray, 1]
+        den = d0 * (-e1) - d1 * (-e0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (a0 * (-e1) - a1 * (-e0)) / den
+            u = (d0 * a1 - d1 * a0) / den
+        hit = (np.abs(den) > 1e-12) & (t >= 0.0) & (u >= 0.0) & (u <= 1.0)
+        nearest = np.full(len(block) * rays, np.inf)
+        np.minimum.at(nearest, pair_pt[hit] * rays + ray[hit], t[hit])
+        out[b0 : b0 + len(block)] = np.minimum(nearest.reshape(len(block), rays), max_range_m)
+    return out
+
+
 def region_kind_at(
     world: World, xy: ArrayLike, params: RegionParams | None = None
 ) -> NDArray[np.str_]:
@@ -93,8 +164,9 @@ def region_kind_at(
     out = np.full(len(pts), "outside", dtype="<U8")
     half = params.rays // 2
     step = 2.0 * np.pi / params.rays
-    for i in np.flatnonzero(inside):
-        r = isovist_ranges(world.walls, pts[i], params.rays, params.max_range_m)
+    rows = np.flatnonzero(inside)
+    ranges = isovist_ranges_many(world.walls, pts[rows], params.rays, params.max_range_m)
+    for i, r in zip(rows, ranges, strict=True):
         across = r[:half] + r[half:]
         width, length = float(across.min()), float(across.max())
         area = 0.5 * float((r * r).sum()) * step

@@ -31,6 +31,7 @@ __all__ = [
     "align_se2",
     "ape_result",
     "evo_absolute_pose_error",
+    "evo_pose_errors",
     "in_world_frame",
     "map_in_world_frame",
 ]
@@ -125,7 +126,12 @@ def evo_absolute_pose_error(
     timestamps: ArrayLike, estimate: ArrayLike, reference: ArrayLike
 ) -> AbsolutePoseError:
     """The same APE computed by evo (``pip install 'albot2d[eval]'``): SE(3) Umeyama
-    alignment without scale of the planar poses, then evo's APE statistics."""
+    alignment without scale of the planar poses (evo's ``align``), then evo's APE
+    statistics of the translation and rotation-angle errors.
+
+    The per-pose errors are evo's ``metrics.APE`` formulas evaluated on all poses at once
+    (``evo_pose_errors``), bit for bit the numbers of its per-pose loop, which calls scipy
+    once per pose and was most of a run's scoring time."""
     import evo
     from evo.core import metrics
 
@@ -133,27 +139,66 @@ def evo_absolute_pose_error(
     est = _evo_trajectory(t, np.asarray(estimate, dtype=np.float64).reshape(-1, 3))
     ref = _evo_trajectory(t, np.asarray(reference, dtype=np.float64).reshape(-1, 3))
     rot, _, _ = est.align(ref, correct_scale=False)
+    trans, angle = evo_pose_errors(est, ref)
     stats = {}
-    for relation in (
-        metrics.PoseRelation.translation_part,
-        metrics.PoseRelation.rotation_angle_deg,
+    for relation, error in (
+        (metrics.PoseRelation.translation_part, trans),
+        (metrics.PoseRelation.rotation_angle_deg, angle),
     ):
         ape = metrics.APE(relation)
-        ape.process_data((ref, est))
+        ape.error = error  # evo's statistics (rmse, mean, median, max) of these errors
         stats[relation] = ape
-    trans = stats[metrics.PoseRelation.translation_part]
-    angle = stats[metrics.PoseRelation.rotation_angle_deg]
+    trans_ape = stats[metrics.PoseRelation.translation_part]
+    angle_ape = stats[metrics.PoseRelation.rotation_angle_deg]
     return AbsolutePoseError(
-        trans_m_rmse=float(trans.get_statistic(metrics.StatisticsType.rmse)),
-        trans_m_mean=float(trans.get_statistic(metrics.StatisticsType.mean)),
-        trans_m_median=float(trans.get_statistic(metrics.StatisticsType.median)),
-        trans_m_max=float(trans.get_statistic(metrics.StatisticsType.max)),
-        rot_deg_rmse=float(angle.get_statistic(metrics.StatisticsType.rmse)),
-        rot_deg_max=float(angle.get_statistic(metrics.StatisticsType.max)),
+        trans_m_rmse=float(trans_ape.get_statistic(metrics.StatisticsType.rmse)),
+        trans_m_mean=float(trans_ape.get_statistic(metrics.StatisticsType.mean)),
+        trans_m_median=float(trans_ape.get_statistic(metrics.StatisticsType.median)),
+        trans_m_max=float(trans_ape.get_statistic(metrics.StatisticsType.max)),
+        rot_deg_rmse=float(angle_ape.get_statistic(metrics.StatisticsType.rmse)),
+        rot_deg_max=float(angle_ape.get_statistic(metrics.StatisticsType.max)),
         poses=len(t),
         align_rot_deg=math.degrees(math.atan2(rot[1, 0], rot[0, 0])),
         implementation=f"evo {evo.__version__.lstrip('v')}",
     )
+
+
+def evo_pose_errors(est: Any, ref: Any) -> tuple[FloatArray, FloatArray]:
+    """Per pose, evo's APE translation error (m) and rotation angle (deg) of the evo
+    trajectories ``est`` (aligned) and ``ref``: the formulas of evo's ``metrics.APE``
+    on all poses at once, with the same floating-point operations, so the same bits.
+
+    - translation: ``‖p_est − p_ref‖`` (evo: ``np.linalg.norm``, i.e. ``sqrt(x·x)`` with
+      BLAS's dot, which batched ``matmul`` of 1×3 by 3×1 also calls; an ``einsum`` sum
+      would differ in the last bit);
+    - rotation: the angle of the rotation part of ``E = P_est⁻¹ · P_ref`` (4×4 matrices,
+      multiplied by ``matmul`` as evo's ``np.dot`` does), scipy's rotation vector of it
+      (one batched call instead of one per pose), its norm in degrees. evo first checks
+      each matrix is in SO(3) (``lie.is_so3``); so do we, all at once.
+    """
+    # evo's own helper: scipy's Rotation.from_matrix, which takes 1..n matrices
+    from evo.core.lie_algebra import LieAlgebraException, sst_rotation_from_matrix
+
+    diff = np.ascontiguousarray(est.positions_xyz - ref.positions_xyz)
+    trans = np.sqrt(np.matmul(diff[:, None, :], diff[:, :, None])[:, 0, 0])
+    p_est = np.asarray(est.poses_se3, dtype=np.float64).reshape(-1, 4, 4)
+    p_ref = np.asarray(ref.poses_se3, dtype=np.float64).reshape(-1, 4, 4)
+    inverse = np.zeros_like(p_est)  # evo's se3_inverse: [Rᵀ, −Rᵀt; 0 1]
+    r_inv = p_est[:, :3, :3].transpose(0, 2, 1)
+    inverse[:, :3, :3] = r_inv
+    inverse[:, :3, 3] = -np.matmul(r_inv, p_est[:, :3, 3, None])[:, :, 0]
+    inverse[:, 3, 3] = 1.0
+    rotations = np.matmul(inverse, p_ref)[:, :3, :3]
+    det_ok = np.isclose(np.linalg.det(rotations), 1.0, rtol=1e-5, atol=1e-6)
+    gram = np.matmul(rotations.transpose(0, 2, 1), rotations)
+    inv_ok = np.isclose(gram, np.eye(3), rtol=1e-5, atol=1e-6).all(axis=(1, 2))
+    if not (det_ok.all() and inv_ok.all()):
+        raise LieAlgebraException("matrix is not a valid SO(3) group element")
+    if len(rotations) == 0:
+        return trans, np.zeros(0)
+    rotvec = sst_rotation_from_matrix(rotations).as_rotvec().reshape(-1, 3)
+    norms = np.sqrt(np.matmul(rotvec[:, None, :], rotvec[:, :, None])[:, 0, 0])
+    return trans, np.abs(np.rad2deg(norms))
 
 
 def ape_result(

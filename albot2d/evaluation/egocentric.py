@@ -21,6 +21,7 @@ accuracy what is misplaced, rather than both measuring drift.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -45,6 +46,7 @@ from albot2d.validation import check_positive
 __all__ = [
     "EgocentricParams",
     "EgocentricQuality",
+    "egocentric_qualities",
     "egocentric_quality",
     "in_robot_frame",
     "seen_window_local",
@@ -78,6 +80,13 @@ class EgocentricQuality:
         return asdict(self)
 
 
+# unique_on_grid takes the dense path from this many points, when the occupied box has at
+# most this many cells per point and in all (64 MB of int64).
+_DENSE_MIN_POINTS = 1 << 12
+_DENSE_CELLS_PER_POINT = 16
+_DENSE_MAX_CELLS = 1 << 23
+
+
 def unique_on_grid(points: FloatArray, grid_m: float) -> FloatArray:
     """One point per occupied ``grid_m`` cell (the cell's first point, in input order)."""
     pts = np.asarray(points, np.float64).reshape(-1, 2)
@@ -86,14 +95,24 @@ def unique_on_grid(points: FloatArray, grid_m: float) -> FloatArray:
     cells = np.floor(pts / grid_m).astype(np.int64)
     lo = cells.min(axis=0)
     span = cells.max(axis=0) - lo + 1
-    if float(span[0]) * float(span[1]) < 2.0**62:
-        # One int64 key per cell: a 1-D stable sort, ~10x faster than unique rows (axis=0)
-        # and the same first index per cell.
-        key = (cells[:, 0] - lo[0]) * span[1] + (cells[:, 1] - lo[1])
-        _, first = np.unique(key, return_index=True)
-    else:
+    n_cells = float(span[0]) * float(span[1])
+    if n_cells >= 2.0**62:
         _, first = np.unique(cells, axis=0, return_index=True)
-    return pts[np.sort(first)]
+        return pts[np.sort(first)]
+    # One int64 key per cell: a 1-D stable sort, ~10x faster than unique rows (axis=0)
+    # and the same first index per cell.
+    key = (cells[:, 0] - lo[0]) * span[1] + (cells[:, 1] - lo[1])
+    if len(pts) < _DENSE_MIN_POINTS or n_cells > min(_DENSE_CELLS_PER_POINT * len(pts),
+                                                      _DENSE_MAX_CELLS):  # fmt: skip
+        _, first = np.unique(key, return_index=True)
+        return pts[np.sort(first)]
+    # Few cells for the points (a map's samples near the robot): the first index per cell
+    # by a minimum over a dense array of the cells, no sort (~8x faster, the same points).
+    lowest = np.full(int(n_cells), len(pts), np.int64)
+    np.minimum.at(lowest, key, np.arange(len(pts)))
+    keep = np.zeros(len(pts), bool)
+    keep[lowest[lowest < len(pts)]] = True
+    return pts[keep]
 
 
 def in_robot_frame(pose: FloatArray, segments: FloatArray, reach_m: float) -> FloatArray:
@@ -135,18 +154,53 @@ def egocentric_quality(
     return EgocentricQuality(p.window_m, completeness, accuracy, n)
 
 
+def egocentric_qualities(
+    seen_local: FloatArray,
+    maps: Mapping[str, tuple[FloatArray, int]],
+    walls_world: FloatArray,
+    true_pose: FloatArray,
+    params: EgocentricParams | None = None,
+) -> dict[str, EgocentricQuality]:
+    """``egocentric_quality`` of several mappers' maps at one stop: ``maps`` gives each
+    name its map surfaces in its robot frame (``in_robot_frame``) and its surface count."""
+    return {
+        name: egocentric_quality(seen_local, local, walls_world, true_pose, params,
+                                 surfaces=surfaces)
+        for name, (local, surfaces) in maps.items()
+    }  # fmt: skip
+
+
 # Seen points per tree query and (point, surface) pairs per numpy chunk in _covered: a
 # short run's naive map stacks hundreds of surfaces on each wall, so the pairs, not the
 # points, bound the memory (~200 bytes a pair in a chunk).
 _BLOCK_POINTS = 1 << 10
 _CHUNK_PAIRS = 1 << 16
+# Segments of the first, thinned pass of _covered.
+_SUBSET_SEGMENTS = 1 << 11
 
 
 def _covered(points: FloatArray, segs: FloatArray, tolerance_m: float) -> NDArray[np.bool_]:
     """Per point, whether a segment lies within ``tolerance_m`` (as
-    ``nearest_segment_distance(points, segs) <= tolerance_m``, twice as fast on a naive
-    map's overlapping surfaces): the segments whose bounding box meets the point's
-    tolerance box are measured with GEOS's formula (``map_quality``'s), no nearest search."""
+    ``nearest_segment_distance(points, segs) <= tolerance_m``).
+
+    A point is covered by any one segment, and a naive or truth map stacks hundreds of
+    overlapping surfaces on each wall: so the points are first tested against every k-th
+    segment (at most ``_SUBSET_SEGMENTS`` of them), and only the points that leaves
+    uncovered against all of them (``_covered_by``); the same answer, ~4x faster there."""
+    out = np.zeros(len(points), bool)
+    if len(points) == 0 or len(segs) == 0:
+        return out
+    stride = -(-len(segs) // _SUBSET_SEGMENTS)
+    if stride > 1:
+        out = _covered_by(points, segs[::stride], tolerance_m)
+    rest = np.flatnonzero(~out)
+    out[rest] = _covered_by(points[rest], segs, tolerance_m)
+    return out
+
+
+def _covered_by(points: FloatArray, segs: FloatArray, tolerance_m: float) -> NDArray[np.bool_]:
+    """``_covered`` measuring every candidate: the segments whose bounding box meets the
+    point's tolerance box, with GEOS's formula (``map_quality``'s), no nearest search."""
     out = np.zeros(len(points), bool)
     if len(points) == 0 or len(segs) == 0:
         return out

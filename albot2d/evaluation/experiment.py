@@ -123,6 +123,9 @@ def run_experiment(
     trace = drive_mappers(
         frames, mappers, homing=params.homing, last_k_views=params.map_quality.last_k_views,
         max_frames=spec.max_frames, on_frame=on_frame,
+        # Scored at each stop while driving (memory follows the map, not stops × map);
+        # without scoring the stops keep their inputs for a caller's own scores.
+        walls=world.obstacle_segments if score else None,
     )  # fmt: skip
     assert trace.true_poses is not None  # the simulator always knows the truth
     if on_stage is not None:

@@ -168,6 +168,8 @@ def _bounded_distances(
     which, wall = tree.query(shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]))
     order = np.lexsort((wall, which))
     which, wall = which[order], wall[order]
+    keep = _may_be_nearest(segs[used], which, truth[wall])
+    which, wall = which[keep], wall[keep]
     walls_per = np.zeros(len(segs), np.int64)
     walls_per[used] = np.bincount(which, minlength=len(used))
     wall_start = np.zeros(len(segs), np.int64)
@@ -191,6 +193,36 @@ def _bounded_distances(
         d = point_to_segment_geos(pts[:, 0], pts[:, 1], truth[cand])
         out[rows] = np.minimum.reduceat(d, np.cumsum(w) - w)
     return out
+
+
+# Candidate walls farther than this beyond a surface's bound are dropped (metres): far
+# above the rounding of the distances, so no wall that could be nearest by a rounding
+# difference is dropped and the minimum is the same number.
+_PRUNE_MARGIN_M = 1e-6
+
+
+def _may_be_nearest(
+    surfaces: NDArray[np.float64], which: NDArray[np.int64], walls: NDArray[np.float64]
+) -> NDArray[np.bool_]:
+    """Per (surface ``which[i]``, candidate wall ``walls[i]``) pair: whether the wall may be
+    the nearest wall of some point of the surface.
+
+    The distance from a point moving along a segment to a fixed segment is convex, so its
+    largest value on the surface is at an endpoint: every point of the surface is within
+    ``bound`` = min over its candidates of max(endpoint distances) of some wall. A wall
+    whose bounding box is farther than that from the surface's is nobody's nearest. On a
+    map along the walls this leaves one or two of a surface's candidates."""
+    bound_pair = np.maximum(
+        point_to_segment_geos(surfaces[which, 0], surfaces[which, 1], walls),
+        point_to_segment_geos(surfaces[which, 2], surfaces[which, 3], walls),
+    )
+    bound = np.full(len(surfaces), np.inf)
+    np.minimum.at(bound, which, bound_pair)
+    s_lo = np.minimum(surfaces[:, :2], surfaces[:, 2:])[which]
+    s_hi = np.maximum(surfaces[:, :2], surfaces[:, 2:])[which]
+    w_lo, w_hi = np.minimum(walls[:, :2], walls[:, 2:]), np.maximum(walls[:, :2], walls[:, 2:])
+    gap = np.maximum(np.maximum(w_lo - s_hi, s_lo - w_hi), 0.0)
+    return np.hypot(gap[:, 0], gap[:, 1]) <= bound[which] + _PRUNE_MARGIN_M
 
 
 def nearest_segment_distance(

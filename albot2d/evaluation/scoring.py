@@ -222,11 +222,15 @@ def snapshots_section(trace: Trace, mapper: Mapper, n: int) -> tuple[Snapshot, .
 def egocentric_at(
     trace: Trace, stop: Stop | None, name: str, world_segments: FloatArray | None
 ) -> EgocentricQuality | None:
-    """Egocentric map quality of mapper ``name`` at a captured stop (None without truth)."""
-    if (
-        stop is None or stop.seen is None or name not in stop.maps
-        or world_segments is None or trace.true_poses is None
-    ):  # fmt: skip
+    """Egocentric map quality of mapper ``name`` at a captured stop (None without truth).
+
+    A stop scored while driving (``drive_mappers(walls=...)``) has it already: those walls
+    are the world's, which ``world_segments`` must then be too."""
+    if stop is None or world_segments is None or trace.true_poses is None:
+        return None
+    if name in stop.egocentric:
+        return stop.egocentric[name]
+    if stop.seen is None or name not in stop.maps:
         return None
     local, surfaces = stop.maps[name]
     return egocentric_quality(
