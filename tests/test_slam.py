@@ -177,7 +177,7 @@ def test_front_end_is_kiss_icps_own_step_unless_map_updates_are_thinned(
     from kiss_icp.kiss_icp import KissICP
 
     from albot2d.mapping.protocol import StageTimer
-    from albot2d.mapping.slam_front import KissIcpOdometry, _planar, _se2_matrix
+    from albot2d.mapping.slam_front import KissIcpOdometry, _planar, se2_matrix_4x4
 
     frames = office_run[1][:120]
     ours = KissIcpOdometry(ScanMatchingParams(), StageTimer())
@@ -185,10 +185,10 @@ def test_front_end_is_kiss_icps_own_step_unless_map_updates_are_thinned(
     reference = []
     for frame in frames:
         pose = ours.register(frame)
-        icp.last_delta = _se2_matrix(frame.odom_increment.as_array())
+        icp.last_delta = se2_matrix_4x4(frame.odom_increment.as_array())
         lifted = ours.lift(frame.scan.points())
         icp.register_frame(lifted, np.zeros(len(lifted)))
-        icp.last_pose = _se2_matrix(_planar(icp.last_pose))
+        icp.last_pose = se2_matrix_4x4(_planar(icp.last_pose))
         reference.append(_planar(icp.last_pose))
         np.testing.assert_allclose(pose, reference[-1], rtol=0, atol=1e-12)
     thinned = KissIcpOdometry(ScanMatchingParams(map_update_m=0.5, map_update_deg=10.0),

@@ -96,7 +96,8 @@ class ScanMatchingParams:
         object.__setattr__(self, "layer_heights_m", heights)
 
 
-def _se2_matrix(pose: NDArray[np.float64]) -> NDArray[np.float64]:
+def se2_matrix_4x4(pose: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``[x, y, theta]`` as the 4×4 homogeneous transform KISS-ICP works in (z = 0)."""
     c, s = np.cos(pose[2]), np.sin(pose[2])
     out = np.eye(4)
     out[:2, :2] = [[c, -s], [s, c]]
@@ -181,7 +182,7 @@ class KissIcpOdometry:
         """The frame's ``(x, y, yaw)`` in the front end's frame."""
         icp = self._icp
         # KISS-ICP predicts last_pose @ last_delta: the odometry increment is the prior.
-        delta = _se2_matrix(frame.odom_increment.as_array())
+        delta = se2_matrix_4x4(frame.odom_increment.as_array())
         predicted = _planar(icp.last_pose @ delta)
         points = frame.scan.points()
         estimate = None
@@ -198,7 +199,7 @@ class KissIcpOdometry:
         if estimate is None:
             estimate = predicted
             self.dead_reckoned += self.frames > 0
-        icp.last_pose = _se2_matrix(estimate)
+        icp.last_pose = se2_matrix_4x4(estimate)
         self.frames += 1
         return estimate
 

@@ -41,6 +41,7 @@ from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.geometry import between_arrays, transform_points, wrap_angle
+from albot2d.mapping.slam_front import se2_matrix_4x4
 from albot2d.validation import (
     check_in_range,
     check_non_negative,
@@ -225,14 +226,6 @@ def registration_information(
     return jac.T @ jac
 
 
-def _se2_matrix(pose: NDArray[np.float64]) -> NDArray[np.float64]:
-    c, s = np.cos(pose[2]), np.sin(pose[2])
-    out = np.eye(4)
-    out[:2, :2] = [[c, -s], [s, c]]
-    out[:2, 3] = pose[:2]
-    return out
-
-
 class LoopVerifier:
     """Registers a query local map onto a target local map with KISS-ICP and judges it."""
 
@@ -257,7 +250,7 @@ class LoopVerifier:
         max_correspondence_m: float, kernel_m: float,
     ) -> NDArray[np.float64]:  # fmt: skip
         matrix = self._registration.align_points_to_map(
-            points=self._lift(points), voxel_map=target_map, initial_guess=_se2_matrix(start),
+            points=self._lift(points), voxel_map=target_map, initial_guess=se2_matrix_4x4(start),
             max_correspondance_distance=max_correspondence_m, kernel=kernel_m,
         )  # fmt: skip
         return np.array([matrix[0, 3], matrix[1, 3], np.arctan2(matrix[1, 0], matrix[0, 0])])
