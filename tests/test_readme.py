@@ -40,7 +40,8 @@ def readme_commands() -> list[str]:
     found = []
     for m in _BLOCK.finditer(README):
         if m.group(2) == "bash":
-            found += [line.split("#")[0].strip() for line in m.group(3).splitlines()]
+            lines = m.group(3).replace("\\\n", " ").splitlines()  # continuation lines joined
+            found += [line.split("#")[0].strip() for line in lines]
     found += [" ".join(c.split()) for c in re.findall(r"`((?:\w+=\S+ )?albot2d [^`]+)`", README)]
     commands = []
     for text in found:
