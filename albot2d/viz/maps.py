@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.geometry import compose_arrays, transform_segments
-from albot2d.viz._figure import colour_buckets, nan_lines, new_figure
+from albot2d.viz._figure import colour_buckets, line_segments, nan_lines, new_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -235,10 +235,10 @@ def plot_route(
     poses = anchor_path(start_pose, route.compose_chain()) if len(route) else np.zeros((0, 3))
     views = [transform_segments(p, m.view.segments) for p, m in zip(poses, route, strict=True)]
     segs = np.vstack(views) if views else np.zeros((0, 4))
+    # One line per surface here (not ``nan_lines``): with alpha, overlapping views darken,
+    # which shows where many remembered views overlap; one path per colour would not.
     ax.add_collection(
-        _unsimplified(
-            LineCollection(nan_lines(segs), colors=VIEW_COLOR, linewidths=0.5, alpha=0.5, zorder=2)
-        )
+        LineCollection(line_segments(segs), colors=VIEW_COLOR, linewidths=0.5, alpha=0.5, zorder=2)
     )
     if true_path is not None and len(true_path):
         ax.plot(*true_path[:, :2].T, "-", color=TRUE_PATH_COLOR, lw=0.8, alpha=0.4, zorder=2)
