@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import shapely
 
+import albot2d.evaluation.map_quality as mq
 from albot2d.evaluation.map_quality import (
     MapQualityParams,
-    _near_points,
     map_quality,
     nearest_segment_distance,
 )
@@ -24,13 +24,16 @@ def _map(rng: np.random.Generator, n: int, span: float) -> np.ndarray:
 
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("reach_m", [0.01, 0.1, 0.75, 3.0])
-def test_near_points_never_drops_a_surface_within_reach(seed: int, reach_m: float) -> None:
+def test_near_points_never_drops_a_surface_within_reach(
+    seed: int, reach_m: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(mq, "_NEAR_BLOCK", 97 * (seed + 1))  # several blocks, a ragged last one
     rng = np.random.default_rng(seed)
     segs = _map(rng, 4000, 40.0)
     segs[:50, 2:] = segs[:50, :2]  # points as segments too
     centre = rng.uniform(5.0, 35.0, 2)
     pts = centre + rng.normal(0.0, 3.0, (300, 2))
-    keep = _near_points(segs, pts, reach_m)
+    keep = mq._near_points(segs, pts, reach_m)
     dist = shapely.distance(shapely.linestrings(segs.reshape(-1, 2, 2)), shapely.multipoints(pts))
     assert not np.any(~keep & (dist <= reach_m))  # every surface that may cover is kept
     assert keep.mean() < 0.6  # and it does leave the far ones out
