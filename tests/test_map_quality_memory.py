@@ -4,17 +4,21 @@ reach of a seen point is ever left out."""
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 import shapely
 
-import albot2d.evaluation.map_quality as mq
 from albot2d.evaluation.map_quality import (
     MapQualityParams,
     map_quality,
     nearest_segment_distance,
 )
 from albot2d.geometry import Pose
+
+# The module (``albot2d.evaluation.map_quality`` the attribute is the function).
+mq = importlib.import_module("albot2d.evaluation.map_quality")
 
 
 def _map(rng: np.random.Generator, n: int, span: float) -> np.ndarray:
