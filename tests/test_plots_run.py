@@ -108,7 +108,7 @@ def test_animation_mp4_when_ffmpeg_is_installed(request: pytest.FixtureRequest) 
 def test_map_and_route_follow_the_plot_convention(result: ExperimentResult) -> None:
     """``plot_map``/``plot_route`` take the data first and return the axes they drew on
     (a new figure when no ``ax``); the surfaces' LineCollection is reachable for a colour
-    bar and carries one colour value per surface."""
+    bar and carries every surface, coloured by its view."""
     from matplotlib.axes import Axes
 
     from albot2d.viz import map_surfaces, plot_map, plot_route
@@ -118,8 +118,13 @@ def test_map_and_route_follow_the_plot_convention(result: ExperimentResult) -> N
     ax = plot_map(snap.segments, map_ids=snap.map_ids, world=result.world)
     assert isinstance(ax, Axes) and ax.get_figure(root=True) is not None
     lines = map_surfaces(ax)
-    assert len(lines.get_segments()) == len(snap.segments)
-    assert np.array_equal(lines.get_array(), snap.map_ids)
+    # Drawn as NaN-separated lines, one colour value per line: every surface once, each
+    # with its own view's colour (tests/test_viz_memory.py checks the pixels).
+    rows = np.vstack([p.vertices for p in lines.get_paths()])
+    assert np.isnan(rows[2::3]).all() and len(rows) == 3 * len(snap.segments)
+    values = lines.get_array()
+    assert values is not None and set(values) <= set(snap.map_ids.tolist())
+    assert lines.get_clim() == (snap.map_ids.min(), max(snap.map_ids.max(), snap.map_ids.min() + 1))
     given = plot_map(snap.segments, ax=ax)
     assert given is ax and map_surfaces(ax) is not lines  # the last map drawn
     with pytest.raises(ValueError, match="plot_map"):

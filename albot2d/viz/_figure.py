@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["line_segments", "new_figure", "png_bytes"]
+__all__ = ["colour_buckets", "line_segments", "nan_lines", "new_figure", "png_bytes"]
 
 
 Layout = Literal["constrained", "compressed", "tight"] | None
@@ -35,6 +35,53 @@ def line_segments(segments: ArrayLike) -> list[NDArray[np.float64]]:
     """``(N, 4)`` or ``(N, 2, 2)`` segments as the list of ``(2, 2)`` arrays that
     ``LineCollection`` is typed to take (a sequence of lines, not one 3-D array)."""
     return list(np.asarray(segments, dtype=np.float64).reshape(-1, 2, 2))
+
+
+NAN_LINE_SEGMENTS = 2048
+"""Segments per NaN-separated line: bounded so no single Agg path grows without limit."""
+
+
+def nan_lines(
+    segments: ArrayLike, *, per_line: int = NAN_LINE_SEGMENTS
+) -> list[NDArray[np.float64]]:
+    """``(N, 4)`` or ``(N, 2, 2)`` segments as a few ``(3k, 2)`` polylines, each segment
+    followed by a NaN row (a pen-up: Agg removes NaNs, so the segments stay apart).
+
+    ``LineCollection`` makes one ``Path`` object per line it is given: for the 820,000
+    surfaces of a long run's naive map, one per segment cost ~1 KB each per figure; these
+    lines cost the 48 bytes of their vertices. The paths are marked not to be simplified,
+    so each segment is stroked as it would be alone (matplotlib simplifies long paths)."""
+    segs = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    lines: list[NDArray[np.float64]] = []
+    for lo in range(0, len(segs), per_line):
+        block = segs[lo : lo + per_line]
+        line = np.full((len(block), 3, 2), np.nan)
+        line[:, :2] = block.reshape(-1, 2, 2)
+        lines.append(line.reshape(-1, 2))
+    return lines
+
+
+def colour_buckets(
+    values: ArrayLike, clim: tuple[float, float], n_colours: int
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]]:
+    """Group ``values`` by the colour a ``n_colours``-entry colour map gives them under
+    ``clim`` (matplotlib's ``Normalize`` then ``Colormap`` arithmetic, so each group is one
+    colour). Returns ``(order, starts, value)``: ``order`` sorts the values by group
+    (stable, so draw order within a group is kept), group ``g`` is
+    ``order[starts[g]:starts[g + 1]]`` and ``value[g]`` is one of its members' values
+    (drawing the group with it gives every member its own colour)."""
+    v = np.asarray(values, dtype=np.float64).ravel()
+    lo, hi = float(clim[0]), float(clim[1])
+    x = (v - lo) / (hi - lo) if hi > lo else np.zeros_like(v)
+    x *= n_colours
+    x[x == n_colours] = n_colours - 1
+    idx = np.clip(x, -1, n_colours).astype(np.intp)  # -1 / n_colours: under / over
+    order = np.argsort(idx, kind="stable")
+    keys = idx[order]
+    starts = (
+        np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if len(keys) else np.zeros(0, np.intp)
+    )
+    return order, np.r_[starts, len(keys)].astype(np.intp), v[order[starts]]
 
 
 def png_bytes(fig: Figure, dpi: float) -> bytes:

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.geometry import compose_arrays, transform_segments
-from albot2d.viz._figure import line_segments, new_figure
+from albot2d.viz._figure import colour_buckets, line_segments, nan_lines, new_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -93,10 +93,49 @@ def _draw_world(ax: Axes, world: World | None) -> None:
 
     if world is not None and len(world.obstacle_segments):
         ax.add_collection(
-            LineCollection(
-                line_segments(world.obstacle_segments), colors=WORLD_COLOR, linewidths=0.8, zorder=1
+            _unsimplified(
+                LineCollection(
+                    nan_lines(world.obstacle_segments), colors=WORLD_COLOR, linewidths=0.8, zorder=1
+                )
             )
         )
+
+
+def _unsimplified(lines: LineCollection) -> LineCollection:
+    # Long NaN-separated paths would be simplified by matplotlib (sub-pixel segments
+    # merged); keep every segment's stroke as if it were drawn alone.
+    for path in lines.get_paths():
+        path.should_simplify = False
+    return lines
+
+
+def _surface_lines(
+    segs: FloatArray, map_ids: NDArray[np.int64] | None, id_range: tuple[int, int] | None
+) -> LineCollection:
+    """The surfaces as one LineCollection of a few NaN-separated lines per colour of the
+    map (memory ~ the vertices, not a Path object per surface; see ``nan_lines``)."""
+    from matplotlib import colormaps
+    from matplotlib.collections import LineCollection
+
+    kw = {"linewidths": 1.6, "zorder": 3, "label": MAP_SURFACES_LABEL}
+    if map_ids is None or not len(segs):
+        lines = LineCollection(nan_lines(segs), colors="#212121", **kw)
+        return _unsimplified(lines)
+    ids = np.asarray(map_ids)
+    lo, hi = id_range if id_range is not None else (int(np.min(ids)), int(np.max(ids)))
+    hi = max(hi, lo + 1)
+    cmap = colormaps[MAP_CMAP]
+    order, starts, value = colour_buckets(ids, (lo, hi), cmap.N)
+    paths: list[FloatArray] = []
+    values: list[float] = []
+    for g, v in enumerate(value):
+        group = nan_lines(segs[order[starts[g] : starts[g + 1]]])
+        paths += group
+        values += [float(v)] * len(group)
+    lines = LineCollection(paths, cmap=cmap, **kw)
+    lines.set_array(np.asarray(values, dtype=np.float64))
+    lines.set_clim(lo, hi)
+    return _unsimplified(lines)
 
 
 def plot_map(
@@ -113,28 +152,20 @@ def plot_map(
     title: str | None = None,
 ) -> Axes:
     """Draw one global map (``(N, 4)`` surfaces) on ``ax`` (a new figure when None); returns
-    the axes. ``map_ids`` colour each surface by its view; ``map_surfaces(ax)`` gives the
-    surfaces' LineCollection (for a colour bar).
+    the axes. ``map_ids`` colour each surface by its view (over ``id_range``, default the
+    ids' own range); ``map_surfaces(ax)`` gives the surfaces' LineCollection (for a colour
+    bar). The surfaces are drawn as a few NaN-separated lines per colour of the map, so a
+    map of a million surfaces costs its vertices, not a Path object each; the collection's
+    colour limits are fixed when drawn (pass ``id_range`` rather than ``set_clim`` after).
 
     ``segments``/``est_path`` are in the mapper's frame and are moved into the world by
     ``start_pose`` when given; ``true_path`` and ``world`` are in the world frame.
     """
-    from matplotlib.collections import LineCollection
-
     if ax is None:
         ax = new_figure(PANEL_IN * 1.6, PANEL_IN * 1.6).add_subplot()
     _draw_world(ax, world)
     segs = anchor_segments(start_pose, np.asarray(segments, np.float64).reshape(-1, 4))
-    lines = LineCollection(
-        line_segments(segs), linewidths=1.6, cmap=MAP_CMAP, zorder=3, label=MAP_SURFACES_LABEL
-    )
-    if map_ids is not None and len(segs):
-        lines.set_array(np.asarray(map_ids, dtype=np.float64))
-        lo, hi = id_range if id_range is not None else (int(np.min(map_ids)), int(np.max(map_ids)))
-        lines.set_clim(lo, max(hi, lo + 1))
-    else:
-        lines.set_color("#212121")
-    ax.add_collection(lines)
+    ax.add_collection(_surface_lines(segs, map_ids, id_range))
     parts: list[FloatArray] = [segs.reshape(-1, 2)]
     if world is not None and len(world.obstacle_segments):
         ax.plot([], [], "-", color=WORLD_COLOR, lw=0.8, label="true walls")
@@ -204,6 +235,8 @@ def plot_route(
     poses = anchor_path(start_pose, route.compose_chain()) if len(route) else np.zeros((0, 3))
     views = [transform_segments(p, m.view.segments) for p, m in zip(poses, route, strict=True)]
     segs = np.vstack(views) if views else np.zeros((0, 4))
+    # One line per surface here (not ``nan_lines``): with alpha, overlapping views darken,
+    # which shows where many remembered views overlap; one path per colour would not.
     ax.add_collection(
         LineCollection(line_segments(segs), colors=VIEW_COLOR, linewidths=0.5, alpha=0.5, zorder=2)
     )

@@ -178,6 +178,7 @@ def _map_panel(
     update: int | None = None,
     extent: Extent | None = None,
     title: str | None = None,
+    id_range: tuple[int, int] | None = None,
 ) -> LineCollection:
     trace = result.trace
     mapper = trace.mappers[name]
@@ -203,6 +204,7 @@ def _map_panel(
         true_path=true_path,
         extent=extent,
         title=title or default,
+        id_range=id_range,
     )
     return map_surfaces(ax)
 
@@ -390,9 +392,9 @@ def render_experiment_figures(
                 f"surfaces, {snap.update} views remembered"
             )
             lines = _map_panel(
-                ax, result, name, row=snap.row, update=snap.update, extent=ext, title=title
-            )
-            lines.set_clim(*id_range)
+                ax, result, name, row=snap.row, update=snap.update, extent=ext, title=title,
+                id_range=id_range,
+            )  # fmt: skip
             _colorbar(fig, lines, ax)
             ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
         for ax in axes[len(snaps) :]:
