@@ -117,9 +117,10 @@ def _surface_lines(
     from matplotlib import colormaps
     from matplotlib.collections import LineCollection
 
-    kw = {"linewidths": 1.6, "zorder": 3, "label": MAP_SURFACES_LABEL}
+    style = {"linewidths": 1.6, "zorder": 3, "label": MAP_SURFACES_LABEL}
     if map_ids is None or not len(segs):
-        lines = LineCollection(nan_lines(segs), colors="#212121", **kw)
+        lines = LineCollection(nan_lines(segs), colors="#212121")
+        lines.set(**style)
         return _unsimplified(lines)
     ids = np.asarray(map_ids)
     lo, hi = id_range if id_range is not None else (int(np.min(ids)), int(np.max(ids)))
@@ -132,7 +133,8 @@ def _surface_lines(
         group = nan_lines(segs[order[starts[g] : starts[g + 1]]])
         paths += group
         values += [float(v)] * len(group)
-    lines = LineCollection(paths, cmap=cmap, **kw)
+    lines = LineCollection(paths, cmap=cmap)
+    lines.set(**style)
     lines.set_array(np.asarray(values, dtype=np.float64))
     lines.set_clim(lo, hi)
     return _unsimplified(lines)
