@@ -6,7 +6,8 @@ more (absolute pose error after alignment, egocentric map quality at every homin
 and at the end, updates by region kind, map-history snapshots), which cost an episode
 more than driving and mapping it. ``episode_metrics`` computes only the campaign's numbers
 from the run's trace, with the very functions ``score_run`` uses, so they are equal bit
-for bit to the ones read off a fully scored run (``tests/test_campaign.py`` checks it).
+for bit to the ones read off a fully scored run (``tests/test_campaign_speed.py`` checks
+it).
 
 A failing episode's reproducer is a full report.json (``albot2d run --reproduce`` compares
 the re-run with it), so ``complete_scores`` scores a run made with ``score=False``

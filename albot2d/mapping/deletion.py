@@ -43,9 +43,11 @@ The functions here are pure and vectorised over ``(N, 4)`` segment arrays; ``Glo
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any, Literal
 
 import numpy as np
@@ -316,20 +318,16 @@ def touching_mask(
 _QUICK_SLACK_M = 1e-6
 _QUICK_OUT = 1.011  # x r: beyond this from Q, outside P
 _QUICK_IN = 0.997  # x r: within this of Q (in front of the axis), inside P
-_quick_kernels: tuple[Callable[..., Any], Callable[..., Any]] | None = None
-_quick_missing = False
 
 
-def _compiled_touching() -> tuple[Callable[..., Any], Callable[..., Any]] | None:
-    global _quick_kernels, _quick_missing
-    if _quick_kernels is None and not _quick_missing:
-        try:
-            from albot2d.mapping.deletion_numba import classify_touching, quick_ring
-        except ImportError:
-            _quick_missing = True
-        else:
-            _quick_kernels = (quick_ring, classify_touching)
-    return _quick_kernels
+@functools.cache
+def _kernels() -> ModuleType | None:
+    """The compiled kernels (``deletion_numba``), imported on first use; None without numba."""
+    try:
+        from albot2d.mapping import deletion_numba
+    except ImportError:
+        return None
+    return deletion_numba
 
 
 def quick_touch_ring(
@@ -338,11 +336,11 @@ def quick_touch_ring(
     """Q's vertices (the viewpoint, then the view's endpoints) when the quick touching test
     applies: numba present, P enlarged ``"forward"`` through the viewpoint by > 0, no
     forward ray, and Q clearly simple; ``None``: build P and test with GEOS."""
-    kernels = _compiled_touching()
+    kernels = _kernels()
     if (kernels is None or params.enlarge != "forward" or not params.include_viewpoint
             or params.forward_ray_m > 0 or not params.enlarge_m > 0):  # fmt: skip
         return None
-    ring = kernels[0](np.ascontiguousarray(as_segments(segments)), float(robot.x),
+    ring = kernels.quick_ring(np.ascontiguousarray(as_segments(segments)), float(robot.x),
                       float(robot.y), 1e-6)  # fmt: skip
     return ring if len(ring) else None
 
@@ -363,10 +361,10 @@ def quick_touching_mask(
 ) -> BoolArray:
     """``touching_mask(polygon(), segments, robot)``, calling ``polygon`` only for the
     surfaces the ring test is unsure of."""
-    kernels = _compiled_touching()
+    kernels = _kernels()
     assert kernels is not None  # quick_touch_ring gave the ring
     segs = np.ascontiguousarray(as_segments(segments))
-    status = kernels[1](
+    status = kernels.classify_touching(
         segs, ring, float(robot.x), float(robot.y), math.cos(robot.theta),
         math.sin(robot.theta), _QUICK_OUT * enlarge_m + _QUICK_SLACK_M,
         _QUICK_IN * enlarge_m - _QUICK_SLACK_M, _QUICK_SLACK_M,
@@ -424,22 +422,6 @@ def seen_side_mask(segments: FloatArray, robot: Pose) -> BoolArray:
 #: ``visible_share(backend=...)``: "auto" takes the compiled kernel when numba imports.
 SHARE_BACKENDS = ("auto", "numpy", "numba")
 
-_numba_share: Callable[..., FloatArray] | None = None
-_numba_missing = False
-
-
-def _compiled_share() -> Callable[..., FloatArray] | None:
-    """The compiled sight-line kernel, loaded on first use (None without numba)."""
-    global _numba_share, _numba_missing
-    if _numba_share is None and not _numba_missing:
-        try:
-            from albot2d.mapping.deletion_numba import visible_share_kernel
-        except ImportError:
-            _numba_missing = True
-        else:
-            _numba_share = visible_share_kernel
-    return _numba_share
-
 
 def visible_share(
     segments: FloatArray,
@@ -464,9 +446,9 @@ def visible_share(
     if len(segs) == 0 or len(vsegs) == 0:
         return np.zeros(len(segs))
     if backend != "numpy":
-        kernel = _compiled_share()
-        if kernel is not None:
-            return kernel(
+        kernels = _kernels()
+        if kernels is not None:
+            return kernels.visible_share_kernel(
                 np.ascontiguousarray(segs), np.ascontiguousarray(vsegs),
                 float(robot.x), float(robot.y), float(beyond_m), int(samples),
             )  # fmt: skip

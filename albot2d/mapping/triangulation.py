@@ -259,6 +259,19 @@ def _pi_fitness(aff: Affordances, current: Surfaces, path_integration: Pose) -> 
     )
 
 
+def _gate_limits(
+    params: TriangulationParams, gate: tuple[float, float] | None
+) -> tuple[float, float]:
+    """The per-step (metres, degrees) an affordance may deviate from path integration:
+    ``max_pi_deviation_*`` where set, else ``gate``, else RTSV's recognition thresholds."""
+    if gate is None:
+        defaults = TrackingParams()
+        gate = (defaults.match_distance_m, defaults.match_angle_deg)
+    gate_m = params.max_pi_deviation_m if params.max_pi_deviation_m is not None else gate[0]
+    gate_deg = params.max_pi_deviation_deg if params.max_pi_deviation_deg is not None else gate[1]
+    return gate_m, gate_deg
+
+
 def triangulate(
     local: Surfaces,
     current: Surfaces,
@@ -274,11 +287,7 @@ def triangulate(
     ``gate``: the per-step (metres, degrees) used where ``max_pi_deviation_*`` is ``None``;
     by default RTSV's recognition thresholds (``TrackingParams`` defaults).
     """
-    if gate is None:
-        defaults = TrackingParams()
-        gate = (defaults.match_distance_m, defaults.match_angle_deg)
-    gate_m = params.max_pi_deviation_m if params.max_pi_deviation_m is not None else gate[0]
-    gate_deg = params.max_pi_deviation_deg if params.max_pi_deviation_deg is not None else gate[1]
+    gate_m, gate_deg = _gate_limits(params, gate)
     k = max(int(steps), 1)
     if len(local) < _SMALL and len(local) == len(current) and _small_path_covers(params):
         return triangulate_small(local, current, path_integration, params, k, gate_m, gate_deg)
@@ -351,10 +360,7 @@ def heading_from_directions(
         raise ValueError(f"local has {len(local)} surfaces but current has {len(current)}")
     if len(local) == 0:
         return None
-    if gate is None:
-        defaults = TrackingParams()
-        gate = (defaults.match_distance_m, defaults.match_angle_deg)
-    gate_deg = params.max_pi_deviation_deg if params.max_pi_deviation_deg is not None else gate[1]
+    _, gate_deg = _gate_limits(params, gate)
     k = max(int(steps), 1)
     fused = _weighted_heading_offset(
         local,
@@ -369,15 +375,10 @@ def heading_from_directions(
     return float(wrap_angle(path_integration.theta + fused[0]))
 
 
-# -- the same triangulation for a few surfaces, in scalars (speed only) -------------------
-# An update localises from 1-6 tracked surfaces; the array path above then costs ~100
-# numpy calls (~160 µs), not arithmetic. Below, the same float operations in the same
-# order: the transcendental functions (arctan2, cos, sin, hypot) still on numpy arrays, so
-# their values are numpy's; the rest in Python floats, which round as numpy's float64
-# does (``%`` is numpy's remainder; see ``wrap_angle``). Sums run left to right, which is
-# what numpy's pairwise summation does below 8 terms, hence ``_SMALL``.
-# ``tests/test_triangulation_small.py`` checks the two paths equal on random and real views.
-_SMALL = 8  # below this many surfaces, the scalar path (triangulation_scalar)
+# -- a few surfaces: the same triangulation in scalars (``triangulation_scalar``) --------
+# Its sums run left to right, which is what numpy's pairwise summation does below 8 terms,
+# hence ``_SMALL``; ``tests/test_triangulation_small.py`` checks the two paths equal.
+_SMALL = 8
 
 
 @functools.lru_cache(maxsize=16)

@@ -5,7 +5,9 @@ surfaces with the default heuristics (nearest to path integration, the outlier h
 ``heading="weighted"``). Per call numpy's small-array overhead cost more than the work
 (160 µs against 43 µs here). The transcendental functions stay numpy's (this CPU's
 vectorised ``arctan2``/``cos``/``sin``/``hypot`` differ from ``math``'s in the last bit), so
-``tests/test_triangulation_small.py`` holds the two paths equal bit for bit.
+``tests/test_triangulation_small.py`` holds the two paths equal bit for bit. The rest runs
+in Python floats, which round as numpy's float64 does (``%`` is numpy's remainder, see
+``wrap_angle``).
 """
 
 from __future__ import annotations
