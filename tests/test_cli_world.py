@@ -83,6 +83,11 @@ def test_same_arguments_give_identical_files(tmp_path: Path, capsys) -> None:
         (["--kind", KIND, "--param", "door_width_min_m=-1"], ["door_width_min_m", "-1"]),
         (["--kind", KIND, "--param", "no_such_knob=1"], ["no_such_knob"]),
         (["--kind", KIND, "--param", "oops"], ["--param expects NAME=VALUE", "'oops'"]),
+        (["--kind", KIND, "--param", "=3"], ["--param expects NAME=VALUE", "'=3'"]),
+        (
+            ["--kind", KIND, "--param", "triangulation.min_tracked=2"],
+            ["'triangulation.min_tracked'", "not a world generator parameter", "--mapper"],
+        ),
         (["--kind", KIND, "--param", "width_m=20", "--width", "20"], ["not both"]),
         (["--kind", KIND, "--tour-kind", "spiral"], ["--tour-kind 'spiral'", "loop"]),
         (["--kind", KIND, "--tour-length", "nan"], ["--tour-length"]),

@@ -24,8 +24,14 @@ from albot2d.cli.options import positive_int, positive_number, world_params
 from albot2d.errors import InputError
 
 __all__ = [
+    "ALBOT1_OPTION_KEYS",
     "DEFAULT_KIND",
     "DEFAULT_NOISE",
+    "LASER_NOISE_NAMES",
+    "NOISE_NAMES",
+    "PROFILE_NAMES",
+    "TOUR_KIND_NAMES",
+    "WORLD_KINDS",
     "add_json_option",
     "add_run_options",
     "add_scoring_options",
@@ -50,6 +56,14 @@ DEFAULT_NOISE = "typical"
 DEFAULT_LASER_NOISE = "sick_lms200"
 DEFAULT_TOUR_KIND = "loop"
 DEFAULT_TOUR_LENGTH_M = 100.0
+# The valid names of each option, for --help likewise (tests/test_setup.py checks each
+# against the registry that defines it: worldgen.KINDS, PROFILES, NOISE_PRESETS, ...).
+WORLD_KINDS = ("corridors", "rooms", "open", "office", "fig6", "mixed")
+PROFILE_NAMES = ("dataset1", "dataset2", "dataset3", "start_stop", "start_stop_v1")
+NOISE_NAMES = ("none", "low", "typical", "high", "pioneer3dx")
+LASER_NOISE_NAMES = ("sick_lms200", "zero")
+TOUR_KIND_NAMES = ("loop", "out_and_back", "backtracking", "circuit")
+ALBOT1_OPTION_KEYS = ("preset", "deletion", "min_tracked", "position_endpoint", "match_candidates")
 # Fields two reports of the same run may differ in: file lists, the version, and a fuzzing
 # reproducer's own section (wall-clock timings are dropped by ``without_timings``).
 _NOT_COMPARED = ("figures", "exports", "albot2d_version", "reproducer")
@@ -59,7 +73,7 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     """World and driving options, shared by ``run`` and ``simulate`` (same defaults)."""
     world = p.add_argument_group("world (default: --kind office --seed 0)")
     world.add_argument("--world", metavar="world.json", help="a world file (albot2d world)")
-    world.add_argument("--kind", help="generate a world: corridors, rooms, open, office, mixed")
+    world.add_argument("--kind", help=f"generate a world: {', '.join(WORLD_KINDS)}")
     world.add_argument("--seed", metavar="N", help="world and run seed (default 0)")
     world.add_argument("--width", metavar="W", help="generated world's width in metres")
     world.add_argument("--height", metavar="H", help="generated world's height in metres")
@@ -70,16 +84,17 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
         help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)",
     )
     drive = p.add_argument_group("driving")
+    drive.add_argument("--profile", help=f"{', '.join(PROFILE_NAMES)} (default {DEFAULT_PROFILE})")
     drive.add_argument(
-        "--profile", help=f"dataset1, dataset2, dataset3, start_stop (default {DEFAULT_PROFILE})"
+        "--noise",
+        help=f"odometry noise preset: {', '.join(NOISE_NAMES)} (default {DEFAULT_NOISE})",
     )
     drive.add_argument(
-        "--noise", help=f"odometry noise preset: none, low, typical, high (default {DEFAULT_NOISE})"
+        "--laser-noise", help=f"{' or '.join(LASER_NOISE_NAMES)} (default {DEFAULT_LASER_NOISE})"
     )
-    drive.add_argument("--laser-noise", help=f"sick_lms200 or zero (default {DEFAULT_LASER_NOISE})")
     drive.add_argument(
         "--tour-kind",
-        help=f"loop, out_and_back, backtracking, circuit (default {DEFAULT_TOUR_KIND})",
+        help=f"{', '.join(TOUR_KIND_NAMES)} (default {DEFAULT_TOUR_KIND})",
     )
     drive.add_argument(
         "--tour-length",

@@ -59,8 +59,15 @@ def parse_param(text: str) -> tuple[str, Any]:
     """``NAME=VALUE`` → (name, value); the value becomes an int, float, bool or string."""
     name, sep, raw = text.partition("=")
     name = name.strip()
-    if not sep or not name.isidentifier():
+    if not sep or not name:
         raise InputError(f"--param expects NAME=VALUE, got {text!r}")
+    if not name.isidentifier():
+        # A dotted name is a mapper's option (e.g. triangulation.position_endpoint), which
+        # --param (the world generator's) cannot set: say where it goes instead.
+        raise InputError(
+            f"--param {text!r}: {name!r} is not a world generator parameter name; "
+            "mapper options go in --mapper 'albot1[KEY=VALUE]'"
+        )
     raw = raw.strip()
     for convert in (int, float):
         try:

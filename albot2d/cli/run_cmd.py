@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
+    ALBOT1_OPTION_KEYS,
     add_json_option,
     add_run_options,
     add_scoring_options,
@@ -70,7 +71,7 @@ def register(subparsers: Any) -> None:
         action="extend",
         metavar="NAME",
         help="mappers: albot1, naive, truth, slam and scan_odometry ([slam] extra), "
-        "albot1[KEY=VALUE,...] (keys preset, deletion, min_tracked) or "
+        f"albot1[KEY=VALUE,...] (keys {', '.join(ALBOT1_OPTION_KEYS)}) or "
         "module:Class (default: albot1 naive truth)",
     )
     add_scoring_options(p)
