@@ -1,5 +1,6 @@
-"""The README works as written: its Python blocks run, and its commands run without a
-single warning (``-W error``), shortened where they would take minutes."""
+"""The README and the guides in docs/ work as written: their Python blocks run, and their
+commands run without a single warning (``-W error``), shortened where they would take
+minutes."""
 
 from __future__ import annotations
 
@@ -15,7 +16,11 @@ import pytest
 from albot2d.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-README = (ROOT / "README.md").read_text(encoding="utf-8")
+# The README first (its commands draw figures), then every guide in docs/.
+DOCUMENTS = {
+    path.relative_to(ROOT).as_posix(): path.read_text(encoding="utf-8")
+    for path in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+}
 SHARED_DATA = ROOT.parent / "shared" / "data"
 SKIP_MARK = "<!-- not run by tests/test_readme.py"
 _BLOCK = re.compile(r"(<!--[^\n]*-->\n)?```(\w+)\n(.*?)```", re.DOTALL)
@@ -23,26 +28,28 @@ _PLACEHOLDER = re.compile(r"^[A-Z][A-Z0-9_]*$|[\[\]|…]|\.\.\.")
 
 
 def python_blocks() -> list[tuple[int, str, str | None]]:
-    """(line, code, reason to skip) of every ```python block."""
+    """(file:line, code, reason to skip) of every ```python block."""
     out = []
-    for m in _BLOCK.finditer(README):
-        if m.group(2) != "python":
-            continue
-        line = README[: m.start(3)].count("\n") + 1
-        skip = m.group(1) if m.group(1) and m.group(1).startswith(SKIP_MARK) else None
-        out.append((line, m.group(3), skip))
+    for name, text in DOCUMENTS.items():
+        for m in _BLOCK.finditer(text):
+            if m.group(2) != "python":
+                continue
+            line = text[: m.start(3)].count("\n") + 1
+            skip = m.group(1) if m.group(1) and m.group(1).startswith(SKIP_MARK) else None
+            out.append((f"{name}:{line}", m.group(3), skip))
     return out
 
 
 def readme_commands() -> list[str]:
-    """Every complete ``albot2d …`` command in the README (bash blocks and inline code),
-    without the usage synopses (those with placeholders such as DIR or [--option])."""
+    """Every complete ``albot2d …`` command in the README and docs/ (bash blocks and inline
+    code), without the usage synopses (those with placeholders such as DIR or [--option])."""
     found = []
-    for m in _BLOCK.finditer(README):
-        if m.group(2) == "bash":
-            lines = m.group(3).replace("\\\n", " ").splitlines()  # continuation lines joined
-            found += [line.split("#")[0].strip() for line in lines]
-    found += [" ".join(c.split()) for c in re.findall(r"`((?:\w+=\S+ )?albot2d [^`]+)`", README)]
+    for text in DOCUMENTS.values():
+        for m in _BLOCK.finditer(text):
+            if m.group(2) == "bash":
+                lines = m.group(3).replace("\\\n", " ").splitlines()  # continuation lines joined
+                found += [line.split("#")[0].strip() for line in lines]
+        found += [" ".join(c.split()) for c in re.findall(r"`((?:\w+=\S+ )?albot2d [^`]+)`", text)]
     commands = []
     for text in found:
         words = shlex.split(text)
@@ -76,17 +83,17 @@ def shortened(words: list[str], drawn: set[str]) -> list[str] | None:
     return words
 
 
-@pytest.mark.parametrize(("line", "code", "skip"), python_blocks(),
-                         ids=[f"line{b[0]}" for b in python_blocks()])  # fmt: skip
+@pytest.mark.parametrize(("where", "code", "skip"), python_blocks(),
+                         ids=[b[0] for b in python_blocks()])  # fmt: skip
 def test_python_block_runs(
-    line: int, code: str, skip: str | None, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    where: str, code: str, skip: str | None, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     if skip:
         pytest.skip(skip.strip())
     monkeypatch.chdir(tmp_path)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        exec(compile(code, f"README.md:{line}", "exec"), {"__name__": "__readme__"})
+        exec(compile(code, where, "exec"), {"__name__": "__readme__"})
 
 
 def test_the_readme_has_a_library_example_and_commands() -> None:
