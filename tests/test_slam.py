@@ -124,6 +124,7 @@ def test_scans_without_enough_hits_follow_odometry(kiss: ModuleType) -> None:
         ({"fixed_threshold_m": -1.0}, "fixed_threshold_m"),
         ({"map_update_m": -1.0}, "map_update_m"),
         ({"prior": "imu"}, "prior"),
+        ({"prior_gate_deg": 0.0}, "prior_gate_deg"),
     ],
 )
 def test_bad_params_name_the_field(overrides: dict[str, object], message: str) -> None:
@@ -205,7 +206,8 @@ def test_scan_to_scan_prior_recovers_the_mit_logs_fast_turns(
     """The MIT log's odometry overstates fast turns (30° between scans 153 and 154 where
     the relations say 17°). KISS-ICP against its local map stays near such a prior; the
     previous scan alone pulls the heading to the truth (README, issue 11), so with the
-    scan-to-scan prior far fewer short relations are off by more than 5°."""
+    scan-to-scan prior far fewer short relations are off by more than 5°; ``gated`` takes
+    its heading only on the scans where the two disagree by more than 2°."""
     from albot2d.evaluation.rpe import relation_errors
     from albot2d.logs import read_frames, read_relations
     from albot2d.mapping.protocol import StageTimer
@@ -215,11 +217,15 @@ def test_scan_to_scan_prior_recovers_the_mit_logs_fast_turns(
     rel = read_relations(shared_data / "relations" / "mit-csail.relations")
     times = np.array([f.timestamp for f in frames])
     short = rel.t2 - rel.t1 < 2.0
-    bad = {}
-    for prior in ("odometry", "scan_to_scan"):
+    bad, switches = {}, {}
+    for prior in ("odometry", "scan_to_scan", "gated"):
         fe = KissIcpOdometry(ScanMatchingParams(prior=prior), StageTimer())
         poses = np.array([fe.register(f) for f in frames])
+        switches[prior] = fe.prior_switches
         _, rot, used = relation_errors(times, poses, rel.t1, rel.t2, rel.motion)
         assert np.count_nonzero(used & short) > 150
         bad[prior] = int(np.count_nonzero(used & short & (np.degrees(rot) > 5.0)))
     assert bad["scan_to_scan"] * 3 < bad["odometry"], bad
+    assert bad["gated"] * 2 < bad["odometry"], bad
+    assert switches["odometry"] == switches["scan_to_scan"] == 0
+    assert 0 < switches["gated"] < len(frames) // 2

@@ -47,7 +47,7 @@ __all__ = [
 ]
 
 MISSING_EXTRA = "the slam mapper needs the optional extra: pip install 'albot2d[slam]'"
-PRIORS = ("odometry", "scan_to_scan", "scan_to_scan_heading")
+PRIORS = ("odometry", "scan_to_scan", "scan_to_scan_heading", "gated")
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,7 +74,12 @@ class ScanMatchingParams:
     - ``prior``: where scan-to-map registration starts (see the module doc): ``"odometry"``
       (KISS-ICP with the odometry increment as its motion model), ``"scan_to_scan"`` (the
       scan registered against the previous scan first) or ``"scan_to_scan_heading"`` (the
-      odometry's translation with that registration's heading).
+      odometry's translation with that registration's heading) or ``"gated"`` (the
+      odometry, unless the scan-to-scan heading differs from it by more than
+      ``prior_gate_deg``; then ``"scan_to_scan_heading"``: a registration's per-scan
+      heading noise adds up with dense views, so it is used only where the odometry is
+      plainly wrong).
+    - ``prior_gate_deg``: that disagreement (per scan) for ``"gated"``.
     """
 
     voxel_size_m: float = 0.20
@@ -91,6 +96,7 @@ class ScanMatchingParams:
     map_update_m: float = 0.0
     map_update_deg: float = 0.0
     prior: str = "odometry"
+    prior_gate_deg: float = 2.0
 
     def __post_init__(self) -> None:
         if self.prior not in PRIORS:
@@ -98,7 +104,7 @@ class ScanMatchingParams:
                 f"ScanMatchingParams.prior must be one of {', '.join(PRIORS)}, got {self.prior!r}"
             )
         check_positive(self, "voxel_size_m", "max_range_m", "initial_threshold_m",
-                       "convergence")  # fmt: skip
+                       "convergence", "prior_gate_deg")  # fmt: skip
         check_non_negative(self, "min_range_m", "min_motion_m", "map_update_m",
                            "map_update_deg")  # fmt: skip
         check_positive_int(self, "max_points_per_voxel", "max_iterations", "min_points")
@@ -156,6 +162,7 @@ class KissIcpOdometry:
         # scan-to-scan prior: the previous scan as a one-scan map, and a second adaptive
         # threshold for scan-to-map (its prediction is then the scan-to-scan result)
         self._previous: Any = None
+        self.prior_switches = 0  # scans where "gated" took the scan-to-scan heading
         self._map_threshold: Any = None
         if params.prior != "odometry":
             from kiss_icp.threshold import get_threshold_estimator
@@ -234,9 +241,14 @@ class KissIcpOdometry:
         )  # fmt: skip
         if not np.all(np.isfinite(delta)):
             return guess
-        if self.params.prior == "scan_to_scan_heading":
+        prior = self.params.prior
+        if prior != "scan_to_scan":
             odom, scan = _planar(icp.last_delta), _planar(delta)
+            gap = np.degrees(abs(float(np.angle(np.exp(1j * (scan[2] - odom[2]))))))
+            if prior == "gated" and gap <= self.params.prior_gate_deg:
+                return guess
             delta = se2_matrix_4x4(np.array([odom[0], odom[1], scan[2]]))
+            self.prior_switches += prior == "gated"
         return np.asarray(icp.last_pose @ delta)
 
     def register(self, frame: Frame) -> NDArray[np.float64]:
