@@ -75,7 +75,7 @@ class LoopClosureParams:
     - ``max_candidates``: nearest candidates verified per keyframe.
     - ``closure_spacing_m``: after an accepted closure, no candidate is searched for
       until the robot drove this far (front-end path), as hdl_graph_slam's
-      ``distance_from_last_edge_thresh``: consecutive keyframes closing onto the same
+      ``min_edge_interval`` (5 m there): consecutive keyframes closing onto the same
       target local map share its registration error, and the graph would count them as
       independent (README). 0 (the default): every keyframe searches.
     - ``submap_keyframes``: keyframes whose scans form a local map (query: the last ones up
