@@ -16,7 +16,8 @@ The prior (``ScanMatchingParams.prior``): KISS-ICP starts from the odometry incr
 (``"odometry"``), or first registers the scan against the previous scan alone, from the
 odometry increment, and starts the scan-to-map registration from that (``"scan_to_scan"``,
 the LOAM split of scan-to-scan odometry and scan-to-map refinement; ``"scan_to_scan_heading"``
-keeps the odometry's translation and takes only the heading from it). Why (README, MIT
+keeps the odometry's translation and takes only the heading from it; ``"gated"`` does that
+only where the two headings disagree by more than ``prior_gate_deg``). Why (README, MIT
 log): the log's odometry overstates fast turns (30° between two scans where the relations
 say 17°), and scan-to-map ICP against a local map already smeared by earlier turns stays
 near such a prior (from 30° it stops at 26°), while the previous scan alone pulls it to
@@ -34,7 +35,7 @@ from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.frames import Frame
-from albot2d.geometry import between_arrays
+from albot2d.geometry import between_arrays, wrap_angle
 from albot2d.mapping.protocol import StageTimer
 from albot2d.validation import check_non_negative, check_positive, check_positive_int
 
@@ -231,7 +232,8 @@ class KissIcpOdometry:
     ) -> NDArray[np.float64]:
         """The scan-to-map prior: ``guess`` (odometry), or the scan registered against the
         previous scan from there (``prior`` option; its translation replaced by the
-        odometry's with ``"scan_to_scan_heading"``)."""
+        odometry's with ``"scan_to_scan_heading"`` and ``"gated"``, which keeps ``guess``
+        unless the headings disagree by more than ``prior_gate_deg``)."""
         icp = self._icp
         if self._previous is None:
             return guess
@@ -244,7 +246,7 @@ class KissIcpOdometry:
         prior = self.params.prior
         if prior != "scan_to_scan":
             odom, scan = _planar(icp.last_delta), _planar(delta)
-            gap = np.degrees(abs(float(np.angle(np.exp(1j * (scan[2] - odom[2]))))))
+            gap = np.degrees(abs(float(wrap_angle(scan[2] - odom[2]))))
             if prior == "gated" and gap <= self.params.prior_gate_deg:
                 return guess
             delta = se2_matrix_4x4(np.array([odom[0], odom[1], scan[2]]))
