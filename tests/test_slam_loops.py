@@ -256,9 +256,35 @@ def test_bad_loop_params_name_the_field() -> None:
         LoopClosureParams(gate="wide")
     with pytest.raises(InputError, match="gate_chi2"):
         LoopClosureParams(gate_chi2=0.0)
+    with pytest.raises(InputError, match="closure_spacing_m"):
+        LoopClosureParams(closure_spacing_m=-1.0)
 
 
 def test_missing_gtsam_is_one_clean_error(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setitem(sys.modules, "gtsam", None)
     with pytest.raises(InputError, match=r"pip install 'albot2d\[slam\]'"):
         LoopClosingSLAM()
+
+
+def test_closure_spacing_keeps_closures_a_query_local_map_apart(
+    slam: LoopClosingSLAM, frames: list[Frame]
+) -> None:
+    """With ``closure_spacing_m`` no two accepted closures come from keyframes closer than
+    that along the path (consecutive keyframes onto one target share its registration
+    error), fewer candidates are verified, and the loop still closes."""
+    spaced = map_frames(
+        LoopClosingSLAM(replace(slam.params, loops=replace(slam.params.loops,
+                                                           closure_spacing_m=5.0))),
+        frames,
+    )  # fmt: skip
+    accepted = [c.i for c in spaced.checks if c.accepted]
+    assert len(accepted) >= 1
+    path = np.array(spaced._kf_path_m)[accepted]
+    assert np.all(np.diff(path) >= 5.0)
+    assert len(spaced.checks) < len(slam.checks)
+    dense = [c.i for c in slam.checks if c.accepted]
+    assert np.any(np.diff(np.array(slam._kf_path_m)[dense]) < 5.0)  # the rule did something
+    assert (
+        end_pose_error(frames, spaced.trajectory())[0]
+        < end_pose_error(frames, map_frames(ScanMatchingSLAM(), frames).trajectory())[0]
+    )

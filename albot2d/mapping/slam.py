@@ -139,6 +139,7 @@ class LoopClosingSLAM:
         self._origin: NDArray[np.float64] | None = None
         self._last_fe = np.zeros(3)
         self._path_m = 0.0
+        self._last_closure_m = -np.inf  # path (front end) at the last accepted closure
         # per view
         self._segments: list[NDArray[np.float64]] = []
         self._view_kf: list[int] = []
@@ -269,6 +270,7 @@ class LoopClosingSLAM:
             check = self.verify_closure(i, j, guess)
         self.checks.append(check)
         if check.accepted:
+            self._last_closure_m = self._kf_path_m[check.i]
             self.graph.add_loop(i, j, check.relative, check.information)
             with self.timer.stage("optimisation"):
                 self.graph.optimise()
@@ -321,6 +323,8 @@ class LoopClosingSLAM:
         """Older keyframes near keyframe ``i`` under the current estimate, nearest first."""
         p = self.params.loops
         if len(self._kf_points[i]) < self.params.scan_matching.min_points or i == 0:
+            return []
+        if self._kf_path_m[i] - self._last_closure_m < p.closure_spacing_m:
             return []
         est = self.graph.estimate
         path = self._kf_path_m[i] - np.array(self._kf_path_m[:i])

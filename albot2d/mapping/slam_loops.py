@@ -73,6 +73,11 @@ class LoopClosureParams:
     - ``search_radius_m`` + ``search_radius_per_m`` × path since the candidate, at most
       ``max_search_radius_m``: how far apart (current estimate) a candidate may be.
     - ``max_candidates``: nearest candidates verified per keyframe.
+    - ``closure_spacing_m``: after an accepted closure, no candidate is searched for
+      until the robot drove this far (front-end path), as hdl_graph_slam's
+      ``min_edge_interval`` (5 m there): consecutive keyframes closing onto the same
+      target local map share its registration error, and the graph would count them as
+      independent (README). 0 (the default): every keyframe searches.
     - ``submap_keyframes``: keyframes whose scans form a local map (query: the last ones up
       to ``i``; target: as many on each side of ``j``).
     - ``voxel_size_m``: voxel size of the registration map and of the query's downsampling.
@@ -97,6 +102,7 @@ class LoopClosureParams:
     search_radius_per_m: float = 0.02
     max_search_radius_m: float = 6.0
     max_candidates: int = 1
+    closure_spacing_m: float = 0.0
     submap_keyframes: int = 10
     voxel_size_m: float = 0.10
     max_correspondence_m: float = 1.0
@@ -125,7 +131,7 @@ class LoopClosureParams:
                        "max_correction_deg", "gate_chi2")  # fmt: skip
         if self.overlap_distance_m is not None:
             check_positive(self, "overlap_distance_m")
-        check_non_negative(self, "min_separation_m", "search_radius_per_m",
+        check_non_negative(self, "min_separation_m", "search_radius_per_m", "closure_spacing_m",
                            "max_correction_per_m", "max_correction_deg_per_m")  # fmt: skip
         check_positive_int(self, "max_candidates", "submap_keyframes", "max_iterations",
                            "min_inliers", "min_scan_inliers")  # fmt: skip
