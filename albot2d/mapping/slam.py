@@ -90,7 +90,7 @@ class SlamParams:
     disagreement: 4.5 ≈ 3 robust sigmas, as wheel odometry's error is systematic as much
     as random: a heading drift per metre and a turn-scale error are small consistent
     errors that neither a robust kernel nor the median sees; 1.4826, one robust sigma,
-    maps dataset 1 better and dataset 3 worse, see the README)."""
+    maps dataset 1 better and dataset 3 worse, see docs/albot-x.md)."""
 
     scan_matching: ScanMatchingParams = field(default_factory=ScanMatchingParams)
     loops: LoopClosureParams = field(default_factory=LoopClosureParams)

@@ -17,7 +17,7 @@ The prior (``ScanMatchingParams.prior``): KISS-ICP starts from the odometry incr
 odometry increment, and starts the scan-to-map registration from that (``"scan_to_scan"``,
 the LOAM split of scan-to-scan odometry and scan-to-map refinement; ``"scan_to_scan_heading"``
 keeps the odometry's translation and takes only the heading from it; ``"gated"`` does that
-only where the two headings disagree by more than ``prior_gate_deg``). Why (README, MIT
+only where the two headings disagree by more than ``prior_gate_deg``). Why (docs/albot-x.md, MIT
 log): the log's odometry overstates fast turns (30° between two scans where the relations
 say 17°), and scan-to-map ICP against a local map already smeared by earlier turns stays
 near such a prior (from 30° it stops at 26°), while the previous scan alone pulls it to
@@ -69,7 +69,7 @@ class ScanMatchingParams:
       local map only once the registered pose moved this far (or turned this much) since
       the last scan that joined it (keyframe-based map insertion, as in LiDAR odometry
       such as LIO-SAM's 1 m / 0.2 rad). 0 (the default): every scan joins the map,
-      KISS-ICP's own behaviour. Measured (README): 0.5 m / 10° cures the front end's drift
+      KISS-ICP's own behaviour. Measured (docs/albot-x.md): 0.5 m / 10° cures the front end's drift
       on the paper's fig6 route with dense views (2–4 m → ≤ 0.1 m at the end with loop
       closing) but loses track on the MIT log (RPE 0.38 → 1.56 m), so it is not the default.
     - ``prior``: where scan-to-map registration starts (see the module doc): ``"odometry"``

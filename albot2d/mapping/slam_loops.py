@@ -77,7 +77,7 @@ class LoopClosureParams:
       until the robot drove this far (front-end path), as hdl_graph_slam's
       ``min_edge_interval`` (5 m there): consecutive keyframes closing onto the same
       target local map share its registration error, and the graph would count them as
-      independent (README). 0 (the default): every keyframe searches.
+      independent (docs/albot-x.md). 0 (the default): every keyframe searches.
     - ``submap_keyframes``: keyframes whose scans form a local map (query: the last ones up
       to ``i``; target: as many on each side of ``j``).
     - ``voxel_size_m``: voxel size of the registration map and of the query's downsampling.
