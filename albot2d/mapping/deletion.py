@@ -408,7 +408,8 @@ def group_maps(
                 start = m
             prev = m
         runs.append((start, prev))
-    return tuple([m for lo, hi in runs for m in range(lo, hi + 1) if m in existing])
+    has = existing.__contains__  # filter() runs the test in C: groups span many ids
+    return tuple([m for lo, hi in runs for m in filter(has, range(lo, hi + 1))])
 
 
 def seen_side_mask(segments: FloatArray, robot: Pose) -> BoolArray:

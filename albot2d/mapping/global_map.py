@@ -23,7 +23,6 @@ which it was added and removed: any past state of the map is a cheap filter
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -71,6 +70,24 @@ class UpdateReport(NamedTuple):
         """The enlarged view polygon P of this update."""
         got = self.polygon_or_maker
         return got() if callable(got) else got
+
+
+class _LazyPolygon:
+    """The view polygon P of one update, built on first call (most updates never need it)."""
+
+    __slots__ = ("_args", "_polygon")
+
+    def __init__(self, segs: NDArray[np.float64], robot: Pose, params: GlobalMapParams) -> None:
+        self._args = (segs, robot, params)
+        self._polygon: shapely.Geometry | None = None
+
+    def __call__(self) -> shapely.Geometry:
+        if self._polygon is None:
+            segs, robot, p = self._args
+            self._polygon = view_polygon(
+                segs, robot, p.enlarge_m, p.enlarge, include_viewpoint=p.include_viewpoint
+            )
+        return self._polygon
 
 
 class GlobalMap:
@@ -125,11 +142,7 @@ class GlobalMap:
             raise ValueError(f"map ids must increase: got {map_id} after {self.last_map_id}")
         self.n_updates += 1
         p = self.params
-        make_polygon = functools.cache(
-            lambda: view_polygon(
-                segs, robot, p.enlarge_m, p.enlarge, include_viewpoint=p.include_viewpoint
-            )
-        )
+        make_polygon = _LazyPolygon(segs, robot, p)
         ring = quick_touch_ring(segs, robot, p)  # None: P built now, tested by GEOS
         poly = make_polygon() if ring is None else None
         current = self.last_map_id
@@ -166,7 +179,7 @@ class GlobalMap:
             doomed = hit[cur_del]
             n_current = len(doomed)
             touched = hit_maps if p.current_in_group else hit_maps[~is_current]
-            affected = tuple(np.unique(touched).tolist())
+            affected = tuple(sorted(set(touched.tolist())))  # np.unique's, without numpy's overhead
             group = group_maps(affected, p.expand, p.group_gap_maps, self._by_map)
             older_group = tuple(m for m in group if m != current)
             if older_group:

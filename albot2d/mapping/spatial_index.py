@@ -28,35 +28,49 @@ class SegmentGridIndex:
         self.cell_m = float(cell_m)
         self._cells: dict[tuple[int, int], list[int]] = {}
 
-    def _cell_ranges(self, boxes: NDArray[np.float64]) -> NDArray[np.int64]:
-        return np.floor(boxes / self.cell_m).astype(np.int64)
+    def _cell_ranges(self, segments: NDArray[np.float64]) -> list[list[int]]:
+        """Per segment ``[ix0, iy0, ix1, iy1]``: the cells its bounding box covers."""
+        lo = np.minimum(segments[:, :2], segments[:, 2:])
+        hi = np.maximum(segments[:, :2], segments[:, 2:])
+        out = np.empty((len(segments), 4), np.int64)
+        out[:, :2] = np.floor(lo / self.cell_m)
+        out[:, 2:] = np.floor(hi / self.cell_m)
+        return out.tolist()  # type: ignore[no-any-return]
 
     def insert(self, ids: NDArray[np.int64], segments: NDArray[np.float64]) -> None:
         """Index ``segments`` (``(K, 4)``) under the integer ``ids`` (``(K,)``)."""
         if len(ids) == 0:
             return
-        cells = self._cell_ranges(_boxes(segments))
-        for sid, (x0, y0, x1, y1) in zip(ids.tolist(), cells.tolist(), strict=True):
+        cells = self._cells
+        for sid, (x0, y0, x1, y1) in zip(ids.tolist(), self._cell_ranges(segments), strict=True):
             for ix in range(x0, x1 + 1):
                 for iy in range(y0, y1 + 1):
-                    self._cells.setdefault((ix, iy), []).append(sid)
+                    members = cells.get((ix, iy))
+                    if members is None:
+                        cells[(ix, iy)] = [sid]
+                    else:
+                        members.append(sid)
 
     def remove(self, ids: NDArray[np.int64], segments: NDArray[np.float64]) -> None:
         """Forget ``ids``, indexed with these ``segments`` (the same geometry as inserted);
         ids not indexed are ignored, and a cell left empty is dropped."""
         if len(ids) == 0:
             return
-        cells = self._cell_ranges(_boxes(segments))
-        for sid, (x0, y0, x1, y1) in zip(ids.tolist(), cells.tolist(), strict=True):
+        cells = self._cells
+        for sid, (x0, y0, x1, y1) in zip(ids.tolist(), self._cell_ranges(segments), strict=True):
             for ix in range(x0, x1 + 1):
                 for iy in range(y0, y1 + 1):
-                    members = self._cells.get((ix, iy))
-                    if members is not None and sid in members:
-                        # Lists, not sets: a cell holds a few dozen ids (a scan is cheap)
-                        # and a naive map's 50,000 surfaces cost 1 MB, not 10.
+                    members = cells.get((ix, iy))
+                    if members is None:
+                        continue
+                    # Lists, not sets: a cell holds a few dozen ids (a scan is cheap) and a
+                    # naive map's 50,000 surfaces cost 1 MB, not 10.
+                    try:
                         members.remove(sid)
-                        if not members:
-                            del self._cells[(ix, iy)]
+                    except ValueError:  # not indexed here
+                        continue
+                    if not members:
+                        del cells[(ix, iy)]
 
     def query_box(self, xmin: float, ymin: float, xmax: float, ymax: float) -> NDArray[np.int64]:
         """Sorted unique ids of segments whose cells meet the box (a superset of true hits)."""
@@ -77,8 +91,3 @@ class SegmentGridIndex:
                         found.extend(in_cell)
         return np.unique(np.asarray(found, dtype=np.int64))
 
-
-def _boxes(segments: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(K, 4)`` bounding boxes ``[xmin, ymin, xmax, ymax]`` of ``(K, 4)`` segments."""
-    return np.hstack([np.minimum(segments[:, :2], segments[:, 2:]),
-                      np.maximum(segments[:, :2], segments[:, 2:])])  # fmt: skip

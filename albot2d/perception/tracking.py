@@ -202,8 +202,13 @@ def start_tracking(
     that view's observations.
     """
     chosen = view.select(trackable_mask(view, params))
-    ids = first_id + np.arange(len(chosen), dtype=np.int64)
-    return TrackedSurfaces(ids, chosen, chosen)
+    ids = np.arange(first_id, first_id + len(chosen), dtype=np.int64)
+    # Fresh, distinct ids, one per surface: TrackedSurfaces' checks hold by construction.
+    ids.flags.writeable = False
+    state = object.__new__(TrackedSurfaces)
+    for name, value in (("ids", ids), ("local", chosen), ("current", chosen)):
+        object.__setattr__(state, name, value)
+    return state
 
 
 @dataclass(frozen=True, eq=False)
