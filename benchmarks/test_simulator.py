@@ -80,8 +80,13 @@ def test_simulator_with_albot1_steps_per_second(benchmark, office) -> None:
             count += 1
         return count
 
-    count = benchmark.pedantic(run, rounds=3, iterations=1)
-    benchmark.extra_info["steps_per_s"] = count / benchmark.stats.stats.mean
+    # One untimed round first: the first map updates load the tracking, triangulation and
+    # deletion kernels from numba's cache (~40 ms, 6 % of a round), which is not a step.
+    count = benchmark.pedantic(run, rounds=5, iterations=1, warmup_rounds=1)
+    stats = benchmark.stats.stats
+    benchmark.extra_info["steps_per_s"] = count / stats.mean
+    benchmark.extra_info["steps_per_s_median"] = count / stats.median
+    benchmark.extra_info["steps_per_s_best"] = count / stats.min
     assert count == 1500
 
 

@@ -166,9 +166,9 @@ class Albot1Params:
         return dataclasses.replace(base, **overrides)
 
 
-@dataclass(frozen=True, eq=False)
-class _ViewState:
-    """The previous view: what is needed to remember it one frame late."""
+class _ViewState(NamedTuple):
+    """The previous view: what is needed to remember it one frame late (a tuple: one is
+    made per view, and a frozen dataclass's constructor costs several times more)."""
 
     frame_index: int
     timestamp: float
@@ -267,6 +267,9 @@ class Albot1:
             return
         use_vc = self._use_vc
         tracked_after = self._main_loop_step(frame_index, timestamp, view, increment, prev)
+        if len(self.route) == n_maps:  # most views remember none
+            self.steps.append(StepRecord(frame_index, tracked_after, use_vc, (), ()))
+            return
         new = self.route.maps[n_maps:]
         self.steps.append(
             StepRecord(

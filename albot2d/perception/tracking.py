@@ -413,9 +413,13 @@ def rtsv(
     # ti are distinct indices into a valid tracker state: its invariants hold by
     # construction, so the survivors skip TrackedSurfaces' checks (a third of RTSV's time).
     survivors = object.__new__(TrackedSurfaces)
-    ids = tracked.ids[ti]
-    ids.flags.writeable = False
-    for name, value in (("ids", ids), ("local", tracked.local.select(ti)),
-                        ("current", view.select(vj))):  # fmt: skip
+    if len(ti) == len(tracked):
+        # Every surface survived (ti is 0…K-1): the read-only ids and local geometry are
+        # shared, not copied (most views lose none).
+        ids, local = tracked.ids, tracked.local
+    else:
+        ids, local = tracked.ids[ti], tracked.local.select(ti)
+        ids.flags.writeable = False
+    for name, value in (("ids", ids), ("local", local), ("current", view.select(vj))):
         object.__setattr__(survivors, name, value)
     return survivors, MatchInfo(ti, vj, dist, angle, predicted, cand)
