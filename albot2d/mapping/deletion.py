@@ -385,13 +385,17 @@ def in_range_mask(segments: FloatArray, robot: Pose, reach_m: float) -> BoolArra
 
 
 def group_maps(
-    affected: tuple[int, ...], rule: GroupRule, gap_maps: int, existing: set[int] | dict[int, Any]
+    affected: tuple[int, ...],
+    rule: GroupRule,
+    gap_maps: int,
+    existing: set[int] | dict[int, Any] | range,
 ) -> tuple[int, ...]:
     """Expand: the map ids whose surfaces are candidates for deletion as a group.
 
     ``affected`` is sorted. ``"split"``: runs of affected ids whose consecutive differences
     are at most ``gap_maps``, each filled in (25, 28 → 25…28); ``"contiguous"``: one run
-    from the first to the last; ``"none"``: the affected ids. Only ids in ``existing``.
+    from the first to the last; ``"none"``: the affected ids. Only ids in ``existing``
+    (a ``range`` when they are consecutive: then each run is a slice of it).
     """
     if not affected:
         return ()
@@ -408,6 +412,9 @@ def group_maps(
                 start = m
             prev = m
         runs.append((start, prev))
+    if isinstance(existing, range) and existing.step == 1:
+        first, last = existing.start, existing.stop - 1
+        return tuple([m for lo, hi in runs for m in range(max(lo, first), min(hi, last) + 1)])
     has = existing.__contains__  # filter() runs the test in C: groups span many ids
     return tuple([m for lo, hi in runs for m in filter(has, range(lo, hi + 1))])
 

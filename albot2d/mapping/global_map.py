@@ -103,6 +103,9 @@ class GlobalMap:
         self._n = 0
         self._alive = 0
         self._by_map: dict[int, NDArray[np.int64]] = {}
+        #: The ids added so far: a range while they are consecutive (Albot1's are), else
+        #: ``_by_map`` itself; what group expansion picks from.
+        self._ids: range | dict[int, NDArray[np.int64]] = range(0)
         self._index = SegmentGridIndex(params.index_cell_m)
         self.n_updates = 0
         self.last_map_id: int | None = None
@@ -153,7 +156,8 @@ class GlobalMap:
         if self._alive and (poly is None or not poly.is_empty):
             if poly is None:
                 assert ring is not None
-                cand = self._alive_ids(self._index.query_box(*quick_touch_box(ring, p.enlarge_m)))
+                # The index holds live ids only (deletions leave it at once).
+                cand = self._index.query_box(*quick_touch_box(ring, p.enlarge_m))
                 touch = quick_touching_mask(
                     ring, make_polygon, self._segments[cand], robot, p.enlarge_m
                 )
@@ -163,7 +167,7 @@ class GlobalMap:
                     tip = robot @ Pose(p.forward_ray_m, 0.0, 0.0)
                     box = [min(box[0], tip.x), min(box[1], tip.y),
                            max(box[2], tip.x), max(box[3], tip.y)]  # fmt: skip
-                cand = self._alive_ids(self._index.query_box(*box))
+                cand = self._index.query_box(*box)
                 touch = touching_mask(poly, self._segments[cand], robot, p.forward_ray_m)
             hit = cand[touch]
             hit_maps = self._map_ids[hit]
@@ -180,15 +184,16 @@ class GlobalMap:
             n_current = len(doomed)
             touched = hit_maps if p.current_in_group else hit_maps[~is_current]
             affected = tuple(sorted(set(touched.tolist())))  # np.unique's, without numpy's overhead
-            group = group_maps(affected, p.expand, p.group_gap_maps, self._by_map)
-            older_group = tuple(m for m in group if m != current)
-            if older_group:
+            group = group_maps(affected, p.expand, p.group_gap_maps, self._ids)
+            # Any map of the group but the current one (a group spans up to every id).
+            if len(group) > 1 or (group and group[0] != current):
                 if p.could_see in ("in_view", "visible"):
                     # Every hit's map is affected (or the current one) and every affected
                     # map is in its group (each id ever added is in _by_map), so the hits
                     # in the older group are exactly those not of the current map.
                     older = hit[~is_current & visible]
                 else:
+                    older_group = [m for m in group if m != current]
                     ids = self._alive_ids(np.concatenate([self._by_map[m] for m in older_group]))
                     gsegs = self._segments[ids]
                     keep = facing_mask(gsegs, robot, p.facing_test)
@@ -236,6 +241,11 @@ class GlobalMap:
         self._n += len(segs)
         self._alive += len(segs)
         self._by_map[map_id] = new_ids
+        if self._ids is self._by_map or self.last_map_id not in (None, map_id - 1):
+            self._ids = self._by_map
+        else:  # every id first…map_id so far: a range answers ``in`` and groups in C
+            self._ids = range(self._ids.start if self.last_map_id is not None else map_id,
+                              map_id + 1)  # fmt: skip
         self._index.insert(new_ids, segs)
         self.last_map_id = map_id
 
