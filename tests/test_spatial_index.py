@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
+from hypothesis import given
+from hypothesis import strategies as st
 
 from albot2d.geometry import Pose
 from albot2d.mapping import GlobalMap, GlobalMapParams
-from albot2d.mapping.spatial_index import SegmentGridIndex
+from albot2d.mapping.spatial_index import SegmentGridIndex, sorted_unique
 
 
 def random_segments(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -57,3 +59,11 @@ def _check_index_after_deletions(params: GlobalMapParams) -> None:
     alive = set(np.flatnonzero(g._removed[: g._n] == np.iinfo(np.int64).max).tolist())
     assert deleted > 50
     assert indexed == alive and len(alive) == len(g)
+
+
+@given(st.lists(st.integers(-(2**40), 2**40), max_size=300))
+def test_sorted_unique_is_numpys_unique(values: list[int]) -> None:
+    ids = np.asarray(values, dtype=np.int64)
+    got = sorted_unique(ids)
+    np.testing.assert_array_equal(got, np.unique(ids))
+    assert got.dtype == np.int64

@@ -45,7 +45,7 @@ from albot2d.mapping.deletion import (
     visible_share,
 )
 from albot2d.mapping.protocol import MapSnapshot  # the value type every mapper returns
-from albot2d.mapping.spatial_index import SegmentGridIndex
+from albot2d.mapping.spatial_index import SegmentGridIndex, sorted_unique
 
 __all__ = ["GlobalMap", "GlobalMapParams", "MapSnapshot", "UpdateReport", "view_polygon"]
 
@@ -212,7 +212,7 @@ class GlobalMap:
                 n_current = 0
         deleted_older = deleted_current = 0
         if len(doomed):
-            older_ids = self._mark_deleted(np.unique(doomed[n_current:]))
+            older_ids = self._mark_deleted(sorted_unique(doomed[n_current:]))
             current_ids = self._mark_deleted(doomed[:n_current])
             deleted_older, deleted_current = len(older_ids), len(current_ids)
             gone = np.concatenate([older_ids, current_ids])
