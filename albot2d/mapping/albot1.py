@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.frames import Frame
-from albot2d.geometry import Pose, compose_arrays, transform_segments, wrap_angle
+from albot2d.geometry import Pose, compose_arrays, wrap_angle
 from albot2d.mapping.global_map import GlobalMap, GlobalMapParams, MapSnapshot, UpdateReport
 from albot2d.mapping.protocol import MapperCounts, StageTimer
 from albot2d.mapping.route_map import LocalMap, Method, RouteMap
@@ -50,7 +50,7 @@ from albot2d.perception import (
     rtsv,
     start_tracking,
 )
-from albot2d.perception.surfaces import Surfaces
+from albot2d.perception.surfaces import Surfaces, transform_segments_fast
 from albot2d.validation import check_positive, check_positive_int
 
 __all__ = ["Albot1", "Albot1Params", "StepRecord", "UpdateSummary"]
@@ -428,7 +428,7 @@ class Albot1:
         elif method == "path_integration":
             self._path_integrations += 1
         with self.timer.stage("global_map"):
-            segs = transform_segments(lm.pose.as_array(), view.segments)
+            segs = transform_segments_fast(lm.pose.as_array(), view.segments)
             report = self.map.add_view(segs, lm.map_id, lm.pose)
         self.last_update = report
         self.update_log.append(

@@ -8,7 +8,8 @@ or the edge of the field of view hides where the surface really ends.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import math
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,7 +23,7 @@ from albot2d.geometry import (
     transform_segments,
 )
 
-__all__ = ["Surface", "Surfaces"]
+__all__ = ["Surface", "Surfaces", "transform_segments_fast"]
 
 FloatArray = NDArray[np.float64]
 
@@ -144,8 +145,9 @@ class Surfaces:
         assert self.uncertain is not None
         # The flags are read-only already and shared; the segments are fresh.
         return Surfaces.adopt(
-            transform_segments(pose, self.segments), self.occluded, self.beams, self.uncertain
-        )
+            transform_segments_fast(pose, self.segments), self.occluded, self.beams,
+            self.uncertain,
+        )  # fmt: skip
 
     def surface(self, i: int) -> Surface:
         s = self.segments[i]
@@ -158,3 +160,30 @@ class Surfaces:
 
     def __iter__(self) -> Iterator[Surface]:
         return (self.surface(i) for i in range(len(self)))
+
+
+_kernel: list[Callable[..., FloatArray] | None] = []
+
+
+def _transform_kernel() -> Callable[..., FloatArray] | None:
+    """``surfaces_numba.transform_kernel`` when numba imports, else None."""
+    if not _kernel:
+        try:
+            from albot2d.perception.surfaces_numba import transform_kernel
+        except ImportError:
+            _kernel.append(None)
+        else:
+            _kernel.append(transform_kernel)
+    return _kernel[0]
+
+
+def transform_segments_fast(pose: ArrayLike, segments: ArrayLike) -> FloatArray:
+    """``geometry.transform_segments(pose, segments)`` bit for bit, in one compiled call
+    when numba imports (a view's few segments: ~2 µs against ~9)."""
+    kernel = _transform_kernel()
+    p = np.asarray(pose, dtype=np.float64)
+    if kernel is None or p.shape != (3,):
+        return transform_segments(pose, segments)
+    segs = np.ascontiguousarray(as_segments(segments))
+    theta = p[2]
+    return kernel(float(p[0]), float(p[1]), math.cos(theta), math.sin(theta), segs)
