@@ -154,6 +154,17 @@ def test_known_increment_tracks_every_surface_trackable_in_both_views(increment:
     np.testing.assert_allclose(info.distance_m, 0.0, atol=1e-9)
 
 
+def test_trackable_mask_is_kept_with_the_view_per_parameters() -> None:
+    view = star_view()
+    params, looser = TrackingParams(), TrackingParams(min_length_m=0.0, min_view_angle_deg=0.0)
+    first = trackable_mask(view, params)
+    assert trackable_mask(view, params) is first and not first.flags.writeable
+    other = trackable_mask(view, looser)  # other parameters: computed, not the kept one
+    assert other is not first and other.sum() >= first.sum()
+    fresh = Surfaces(view.segments, view.occluded, view.beams, view.uncertain)
+    np.testing.assert_array_equal(trackable_mask(fresh, params), first)
+
+
 def test_survivors_share_the_tracker_state_only_when_none_is_lost() -> None:
     """RTSV skips copying ids and local geometry when every tracked surface survives; either
     way the survivors are what the checked constructor builds from the match, read-only."""

@@ -137,13 +137,22 @@ def view_angles_rad(surfaces: Surfaces) -> FloatArray:
 
 
 def trackable_mask(surfaces: Surfaces, params: TrackingParams | None = None) -> BoolArray:
-    """``(N,)`` bool: the surface meets all three of the paper's tracking criteria."""
-    params = TrackingParams() if params is None else params
-    return (
+    """``(N,)`` bool, read-only: the surface meets all three of the paper's tracking criteria."""
+    if params is None:
+        params = TrackingParams()
+    # A view is tested again with the same parameters when it is re-tracked or becomes the
+    # local map (most updates): the read-only answer is kept with the (immutable) view.
+    memo = surfaces.__dict__.get("_trackable")
+    if memo is not None and memo[0] is params:
+        return memo[1]  # type: ignore[no-any-return]
+    mask = (
         (surfaces.lengths_m > params.min_length_m)
         & (view_angles_rad(surfaces) >= math.radians(params.min_view_angle_deg))
         & ~surfaces.occluded.all(axis=1)
     )
+    mask.flags.writeable = False
+    object.__setattr__(surfaces, "_trackable", (params, mask))
+    return mask
 
 
 def _readonly_ids(ids: ArrayLike) -> IntArray:
