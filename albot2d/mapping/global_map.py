@@ -129,7 +129,7 @@ class GlobalMap:
     def _mark_deleted(self, ids: NDArray[np.int64]) -> NDArray[np.int64]:
         """Mark the live ones of ``ids`` removed at this update; returns them (the caller
         forgets them in the index, once for the whole update)."""
-        ids = ids[self._removed[ids] == _NEVER]
+        ids = ids.compress(self._removed.take(ids) == _NEVER)
         self._removed[ids] = self.n_updates
         self._alive -= len(ids)
         return ids
@@ -159,7 +159,7 @@ class GlobalMap:
                 # The index holds live ids only (deletions leave it at once).
                 cand = self._index.query_box(*quick_touch_box(ring, p.enlarge_m))
                 touch = quick_touching_mask(
-                    ring, make_polygon, self._segments[cand], robot, p.enlarge_m
+                    ring, make_polygon, self._segments.take(cand, axis=0), robot, p.enlarge_m
                 )
             else:
                 box = shapely.bounds(poly).tolist()
@@ -168,21 +168,27 @@ class GlobalMap:
                     box = [min(box[0], tip.x), min(box[1], tip.y),
                            max(box[2], tip.x), max(box[3], tip.y)]  # fmt: skip
                 cand = self._index.query_box(*box)
-                touch = touching_mask(poly, self._segments[cand], robot, p.forward_ray_m)
-            hit = cand[touch]
-            hit_maps = self._map_ids[hit]
-            hsegs = self._segments[hit]
+                touch = touching_mask(
+                    poly, self._segments.take(cand, axis=0), robot, p.forward_ray_m
+                )
+            # take/compress, not fancy indexing: the same arrays at a third of the cost on
+            # the few dozen rows of an update (~1.5 µs each, a dozen per update).
+            hit = cand.compress(touch)
+            hit_maps = self._map_ids.take(hit)
+            hsegs = self._segments.take(hit, axis=0)
             visible = facing_mask(hsegs, robot, p.facing_test)
             if p.seen_side == "front":
                 visible &= seen_side_mask(hsegs, robot)
             if p.could_see == "visible" and visible.any():
-                share = visible_share(hsegs[visible], segs, robot, p.enlarge_m, p.visible_samples)
+                share = visible_share(
+                    hsegs.compress(visible, axis=0), segs, robot, p.enlarge_m, p.visible_samples
+                )
                 visible[visible] = (share > 0.0) & (share >= p.min_visible_share)
             is_current = hit_maps == current
             cur_del = is_current if p.current_map == "touch" else is_current & visible
-            doomed = hit[cur_del]
+            doomed = hit.compress(cur_del)
             n_current = len(doomed)
-            touched = hit_maps if p.current_in_group else hit_maps[~is_current]
+            touched = hit_maps if p.current_in_group else hit_maps.compress(~is_current)
             affected = tuple(sorted(set(touched.tolist())))  # np.unique's, without numpy's overhead
             group = group_maps(affected, p.expand, p.group_gap_maps, self._ids)
             # Any map of the group but the current one (a group spans up to every id).
@@ -191,7 +197,7 @@ class GlobalMap:
                     # Every hit's map is affected (or the current one) and every affected
                     # map is in its group (each id ever added is in _by_map), so the hits
                     # in the older group are exactly those not of the current map.
-                    older = hit[~is_current & visible]
+                    older = hit.compress(~is_current & visible)
                 else:
                     older_group = [m for m in group if m != current]
                     ids = self._alive_ids(np.concatenate([self._by_map[m] for m in older_group]))
@@ -216,7 +222,8 @@ class GlobalMap:
             current_ids = self._mark_deleted(doomed[:n_current])
             deleted_older, deleted_current = len(older_ids), len(current_ids)
             gone = np.concatenate([older_ids, current_ids])
-            self._index.remove(gone, self._segments[gone])  # speed: queries see live ids only
+            # Speed: queries see live ids only.
+            self._index.remove(gone, self._segments.take(gone, axis=0))
         self._append(segs, map_id)
         return UpdateReport(
             self.n_updates, map_id, deleted_current, affected, group, deleted_older, len(segs),
