@@ -316,6 +316,18 @@ def _compiled_match() -> Callable[..., tuple[Any, ...]] | None:
     return _numba_match
 
 
+def _directions(view: Surfaces) -> FloatArray:
+    """The view's segment directions (numpy's arctan2, as ``segment_angles``), kept with the
+    (immutable) view: a view re-tracked after an update is matched twice."""
+    got = view.__dict__.get("_directions")
+    if got is None:
+        v = view.segments
+        got = np.arctan2(v[:, 3] - v[:, 1], v[:, 2] - v[:, 0])
+        got.flags.writeable = False
+        object.__setattr__(view, "_directions", got)
+    return got  # type: ignore[no-any-return]
+
+
 def _compiled_settings(params: TrackingParams) -> bool:
     """Whether the compiled kernel covers ``params`` (the paper's matching)."""
     return (params.match_endpoint == "corresponding" and not params.line_distance_fallback
@@ -350,11 +362,10 @@ def match_surfaces(
     if backend != "numpy":
         kernel = _compiled_match() if _compiled_settings(params) else None
         if kernel is not None:
-            p, v = predicted.segments, view.segments
+            p = predicted.segments
             return kernel(
-                p, predicted.occluded, v, view.occluded, cand,
-                np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]),
-                np.arctan2(v[:, 3] - v[:, 1], v[:, 2] - v[:, 0]),
+                p, predicted.occluded, view.segments, view.occluded, cand,
+                np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]), _directions(view),
                 math.radians(params.match_angle_deg), params.match_distance_m,
             )  # fmt: skip
         if backend == "numba":
