@@ -281,6 +281,27 @@ def facing_mask(segments: FloatArray, robot: Pose, test: FacingTest) -> BoolArra
     return (fwd0 > 0.0) & (fwd1 > 0.0)
 
 
+_FACING_CODES = {"both_endpoints": 0, "midpoint": 1, "any_endpoint": 2}
+
+
+def facing_seen_mask(
+    segments: FloatArray, robot: Pose, test: FacingTest, seen_side: SeenSide
+) -> BoolArray:
+    """``facing_mask(segments, robot, test)``, and with ``seen_side="front"`` also
+    ``seen_side_mask``: one compiled pass when numba imports (the same float operations)."""
+    segs = as_segments(segments)
+    kernels = _kernels()
+    if kernels is None or test not in _FACING_CODES:
+        mask = facing_mask(segs, robot, test)
+        if seen_side == "front":
+            mask &= seen_side_mask(segs, robot)
+        return mask
+    return kernels.facing_seen_kernel(  # type: ignore[no-any-return]
+        np.ascontiguousarray(segs), float(robot.x), float(robot.y), math.cos(robot.theta),
+        math.sin(robot.theta), _FACING_CODES[test], seen_side == "front",
+    )  # fmt: skip
+
+
 def touching_mask(
     polygon: shapely.Geometry, segments: FloatArray, robot: Pose, forward_ray_m: float = 0.0
 ) -> BoolArray:

@@ -33,13 +33,12 @@ from numpy.typing import NDArray
 from albot2d.geometry import Pose, as_segments
 from albot2d.mapping.deletion import (
     GlobalMapParams,
-    facing_mask,
+    facing_seen_mask,
     group_maps,
     in_range_mask,
     quick_touch_box,
     quick_touch_ring,
     quick_touching_mask,
-    seen_side_mask,
     touching_mask,
     view_polygon,
     visible_share,
@@ -176,9 +175,7 @@ class GlobalMap:
             hit = cand.compress(touch)
             hit_maps = self._map_ids.take(hit)
             hsegs = self._segments.take(hit, axis=0)
-            visible = facing_mask(hsegs, robot, p.facing_test)
-            if p.seen_side == "front":
-                visible &= seen_side_mask(hsegs, robot)
+            visible = facing_seen_mask(hsegs, robot, p.facing_test, p.seen_side)
             if p.could_see == "visible" and visible.any():
                 share = visible_share(
                     hsegs.compress(visible, axis=0), segs, robot, p.enlarge_m, p.visible_samples
@@ -202,9 +199,7 @@ class GlobalMap:
                     older_group = [m for m in group if m != current]
                     ids = self._alive_ids(np.concatenate([self._by_map[m] for m in older_group]))
                     gsegs = self._segments[ids]
-                    keep = facing_mask(gsegs, robot, p.facing_test)
-                    if p.seen_side == "front":
-                        keep &= seen_side_mask(gsegs, robot)
+                    keep = facing_seen_mask(gsegs, robot, p.facing_test, p.seen_side)
                     if p.could_see == "in_range":
                         pts = segs.reshape(-1, 2)
                         reach = float(
