@@ -64,8 +64,12 @@ def test_laser_scan_181(benchmark, office, noise_backend: str) -> None:
     assert scan.valid.any()
 
 
-def test_simulator_with_albot1_steps_per_second(benchmark, office) -> None:
-    """Simulator + Albot1 (extraction included) per step: the unit of a mapping run."""
+@pytest.mark.benchmark(group="simulator + albot1, 1,500 steps of a 60 m loop")
+@pytest.mark.parametrize("lookahead", [1, 32])
+def test_simulator_with_albot1_steps_per_second(benchmark, office, lookahead: int) -> None:
+    """Simulator + Albot1 (extraction included) per step: the unit of a mapping run. With
+    ``lookahead=32`` the simulator computes 32 frames at a time (the same frames): the two
+    working sets then share the cache in turns, not at every step."""
     from albot2d.mapping import Albot1
 
     tour = make_tour(office, make_rng(1), kind="loop", min_length_m=60.0)
@@ -75,7 +79,7 @@ def test_simulator_with_albot1_steps_per_second(benchmark, office) -> None:
 
     def run() -> int:
         mapper, count = Albot1(), 0
-        for frame in itertools.islice(sim.drive(tour, "dataset1"), 1500):
+        for frame in itertools.islice(sim.drive(tour, "dataset1", lookahead=lookahead), 1500):
             mapper.observe(frame)
             count += 1
         return count
