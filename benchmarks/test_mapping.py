@@ -165,7 +165,7 @@ def time_updates(benchmark, filled: GlobalMap, views) -> list:  # type: ignore[n
     def setup():  # type: ignore[no-untyped-def]
         return (copy.deepcopy(filled), views), {}
 
-    benchmark.pedantic(run_updates, setup=setup, rounds=12, iterations=1)
+    benchmark.pedantic(run_updates, setup=setup, rounds=30, iterations=1)
     return reports
 
 
