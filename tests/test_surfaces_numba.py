@@ -25,6 +25,7 @@ def test_compiled_transform_is_the_numpy_one_bit_for_bit(pose, segs) -> None:  #
     got = transform_segments_fast(np.array(pose), segs)
     assert got.shape == want.shape == (len(segs), 4)
     np.testing.assert_array_equal(got, want)  # exact: same operations, same order
+    np.testing.assert_array_equal(transform_segments_fast(Pose(*pose), segs), want)
 
 
 def test_read_only_and_strided_inputs_and_surfaces_transformed() -> None:

@@ -428,7 +428,7 @@ class Albot1:
         elif method == "path_integration":
             self._path_integrations += 1
         with self.timer.stage("global_map"):
-            segs = transform_segments_fast(lm.pose.as_array(), view.segments)
+            segs = transform_segments_fast(lm.pose, view.segments)
             report = self.map.add_view(segs, lm.map_id, lm.pose)
         self.last_update = report
         self.update_log.append(

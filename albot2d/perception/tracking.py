@@ -428,7 +428,7 @@ def rtsv(
     cand = trackable_mask(view, params) if candidates is None else np.asarray(candidates, bool)
     if candidates is None and params.match_candidates == "all":  # algorithm #1 as printed
         cand = np.ones(len(view), bool)
-    predicted = tracked.current.transformed(increment.inverse().as_array())
+    predicted = tracked.current.transformed(increment.inverse())
     ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
     # ti are distinct indices into a valid tracker state: its invariants hold by
     # construction, so the survivors skip TrackedSurfaces' checks (a third of RTSV's time).
