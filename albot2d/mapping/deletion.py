@@ -296,7 +296,7 @@ def facing_seen_mask(
         if seen_side == "front":
             mask &= seen_side_mask(segs, robot)
         return mask
-    return kernels.facing_seen_kernel(  # type: ignore[no-any-return]
+    return kernels.facing_seen_kernel(
         np.ascontiguousarray(segs), float(robot.x), float(robot.y), math.cos(robot.theta),
         math.sin(robot.theta), _FACING_CODES[test], seen_side == "front",
     )  # fmt: skip

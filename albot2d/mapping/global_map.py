@@ -243,11 +243,12 @@ class GlobalMap:
         self._n += len(segs)
         self._alive += len(segs)
         self._by_map[map_id] = new_ids
-        if self._ids is self._by_map or self.last_map_id not in (None, map_id - 1):
+        ids = self._ids
+        if isinstance(ids, range) and self.last_map_id in (None, map_id - 1):
+            # Every id first…map_id so far: a range answers ``in`` and groups in C.
+            self._ids = range(ids.start if self.last_map_id is not None else map_id, map_id + 1)
+        else:
             self._ids = self._by_map
-        else:  # every id first…map_id so far: a range answers ``in`` and groups in C
-            self._ids = range(self._ids.start if self.last_map_id is not None else map_id,
-                              map_id + 1)  # fmt: skip
         self._index.insert(new_ids, segs)
         self.last_map_id = map_id
 

@@ -35,7 +35,7 @@ class SegmentGridIndex:
         out = np.empty((len(segments), 4), np.int64)
         out[:, :2] = np.floor(lo / self.cell_m)
         out[:, 2:] = np.floor(hi / self.cell_m)
-        return out.tolist()  # type: ignore[no-any-return]
+        return out.tolist()
 
     def insert(self, ids: NDArray[np.int64], segments: NDArray[np.float64]) -> None:
         """Index ``segments`` (``(K, 4)``) under the integer ``ids`` (``(K,)``)."""

@@ -17,7 +17,7 @@ __all__ = ["transform_kernel"]
 
 
 @njit(cache=True, nogil=True)
-def transform_kernel(px, py, c, s, segs):  # type: ignore[no-untyped-def]
+def transform_kernel(px, py, c, s, segs):
     """``(N, 4)`` segments mapped by the pose ``(px, py)`` with heading cosine ``c``, sine
     ``s`` from its frame into the parent frame."""
     out = np.empty((segs.shape[0], 4), np.float64)

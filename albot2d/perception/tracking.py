@@ -144,7 +144,7 @@ def trackable_mask(surfaces: Surfaces, params: TrackingParams | None = None) -> 
     # local map (most updates): the read-only answer is kept with the (immutable) view.
     memo = surfaces.__dict__.get("_trackable")
     if memo is not None and memo[0] is params:
-        return memo[1]  # type: ignore[no-any-return]
+        return memo[1]
     mask = (
         (surfaces.lengths_m > params.min_length_m)
         & (view_angles_rad(surfaces) >= math.radians(params.min_view_angle_deg))
@@ -325,7 +325,7 @@ def _directions(view: Surfaces) -> FloatArray:
         got = np.arctan2(v[:, 3] - v[:, 1], v[:, 2] - v[:, 0])
         got.flags.writeable = False
         object.__setattr__(view, "_directions", got)
-    return got  # type: ignore[no-any-return]
+    return got
 
 
 def _compiled_settings(params: TrackingParams) -> bool:
