@@ -44,7 +44,7 @@ from albot2d.mapping.deletion import (
     visible_share,
 )
 from albot2d.mapping.protocol import MapSnapshot  # the value type every mapper returns
-from albot2d.mapping.spatial_index import SegmentGridIndex, sorted_unique
+from albot2d.mapping.spatial_index import grid_index, sorted_unique
 
 __all__ = ["GlobalMap", "GlobalMapParams", "MapSnapshot", "UpdateReport", "view_polygon"]
 
@@ -105,7 +105,7 @@ class GlobalMap:
         #: The ids added so far: a range while they are consecutive (Albot1's are), else
         #: ``_by_map`` itself; what group expansion picks from.
         self._ids: range | dict[int, NDArray[np.int64]] = range(0)
-        self._index = SegmentGridIndex(params.index_cell_m)
+        self._index = grid_index(params.index_cell_m)
         self.n_updates = 0
         self.last_map_id: int | None = None
 

@@ -11,12 +11,14 @@ query return ~8 dead ids per live one, each to be filtered by the caller.
 
 from __future__ import annotations
 
+import functools
 import math
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["SegmentGridIndex", "sorted_unique"]
+__all__ = ["CompiledGridIndex", "SegmentGridIndex", "grid_index", "sorted_unique"]
 
 
 class SegmentGridIndex:
@@ -90,6 +92,108 @@ class SegmentGridIndex:
                     if in_cell:
                         found.extend(in_cell)
         return sorted_unique(np.asarray(found, dtype=np.int64))
+
+
+    def indexed_ids(self) -> set[int]:
+        """Every id indexed in some cell (for checks)."""
+        return set().union(*self._cells.values())
+
+
+@functools.cache
+def _kernels() -> ModuleType | None:
+    """``spatial_index_numba`` when numba imports, else None."""
+    try:
+        from albot2d.mapping import spatial_index_numba
+    except ImportError:
+        return None
+    return spatial_index_numba
+
+
+_EMPTY = np.iinfo(np.int64).min
+_MAX_CELL = 2**30  # cell coordinates must fit the compiled index's 32-bit halves of a key
+
+
+class CompiledGridIndex:
+    """``SegmentGridIndex``'s cells in flat arrays, each operation one compiled call
+    (``spatial_index_numba``); the same ``insert``/``remove``/``query_box`` answers."""
+
+    def __init__(self, cell_m: float = 2.0) -> None:
+        if not (math.isfinite(cell_m) and cell_m > 0):
+            raise ValueError(f"cell_m must be > 0, got {cell_m!r}")
+        kernels = _kernels()
+        if kernels is None:
+            raise ImportError("CompiledGridIndex needs numba: pip install 'albot2d[fast]'")
+        self.cell_m = float(cell_m)
+        self._keys = np.full(256, _EMPTY, np.int64)
+        self._heads = np.full(256, -1, np.int64)
+        self._node_id = np.empty(256, np.int64)
+        self._node_next = np.empty(256, np.int64)
+        self._meta = np.array([0, -1, 0], np.int64)  # slots used, free node, nodes used
+
+    def _check_range(self, segments: NDArray[np.float64]) -> None:
+        if len(segments) and float(np.abs(segments).max()) / self.cell_m >= _MAX_CELL:
+            raise ValueError(f"segments beyond ±{_MAX_CELL} cells of {self.cell_m} m")
+
+    def insert(self, ids: NDArray[np.int64], segments: NDArray[np.float64]) -> None:
+        """Index ``segments`` (``(K, 4)``) under the integer ``ids`` (``(K,)``)."""
+        if len(ids) == 0:
+            return
+        ids = np.ascontiguousarray(ids, dtype=np.int64)
+        segs = np.ascontiguousarray(segments, dtype=np.float64)
+        self._check_range(segs)
+        k = _kernels()
+        assert k is not None
+        while (got := k.insert_kernel(ids, segs, self.cell_m, self._keys, self._heads,
+                                      self._node_id, self._node_next, self._meta)) < 0:  # fmt: skip
+            if got == -1:  # the node pool is full: double it (nodes keep their numbers)
+                pool = 2 * len(self._node_id)
+                self._node_id = np.resize(self._node_id, pool)
+                self._node_next = np.resize(self._node_next, pool)
+            else:  # the table would pass half full: rebuild it without emptied cells
+                used = int(self._meta[0]) - int((self._heads[self._keys != _EMPTY] < 0).sum())
+                size = len(self._keys)
+                while 2 * (used + (-got - 2)) > size:
+                    size *= 2
+                keys, heads = np.full(size, _EMPTY, np.int64), np.full(size, -1, np.int64)
+                self._meta[0] = k.rehash_kernel(self._keys, self._heads, keys, heads)
+                self._keys, self._heads = keys, heads
+
+    def remove(self, ids: NDArray[np.int64], segments: NDArray[np.float64]) -> None:
+        """Forget ``ids``, indexed with these ``segments``; ids not indexed are ignored."""
+        if len(ids) == 0:
+            return
+        k = _kernels()
+        assert k is not None
+        ids = np.ascontiguousarray(ids, dtype=np.int64)
+        segs = np.ascontiguousarray(segments, dtype=np.float64)
+        k.remove_kernel(ids, segs, self.cell_m, self._keys, self._heads, self._node_id,
+                        self._node_next, self._meta)  # fmt: skip
+
+    def query_box(self, xmin: float, ymin: float, xmax: float, ymax: float) -> NDArray[np.int64]:
+        """Sorted unique ids of segments whose cells meet the box (a superset of true hits)."""
+        cell = self.cell_m
+        x0, y0 = math.floor(xmin / cell), math.floor(ymin / cell)
+        x1, y1 = math.floor(xmax / cell), math.floor(ymax / cell)
+        k = _kernels()
+        assert k is not None
+        return k.query_kernel(
+            x0, y0, x1, y1, self._keys, self._heads, self._node_id, self._node_next, self._meta
+        )
+
+    def indexed_ids(self) -> set[int]:
+        """Every id indexed in some cell (for checks)."""
+        out: set[int] = set()
+        for head in self._heads[self._keys != _EMPTY].tolist():
+            node = head
+            while node >= 0:
+                out.add(int(self._node_id[node]))
+                node = int(self._node_next[node])
+        return out
+
+
+def grid_index(cell_m: float = 2.0) -> SegmentGridIndex | CompiledGridIndex:
+    """The compiled index when numba imports, else the dict one (the same answers)."""
+    return CompiledGridIndex(cell_m) if _kernels() is not None else SegmentGridIndex(cell_m)
 
 
 def sorted_unique(ids: NDArray[np.int64]) -> NDArray[np.int64]:
