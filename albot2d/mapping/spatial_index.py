@@ -7,6 +7,12 @@ cells of the query box: the cost follows what is near, not how big the map is.
 Deleted segments are removed from their cells (``remove``): Albot1 deletes most of what
 it ever added (on the default run 14,200 of 16,282 surfaces), and ids left behind made a
 query return ~8 dead ids per live one, each to be filtered by the caller.
+
+Two implementations give the same answers: ``SegmentGridIndex`` (a dict of lists, no
+dependencies) and ``CompiledGridIndex`` (flat arrays and numba kernels,
+``spatial_index_numba``: 2.7× faster per operation and half the memory at 100k surfaces);
+``grid_index`` picks the compiled one when numba imports. ``sorted_unique`` is the fast
+``np.unique`` of small id arrays both use.
 """
 
 from __future__ import annotations
