@@ -2,8 +2,8 @@
 
 Run: ``python -m pytest benchmarks/test_deletion.py --benchmark-only
 --benchmark-group-by=group``. The rules run side by side in one group on the same map and
-views (``benchmarks.test_mapping``'s building-density map of 10k surfaces); the
-``visible`` rule adds a sight-line test per candidate surface (goal: ≤ 1.5× ``paper``).
+views (``benchmarks.test_mapping``'s building-density map of 10k surfaces, laser views of
+it); the ``visible`` rule adds a sight-line test per candidate surface (goal: ≤ 1.5× ``paper``).
 """
 
 from __future__ import annotations
@@ -12,16 +12,16 @@ import numpy as np
 import pytest
 
 from albot2d.mapping.deletion import GlobalMapParams
-from benchmarks.test_mapping import filled_map, time_updates
+from benchmarks.test_mapping import filled_map, maps_and_views, time_updates
 
 
 @pytest.mark.benchmark(group="deletion rule")
 @pytest.mark.parametrize("rule", ["paper", "visible", "original"])
 def test_update_by_rule(benchmark, rule: str) -> None:  # type: ignore[no-untyped-def]
-    rng = np.random.default_rng(0)
-    filled, walk = filled_map(10_000, rng)
+    maps, views = maps_and_views((10_000,))
+    filled = maps[10_000]
     filled.params = GlobalMapParams.preset(rule)
-    time_updates(benchmark, filled, rng, walk)
+    time_updates(benchmark, filled, views)
     benchmark.extra_info["rule"] = rule
 
 
@@ -31,12 +31,11 @@ def test_update_by_touching_path(benchmark, path: str) -> None:  # type: ignore[
     """The compiled quick touching test (P built only when it is unsure) against building
     P and testing every candidate with GEOS, side by side on the same map and views."""
     pytest.importorskip("numba")
-    rng = np.random.default_rng(0)
-    filled, walk = filled_map(10_000, rng)
+    maps, views = maps_and_views((10_000,))
     with pytest.MonkeyPatch.context() as mp:
         if path == "geos":
             mp.setattr("albot2d.mapping.global_map.quick_touch_ring", lambda *a: None)
-        time_updates(benchmark, filled, rng, walk)
+        time_updates(benchmark, maps[10_000], views)
 
 
 @pytest.mark.benchmark(group="sight lines (visible_share, 400 updates)")

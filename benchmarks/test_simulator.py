@@ -64,8 +64,12 @@ def test_laser_scan_181(benchmark, office, noise_backend: str) -> None:
     assert scan.valid.any()
 
 
-def test_simulator_with_albot1_steps_per_second(benchmark, office) -> None:
-    """Simulator + Albot1 (extraction included) per step: the unit of a mapping run."""
+@pytest.mark.benchmark(group="simulator + albot1, 1,500 steps of a 60 m loop")
+@pytest.mark.parametrize("lookahead", [1, 32])
+def test_simulator_with_albot1_steps_per_second(benchmark, office, lookahead: int) -> None:
+    """Simulator + Albot1 (extraction included) per step: the unit of a mapping run. With
+    ``lookahead=32`` the simulator computes 32 frames at a time (the same frames): the two
+    working sets then share the cache in turns, not at every step."""
     from albot2d.mapping import Albot1
 
     tour = make_tour(office, make_rng(1), kind="loop", min_length_m=60.0)
@@ -75,13 +79,18 @@ def test_simulator_with_albot1_steps_per_second(benchmark, office) -> None:
 
     def run() -> int:
         mapper, count = Albot1(), 0
-        for frame in itertools.islice(sim.drive(tour, "dataset1"), 1500):
+        for frame in itertools.islice(sim.drive(tour, "dataset1", lookahead=lookahead), 1500):
             mapper.observe(frame)
             count += 1
         return count
 
-    count = benchmark.pedantic(run, rounds=3, iterations=1)
-    benchmark.extra_info["steps_per_s"] = count / benchmark.stats.stats.mean
+    # One untimed round first: the first map updates load the tracking, triangulation and
+    # deletion kernels from numba's cache (~40 ms, 6 % of a round), which is not a step.
+    count = benchmark.pedantic(run, rounds=5, iterations=1, warmup_rounds=1)
+    stats = benchmark.stats.stats
+    benchmark.extra_info["steps_per_s"] = count / stats.mean
+    benchmark.extra_info["steps_per_s_median"] = count / stats.median
+    benchmark.extra_info["steps_per_s_best"] = count / stats.min
     assert count == 1500
 
 

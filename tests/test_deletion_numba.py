@@ -168,3 +168,24 @@ def test_global_map_with_and_without_quick_touching_agree_on_an_office_run() -> 
             outputs.append((reports, snap.segments.tobytes(), snap.map_ids.tobytes()))
         assert len(outputs[0][0]) > 100
         assert outputs[0] == outputs[1], rule
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_compiled_facing_and_seen_side_equal_the_numpy_masks(seed: int) -> None:
+    from albot2d.mapping.deletion import facing_mask, facing_seen_mask, seen_side_mask
+
+    rng = np.random.default_rng(seed)
+    segs = random_segments(rng, 300)
+    segs[:20, 2:] = segs[:20, :2]  # points: zero direction
+    for robot in (Pose(0.0, 0.0, 0.0), Pose(*rng.uniform(-3.0, 3.0, 2), rng.uniform(-4.0, 4.0))):
+        segs[20:25] = [robot.x, robot.y, robot.x + 1.0, robot.y]  # starting at the robot
+        for test, side in itertools.product(
+            ("both_endpoints", "midpoint", "any_endpoint"), ("any", "front")
+        ):
+            want = facing_mask(segs, robot, test)  # type: ignore[arg-type]
+            if side == "front":
+                want &= seen_side_mask(segs, robot)
+            got = facing_seen_mask(segs, robot, test, side)  # type: ignore[arg-type]
+            assert got.dtype == np.bool_
+            np.testing.assert_array_equal(got, want)
+    assert facing_seen_mask(np.zeros((0, 4)), Pose(), "midpoint", "front").shape == (0,)

@@ -236,3 +236,41 @@ def test_a_revisit_deletes_old_surfaces_in_view_and_rebuilds_them() -> None:
     np.testing.assert_array_equal(snap.segments[snap.map_ids == 40], rebuilt)
     # The history still has the map before the revisit (the "before" panel of Fig. 10).
     assert 0 in g.snapshot(at_update=40).map_ids.tolist()
+
+
+@given(
+    st.integers(0, 50),
+    st.integers(1, 120),
+    st.lists(st.integers(0, 200), max_size=12, unique=True),
+    st.sampled_from(["split", "contiguous", "none"]),
+)
+def test_groups_over_a_range_of_ids_are_those_over_the_set(
+    first: int, count: int, picks: list[int], rule: str
+) -> None:
+    """The global map passes its ids as a range while they are consecutive: the same groups
+    as the set of those ids, affected ids outside it included."""
+    ids = range(first, first + count)
+    affected = tuple(sorted(picks))
+    assert group_maps(affected, rule, 20, ids) == group_maps(affected, rule, 20, set(ids))  # type: ignore[arg-type]
+
+
+def test_updates_group_the_same_with_consecutive_and_gapped_map_ids() -> None:
+    """Map ids 0–9 (a range inside) against 0–8 then 20 (a dict inside): the same groups
+    where the ids agree, and no id that was never added."""
+    views = [np.array([[float(k), 1.0, float(k) + 0.8, 1.0]]) for k in range(10)]
+    dense, gapped = GlobalMap(GlobalMapParams(expand="contiguous")), GlobalMap(
+        GlobalMapParams(expand="contiguous")
+    )
+    for k, v in enumerate(views[:-1]):
+        dense.insert(v, k)
+        gapped.insert(v, k)
+    dense.insert(views[-1], 9)
+    gapped.insert(views[-1], 20)
+    assert isinstance(dense._ids, range) and dense._ids == range(10)
+    assert gapped._ids is gapped._by_map
+    robot = Pose(4.5, -1.0, np.pi / 2)
+    seen = np.array([[0.0, 1.0, 9.0, 1.0]])  # sees every map's surface ahead
+    a, b = dense.add_view(seen, 30, robot), gapped.add_view(seen, 30, robot)
+    assert a.affected_maps == tuple(range(10)) and a.group == tuple(range(10))
+    assert b.affected_maps == (*range(9), 20) and b.group == (*range(9), 20)
+    assert dense._ids is dense._by_map  # 30 after 9: no longer consecutive

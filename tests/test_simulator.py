@@ -315,3 +315,23 @@ def test_any_tour_gives_valid_frames(points: list, profile: str, seed: int) -> N
     xy = np.array([[f.true_pose.x, f.true_pose.y] for f in frames])
     assert point_segment_distance(xy, world.obstacle_segments).min() >= 0.25 - 1e-9
     assert all(f.odom_pose == f.true_pose for f in frames)
+
+
+@pytest.mark.parametrize("lookahead", [2, 7, 10_000])
+def test_lookahead_yields_the_same_frames(lookahead: int) -> None:
+    """Frames simulated a batch ahead are the frames of a frame-at-a-time drive, bit for bit
+    (moving obstacles and noise included), and a consumer may stop inside a batch."""
+    world = room_world(MOVERS)
+    sim = Simulator(world, seed=7, odometry=NOISE_PRESETS["typical"])
+    want = list(sim.drive(Tour(LOOP, "loop"), "dataset1"))
+    got = list(sim.drive(Tour(LOOP, "loop"), "dataset1", lookahead=lookahead))
+    assert len(got) == len(want) > 10 and digest(got) == digest(want)
+    head = list(itertools.islice(sim.drive(Tour(LOOP, "loop"), "dataset1", lookahead=lookahead), 5))
+    assert digest(head) == digest(want[:5])
+
+
+@pytest.mark.parametrize("bad", [0, -3, 2.0, True, "8"])
+def test_lookahead_must_be_a_positive_integer(bad: object) -> None:
+    sim = Simulator(room_world(), seed=7)
+    with pytest.raises(InputError, match="lookahead must be an integer >= 1"):
+        sim.drive(Tour(LOOP, "loop"), "dataset1", lookahead=bad)  # type: ignore[arg-type]

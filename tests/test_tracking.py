@@ -154,6 +154,44 @@ def test_known_increment_tracks_every_surface_trackable_in_both_views(increment:
     np.testing.assert_allclose(info.distance_m, 0.0, atol=1e-9)
 
 
+def test_trackable_mask_is_kept_with_the_view_per_parameters() -> None:
+    view = star_view()
+    params, looser = TrackingParams(), TrackingParams(min_length_m=0.0, min_view_angle_deg=0.0)
+    first = trackable_mask(view, params)
+    assert trackable_mask(view, params) is first and not first.flags.writeable
+    other = trackable_mask(view, looser)  # other parameters: computed, not the kept one
+    assert other is not first and other.sum() >= first.sum()
+    fresh = Surfaces(view.segments, view.occluded, view.beams, view.uncertain)
+    np.testing.assert_array_equal(trackable_mask(fresh, params), first)
+
+
+def test_survivors_share_the_tracker_state_only_when_none_is_lost() -> None:
+    """RTSV skips copying ids and local geometry when every tracked surface survives; either
+    way the survivors are what the checked constructor builds from the match, read-only."""
+    view = star_view()
+    tracked = start_tracking(view, first_id=7)
+    assert tracked.ids.tolist() == list(range(7, 7 + len(tracked)))
+    assert not tracked.ids.flags.writeable
+    TrackedSurfaces(tracked.ids, tracked.local, tracked.current)  # passes its checks
+    increment = Pose(0.1, 0.0, 0.01)
+    all_kept, info = rtsv(tracked, moved(view, increment), increment)
+    assert len(all_kept) == len(tracked) and all_kept.local is tracked.local
+    lost_one = moved(view, increment).select(np.arange(1, len(view)))  # first surface gone
+    some_kept, info_some = rtsv(tracked, lost_one, increment)
+    assert 0 < len(some_kept) < len(tracked)
+    for got, inf, new_view in ((all_kept, info, moved(view, increment)),
+                               (some_kept, info_some, lost_one)):  # fmt: skip
+        want = TrackedSurfaces(tracked.ids[inf.tracked_index],
+                               tracked.local.select(inf.tracked_index),
+                               new_view.select(inf.view_index))  # fmt: skip
+        np.testing.assert_array_equal(got.ids, want.ids)
+        for a, b in ((got.local, want.local), (got.current, want.current)):
+            np.testing.assert_array_equal(a.segments, b.segments)
+            np.testing.assert_array_equal(a.occluded, b.occluded)
+            np.testing.assert_array_equal(a.beams, b.beams)
+        assert not got.ids.flags.writeable and not got.local.segments.flags.writeable
+
+
 def test_ten_degree_heading_error_loses_every_surface() -> None:
     view, increment = star_view(), Pose(0.3, 0.1, 0.2)
     tracked, new_view = start_tracking(view), moved(view, increment)

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.frames import Frame
-from albot2d.geometry import Pose, compose_arrays, transform_segments, wrap_angle
+from albot2d.geometry import Pose, compose_arrays, wrap_angle
 from albot2d.mapping.global_map import GlobalMap, GlobalMapParams, MapSnapshot, UpdateReport
 from albot2d.mapping.protocol import MapperCounts, StageTimer
 from albot2d.mapping.route_map import LocalMap, Method, RouteMap
@@ -50,7 +50,7 @@ from albot2d.perception import (
     rtsv,
     start_tracking,
 )
-from albot2d.perception.surfaces import Surfaces
+from albot2d.perception.surfaces import Surfaces, transform_segments_fast
 from albot2d.validation import check_positive, check_positive_int
 
 __all__ = ["Albot1", "Albot1Params", "StepRecord", "UpdateSummary"]
@@ -166,9 +166,9 @@ class Albot1Params:
         return dataclasses.replace(base, **overrides)
 
 
-@dataclass(frozen=True, eq=False)
-class _ViewState:
-    """The previous view: what is needed to remember it one frame late."""
+class _ViewState(NamedTuple):
+    """The previous view: what is needed to remember it one frame late (a tuple: one is
+    made per view, and a frozen dataclass's constructor costs several times more)."""
 
     frame_index: int
     timestamp: float
@@ -267,6 +267,9 @@ class Albot1:
             return
         use_vc = self._use_vc
         tracked_after = self._main_loop_step(frame_index, timestamp, view, increment, prev)
+        if len(self.route) == n_maps:  # most views remember none
+            self.steps.append(StepRecord(frame_index, tracked_after, use_vc, (), ()))
+            return
         new = self.route.maps[n_maps:]
         self.steps.append(
             StepRecord(
@@ -425,7 +428,7 @@ class Albot1:
         elif method == "path_integration":
             self._path_integrations += 1
         with self.timer.stage("global_map"):
-            segs = transform_segments(lm.pose.as_array(), view.segments)
+            segs = transform_segments_fast(lm.pose, view.segments)
             report = self.map.add_view(segs, lm.map_id, lm.pose)
         self.last_update = report
         self.update_log.append(

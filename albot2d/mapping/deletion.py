@@ -281,6 +281,27 @@ def facing_mask(segments: FloatArray, robot: Pose, test: FacingTest) -> BoolArra
     return (fwd0 > 0.0) & (fwd1 > 0.0)
 
 
+_FACING_CODES = {"both_endpoints": 0, "midpoint": 1, "any_endpoint": 2}
+
+
+def facing_seen_mask(
+    segments: FloatArray, robot: Pose, test: FacingTest, seen_side: SeenSide
+) -> BoolArray:
+    """``facing_mask(segments, robot, test)``, and with ``seen_side="front"`` also
+    ``seen_side_mask``: one compiled pass when numba imports (the same float operations)."""
+    segs = as_segments(segments)
+    kernels = _kernels()
+    if kernels is None or test not in _FACING_CODES:
+        mask = facing_mask(segs, robot, test)
+        if seen_side == "front":
+            mask &= seen_side_mask(segs, robot)
+        return mask
+    return kernels.facing_seen_kernel(
+        np.ascontiguousarray(segs), float(robot.x), float(robot.y), math.cos(robot.theta),
+        math.sin(robot.theta), _FACING_CODES[test], seen_side == "front",
+    )  # fmt: skip
+
+
 def touching_mask(
     polygon: shapely.Geometry, segments: FloatArray, robot: Pose, forward_ray_m: float = 0.0
 ) -> BoolArray:
@@ -385,13 +406,17 @@ def in_range_mask(segments: FloatArray, robot: Pose, reach_m: float) -> BoolArra
 
 
 def group_maps(
-    affected: tuple[int, ...], rule: GroupRule, gap_maps: int, existing: set[int] | dict[int, Any]
+    affected: tuple[int, ...],
+    rule: GroupRule,
+    gap_maps: int,
+    existing: set[int] | dict[int, Any] | range,
 ) -> tuple[int, ...]:
     """Expand: the map ids whose surfaces are candidates for deletion as a group.
 
     ``affected`` is sorted. ``"split"``: runs of affected ids whose consecutive differences
     are at most ``gap_maps``, each filled in (25, 28 → 25…28); ``"contiguous"``: one run
-    from the first to the last; ``"none"``: the affected ids. Only ids in ``existing``.
+    from the first to the last; ``"none"``: the affected ids. Only ids in ``existing``
+    (a ``range`` when they are consecutive: then each run is a slice of it).
     """
     if not affected:
         return ()
@@ -408,7 +433,11 @@ def group_maps(
                 start = m
             prev = m
         runs.append((start, prev))
-    return tuple([m for lo, hi in runs for m in range(lo, hi + 1) if m in existing])
+    if isinstance(existing, range) and existing.step == 1:
+        first, last = existing.start, existing.stop - 1
+        return tuple([m for lo, hi in runs for m in range(max(lo, first), min(hi, last) + 1)])
+    has = existing.__contains__  # filter() runs the test in C: groups span many ids
+    return tuple([m for lo, hi in runs for m in filter(has, range(lo, hi + 1))])
 
 
 def seen_side_mask(segments: FloatArray, robot: Pose) -> BoolArray:

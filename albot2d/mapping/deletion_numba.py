@@ -1,4 +1,5 @@
-"""The optional compiled sight-line test of the deletion rule (numba): ``visible_share_kernel``.
+"""The optional compiled sight-line test of the deletion rule (numba): ``visible_share_kernel``,
+and the facing / seen-side tests in one pass (``facing_seen_kernel``).
 
 Importing this module needs numba (``pip install 'albot2d[fast]'``);
 ``albot2d.mapping.deletion.visible_share`` loads it on first use and keeps its numpy path
@@ -16,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["visible_share_kernel"]
+__all__ = ["facing_seen_kernel", "visible_share_kernel"]
 
 
 @njit(cache=True, nogil=True)
@@ -235,4 +236,27 @@ def classify_touching(segs, ring, rx, ry, c, s, out_m, in_m, side_m):
             bx, by = bx + t * (ax - bx), by + t * (ay - by)
         if in_m > 0.0 and _near_polygon(ax, ay, bx, by, ring, in_m):
             out[i] = IN
+    return out
+
+
+@njit(cache=True, nogil=True)
+def facing_seen_kernel(segs, rx, ry, c, s, test, front):
+    """``facing_mask`` (``test``: 0 both endpoints, 1 midpoint, 2 any endpoint) and, when
+    ``front``, ``seen_side_mask``, in one pass with their float operations."""
+    n = segs.shape[0]
+    out = np.empty(n, np.bool_)
+    for i in range(n):
+        f0 = c * (segs[i, 0] - rx) + s * (segs[i, 1] - ry)
+        f1 = c * (segs[i, 2] - rx) + s * (segs[i, 3] - ry)
+        if test == 0:
+            ok = f0 > 0.0 and f1 > 0.0
+        elif test == 1:
+            ok = (f0 + f1) > 0.0
+        else:
+            ok = f0 > 0.0 or f1 > 0.0
+        if ok and front:
+            ex = segs[i, 2] - segs[i, 0]
+            ey = segs[i, 3] - segs[i, 1]
+            ok = ex * (ry - segs[i, 1]) - ey * (rx - segs[i, 0]) > 0.0
+        out[i] = ok
     return out

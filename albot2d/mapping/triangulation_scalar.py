@@ -111,7 +111,7 @@ def triangulate_small(
         pcs.append(pc)
     # The gate against path integration.
     near = np.hypot(np.array(xs) - pi.x, np.array(ys) - pi.y).tolist()
-    turn_gate = k * np.radians(gate_deg)
+    turn_gate = k * math.radians(gate_deg)  # math.radians is numpy's: x * (pi / 180)
     keep_i = [j for j in range(len(idx))
               if near[j] <= k * gate_m and abs(_wrap(th[j] - pi.theta)) <= turn_gate]  # fmt: skip
     if not keep_i:
@@ -133,8 +133,8 @@ def triangulate_small(
     ).tolist()
     best = kept[d_pi.index(min(d_pi))]  # argmin: the first of equals
     # heading="weighted": every tracked surface's direction (the PI gate, consensus).
-    consensus = float(np.radians(params.heading_consensus_deg))
-    gate_rad = k * float(np.radians(gate_deg))
+    consensus = math.radians(params.heading_consensus_deg)
+    gate_rad = k * math.radians(gate_deg)
     ok = [i for i in range(n) if abs(_wrap(dtheta[i] - pi.theta)) <= gate_rad]
     offset = 0.0
     if ok:

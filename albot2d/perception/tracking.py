@@ -137,13 +137,22 @@ def view_angles_rad(surfaces: Surfaces) -> FloatArray:
 
 
 def trackable_mask(surfaces: Surfaces, params: TrackingParams | None = None) -> BoolArray:
-    """``(N,)`` bool: the surface meets all three of the paper's tracking criteria."""
-    params = TrackingParams() if params is None else params
-    return (
+    """``(N,)`` bool, read-only: the surface meets all three of the paper's tracking criteria."""
+    if params is None:
+        params = TrackingParams()
+    # A view is tested again with the same parameters when it is re-tracked or becomes the
+    # local map (most updates): the read-only answer is kept with the (immutable) view.
+    memo = surfaces.__dict__.get("_trackable")
+    if memo is not None and memo[0] is params:
+        return memo[1]
+    mask = (
         (surfaces.lengths_m > params.min_length_m)
         & (view_angles_rad(surfaces) >= math.radians(params.min_view_angle_deg))
         & ~surfaces.occluded.all(axis=1)
     )
+    mask.flags.writeable = False
+    object.__setattr__(surfaces, "_trackable", (params, mask))
+    return mask
 
 
 def _readonly_ids(ids: ArrayLike) -> IntArray:
@@ -202,8 +211,13 @@ def start_tracking(
     that view's observations.
     """
     chosen = view.select(trackable_mask(view, params))
-    ids = first_id + np.arange(len(chosen), dtype=np.int64)
-    return TrackedSurfaces(ids, chosen, chosen)
+    ids = np.arange(first_id, first_id + len(chosen), dtype=np.int64)
+    # Fresh, distinct ids, one per surface: TrackedSurfaces' checks hold by construction.
+    ids.flags.writeable = False
+    state = object.__new__(TrackedSurfaces)
+    for name, value in (("ids", ids), ("local", chosen), ("current", chosen)):
+        object.__setattr__(state, name, value)
+    return state
 
 
 @dataclass(frozen=True, eq=False)
@@ -302,6 +316,18 @@ def _compiled_match() -> Callable[..., tuple[Any, ...]] | None:
     return _numba_match
 
 
+def _directions(view: Surfaces) -> FloatArray:
+    """The view's segment directions (numpy's arctan2, as ``segment_angles``), kept with the
+    (immutable) view: a view re-tracked after an update is matched twice."""
+    got = view.__dict__.get("_directions")
+    if got is None:
+        v = view.segments
+        got = np.arctan2(v[:, 3] - v[:, 1], v[:, 2] - v[:, 0])
+        got.flags.writeable = False
+        object.__setattr__(view, "_directions", got)
+    return got
+
+
 def _compiled_settings(params: TrackingParams) -> bool:
     """Whether the compiled kernel covers ``params`` (the paper's matching)."""
     return (params.match_endpoint == "corresponding" and not params.line_distance_fallback
@@ -336,11 +362,10 @@ def match_surfaces(
     if backend != "numpy":
         kernel = _compiled_match() if _compiled_settings(params) else None
         if kernel is not None:
-            p, v = predicted.segments, view.segments
+            p = predicted.segments
             return kernel(
-                p, predicted.occluded, v, view.occluded, cand,
-                np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]),
-                np.arctan2(v[:, 3] - v[:, 1], v[:, 2] - v[:, 0]),
+                p, predicted.occluded, view.segments, view.occluded, cand,
+                np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]), _directions(view),
                 math.radians(params.match_angle_deg), params.match_distance_m,
             )  # fmt: skip
         if backend == "numba":
@@ -403,14 +428,18 @@ def rtsv(
     cand = trackable_mask(view, params) if candidates is None else np.asarray(candidates, bool)
     if candidates is None and params.match_candidates == "all":  # algorithm #1 as printed
         cand = np.ones(len(view), bool)
-    predicted = tracked.current.transformed(increment.inverse().as_array())
+    predicted = tracked.current.transformed(increment.inverse())
     ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
     # ti are distinct indices into a valid tracker state: its invariants hold by
     # construction, so the survivors skip TrackedSurfaces' checks (a third of RTSV's time).
     survivors = object.__new__(TrackedSurfaces)
-    ids = tracked.ids[ti]
-    ids.flags.writeable = False
-    for name, value in (("ids", ids), ("local", tracked.local.select(ti)),
-                        ("current", view.select(vj))):  # fmt: skip
+    if len(ti) == len(tracked):
+        # Every surface survived (ti is 0…K-1): the read-only ids and local geometry are
+        # shared, not copied (most views lose none).
+        ids, local = tracked.ids, tracked.local
+    else:
+        ids, local = tracked.ids[ti], tracked.local.select(ti)
+        ids.flags.writeable = False
+    for name, value in (("ids", ids), ("local", local), ("current", view.select(vj))):
         object.__setattr__(survivors, name, value)
     return survivors, MatchInfo(ti, vj, dist, angle, predicted, cand)
