@@ -119,9 +119,7 @@ def benchmark_loop() -> Callable[[], Iterator[Frame]]:
     return lambda: sim.drive(tour, "dataset1")
 
 
-def _steps_per_second(
-    drive: Callable[[], Iterator[Frame]], steps: int
-) -> tuple[float, float, int]:
+def _steps_per_second(drive: Callable[[], Iterator[Frame]], steps: int) -> tuple[float, float, int]:
     """Best CPU seconds of ``steps`` simulator steps, and of as many with Albot1 observing
     each frame (after one untimed round); and the views Albot1 remembered."""
     sim = both = float("inf")

@@ -258,8 +258,9 @@ def test_updates_group_the_same_with_consecutive_and_gapped_map_ids() -> None:
     """Map ids 0–9 (a range inside) against 0–8 then 20 (a dict inside): the same groups
     where the ids agree, and no id that was never added."""
     views = [np.array([[float(k), 1.0, float(k) + 0.8, 1.0]]) for k in range(10)]
-    dense, gapped = GlobalMap(GlobalMapParams(expand="contiguous")), GlobalMap(
-        GlobalMapParams(expand="contiguous")
+    dense, gapped = (
+        GlobalMap(GlobalMapParams(expand="contiguous")),
+        GlobalMap(GlobalMapParams(expand="contiguous")),
     )
     for k, v in enumerate(views[:-1]):
         dense.insert(v, k)

@@ -99,7 +99,6 @@ class SegmentGridIndex:
                         found.extend(in_cell)
         return sorted_unique(np.asarray(found, dtype=np.int64))
 
-
     def indexed_ids(self) -> set[int]:
         """Every id indexed in some cell (for checks)."""
         return set().union(*self._cells.values())
