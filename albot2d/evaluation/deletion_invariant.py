@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 from albot2d.evaluation.invariant_base import InvariantError, fail
 from albot2d.geometry import Pose, transform_segments
 from albot2d.mapping.albot1 import Albot1
+from albot2d.mapping.deletion import GlobalMapParams
 from albot2d.mapping.global_map import UpdateReport
 from albot2d.mapping.route_map import LocalMap
 
@@ -83,52 +84,198 @@ def _seen_samples(
     the sight line through the point meets a view surface, the nearest meeting at most
     ``beyond_m`` short of the point (or beyond it). A surface whose sight lines meet the
     view at fewer than ``least_share`` of its points cannot reach that share seen, and is
-    left all unseen without the second test.
-
-    Both halves are shapely predicates on the prepared view surfaces (six times cheaper
-    than constructing each meeting and measuring its distance): the whole sight line meets
-    the view, and its piece from the viewpoint to ``beyond_m`` short of the point does not
-    (a meeting there is nearer than the rule allows)."""
-    frac = (np.arange(samples) + 0.5) / samples
-    pts = segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2])
-    pts = pts.reshape(-1, 2)
-    o = np.array([robot.x, robot.y])
-    dist = np.linalg.norm(pts - o, axis=1)
-    unit = (pts - o) / np.maximum(dist, 1e-12)[:, None]
-    origin = np.broadcast_to(o, pts.shape)
-    surfaces = shapely.multilinestrings(view.reshape(-1, 2, 2))
-    shapely.prepare(surfaces)
-    # The sight line goes on past the point (a point in front of the view's surfaces is in
-    # the free space the laser crossed): as far as the farthest view point, and more.
-    reach = float(np.linalg.norm(view.reshape(-1, 2) - o, axis=1).max()) + 1.0
-    far = o + unit * (reach + dist)[:, None]
-    meets = shapely.intersects(surfaces, shapely.linestrings(np.stack([origin, far], axis=1)))
-    meets = meets.reshape(len(segs), samples)
+    left all unseen without the second test. (Every point is asked; ``_visible`` asks only
+    the points that can still change a surface's verdict.)"""
+    sight = _SightLines(segs, view, robot, beyond_m, samples)
+    every = np.arange(len(sight.dist))
+    meets = sight.meets(every).reshape(len(segs), samples)
     meets &= (meets.mean(axis=1) >= least_share)[:, None]
-    short = dist - beyond_m
-    ahead = np.flatnonzero(meets.ravel() & (short > 0.0))  # a nearer meeting is possible
-    blocked = np.zeros(len(pts), dtype=bool)
-    if len(ahead):
-        stop = o + unit[ahead] * short[ahead, None]
-        blocked[ahead] = shapely.intersects(
-            surfaces, shapely.linestrings(np.stack([origin[ahead], stop], axis=1))
+    seen = np.zeros(len(every), dtype=bool)
+    asked = np.flatnonzero(meets.ravel())
+    seen[asked] = ~sight.blocked(asked)
+    return seen.reshape(len(segs), samples)
+
+
+class _SightLines:
+    """The sight lines from the viewpoint through ``samples`` points of each surface, and
+    the two shapely predicates that decide whether a point is seen (on the prepared view
+    surfaces, six times cheaper than constructing each meeting and measuring its distance):
+    the whole sight line meets the view, and its piece from the viewpoint to ``beyond_m``
+    short of the point does not (a meeting there is nearer than the rule allows). The
+    points' coordinates are computed once for all; a subset is asked by index, so a point
+    gets the same floats and the same answer whichever other points are asked with it."""
+
+    def __init__(
+        self, segs: FloatArray, view: FloatArray, robot: Pose, beyond_m: float, samples: int
+    ) -> None:
+        frac = (np.arange(samples) + 0.5) / samples
+        pts = segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2])
+        pts = pts.reshape(-1, 2)
+        self.o = o = np.array([robot.x, robot.y])
+        self.dist = np.linalg.norm(pts - o, axis=1)
+        self.unit = (pts - o) / np.maximum(self.dist, 1e-12)[:, None]
+        self.surfaces = shapely.multilinestrings(view.reshape(-1, 2, 2))
+        shapely.prepare(self.surfaces)
+        ends = view.reshape(-1, 2) - o
+        # The farthest any point of the view lies from the viewpoint (a segment's farthest
+        # point is an endpoint). The sight line goes on past the point (a point in front of
+        # the view's surfaces is in the free space the laser crossed): that far, and more.
+        self.view_reach = float(np.linalg.norm(ends, axis=1).max())
+        self.reach = self.view_reach + 1.0
+        self.short = self.dist - beyond_m
+        self.ends = ends
+
+    def meets(self, idx: NDArray[np.intp]) -> NDArray[np.bool_]:
+        """Whether the sight lines of points ``idx`` meet the view."""
+        o = self.o
+        far = o + self.unit[idx] * (self.reach + self.dist[idx])[:, None]
+        origin = np.broadcast_to(o, far.shape)
+        return shapely.intersects(
+            self.surfaces, shapely.linestrings(np.stack([origin, far], axis=1))
         )
-    return meets & ~blocked.reshape(len(segs), samples)
+
+    def blocked(self, idx: NDArray[np.intp]) -> NDArray[np.bool_]:
+        """Whether points ``idx`` (whose sight lines meet the view) have a meeting more than
+        ``beyond_m`` short of them."""
+        out = np.zeros(len(idx), dtype=bool)
+        ahead = np.flatnonzero(self.short[idx] > 0.0)  # a nearer meeting is possible
+        if len(ahead):
+            k = idx[ahead]
+            stop = self.o + self.unit[k] * self.short[k, None]
+            origin = np.broadcast_to(self.o, stop.shape)
+            out[ahead] = shapely.intersects(
+                self.surfaces, shapely.linestrings(np.stack([origin, stop], axis=1))
+            )
+        return out
+
+    def seen(self, idx: NDArray[np.intp]) -> NDArray[np.bool_]:
+        """Whether points ``idx`` are seen: their sight line meets the view, and not more
+        than ``beyond_m`` short of them."""
+        out = self.meets(idx)
+        hit = np.flatnonzero(out)
+        out[hit] = ~self.blocked(idx[hit])
+        return out
+
+    def out_of_reach(self) -> NDArray[np.bool_]:
+        """Points provably unseen without asking shapely: farther than ``beyond_m`` (and a
+        micrometre) past the view's farthest point. Any meeting of their sight line lies
+        within the view's reach, so nearer than the rule allows (blocked), or there is
+        none."""
+        return self.short > self.view_reach + _MARGIN_M
+
+    def outside_the_fans(self, idx: NDArray[np.intp]) -> NDArray[np.bool_]:
+        """Which of points ``idx`` are provably unseen without asking shapely: their bearing
+        from the viewpoint lies outside every view surface's angular span (widened by a
+        micro-radian), so their sight line meets no view surface. A surface passing within
+        a micrometre of the viewpoint, or spanning nearly half a turn, counts as spanning
+        every bearing."""
+        a, b = self.ends[0::2], self.ends[1::2]
+        start = np.arctan2(a[:, 1], a[:, 0])
+        span = np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(axis=1))
+        start = np.where(span < 0.0, start + span, start)  # counter-clockwise from start
+        span = np.abs(span)
+        near = (np.linalg.norm(a, axis=1) < _MARGIN_M) | (np.linalg.norm(b, axis=1) < _MARGIN_M)
+        if (near | (span > math.pi - _MARGIN_RAD)).any():
+            return np.zeros(len(idx), dtype=bool)
+        unit = self.unit[idx]
+        bearing = np.arctan2(unit[:, 1], unit[:, 0])
+        off = np.mod(bearing[:, None] - start[None, :] + _MARGIN_RAD, 2.0 * math.pi)
+        inside = (off <= span[None, :] + 2.0 * _MARGIN_RAD).any(axis=1)
+        return ~inside & (self.dist[idx] > _MARGIN_M)
 
 
-def _touching(poly: shapely.Geometry, segs: FloatArray) -> NDArray[np.bool_]:
-    """Which surfaces touch ``poly``: only those whose bounding box meets the polygon's are
-    asked (a map holds hundreds of surfaces, a view polygon is a few metres across)."""
-    x0, y0, x1, y1 = poly.bounds
+# Margins of the provably conservative prefilters (far above float rounding, far below
+# anything a map or a view resolves).
+_MARGIN_M = 1e-6
+_MARGIN_RAD = 1e-6
+
+
+def _visible(
+    segs: FloatArray,
+    view: FloatArray,
+    robot: Pose,
+    beyond_m: float,
+    samples: int,
+    min_share: float,
+) -> NDArray[np.bool_]:
+    """``(N,)``: which surfaces reach the visible share the rule asks (more than none and at
+    least ``min_share`` of their ``samples`` points seen, as ``_seen_samples`` decides each
+    point). Points the cheap tests prove unseen are not asked; then one point of every
+    surface still undecided, then the rest of those still undecided: a surface is decided
+    once enough points are seen, or too many not, so with ``min_share`` 1 (the default) one
+    unseen point settles it."""
+    n = len(segs)
+    # A surface with k of its points seen has the share k / samples (a mean of booleans).
+    ks = np.arange(1, samples + 1)
+    enough = ks[ks / samples >= min_share]
+    if n == 0 or len(enough) == 0:
+        return np.zeros(n, dtype=bool)
+    need = int(enough[0])
+    sight = _SightLines(segs, view, robot, beyond_m, samples)
+    possible = ~sight.out_of_reach().reshape(n, samples)
+    rows = np.flatnonzero(possible.sum(axis=1) >= need)  # the others are decided already
+    if len(rows) == 0:
+        return np.zeros(n, dtype=bool)
+    flat = possible.ravel()  # a view: marking a point here marks it in ``possible``
+    idx = (rows[:, None] * samples + np.arange(samples)).ravel()
+    idx = idx[flat[idx]]
+    flat[idx] = ~sight.outside_the_fans(idx)
+    seen = np.zeros(n, dtype=int)
+    unseen = samples - possible.sum(axis=1)
+    todo = possible.copy()
+    first = np.argmax(possible, axis=1)  # one askable point per surface
+    for step in ("one", "rest"):
+        open_ = (seen < need) & (unseen <= samples - need)
+        if step == "one":
+            ask = np.zeros_like(todo)
+            rows = np.flatnonzero(open_ & possible.any(axis=1))
+            ask[rows, first[rows]] = True
+        else:
+            ask = todo & open_[:, None]
+        rows, cols = np.nonzero(ask)
+        if len(rows) == 0:
+            continue
+        got = sight.seen(rows * samples + cols)
+        todo[rows, cols] = False
+        np.add.at(seen, rows, got)
+        np.add.at(unseen, rows, ~got)
+    return seen >= need
+
+
+def _touching(
+    view: FloatArray, robot: Pose, params: GlobalMapParams, segs: FloatArray, ask: NDArray[np.bool_]
+) -> NDArray[np.bool_]:
+    """Which surfaces of ``ask`` touch P (the others are left false). P is built only when
+    some asked surface meets its bounding box, taken first from the view's points widened by
+    the enlargement (a box P never leaves: a buffer or a radial push moves no point farther
+    than ``enlarge_m``), then from P itself; only those surfaces are asked of shapely."""
     out = np.zeros(len(segs), dtype=bool)
-    near = np.flatnonzero(
-        (np.minimum(segs[:, 0], segs[:, 2]) <= x1) & (np.maximum(segs[:, 0], segs[:, 2]) >= x0)
-        & (np.minimum(segs[:, 1], segs[:, 3]) <= y1) & (np.maximum(segs[:, 1], segs[:, 3]) >= y0)
-    )  # fmt: skip
+    near = np.flatnonzero(ask)
+    if len(near) == 0:
+        return out
+    pts = view.reshape(-1, 2)
+    if params.include_viewpoint:
+        pts = np.vstack([[robot.x, robot.y], pts])
+    grow = max(params.enlarge_m, 1e-6) + _MARGIN_M
+    lo, hi = pts.min(axis=0) - grow, pts.max(axis=0) + grow
+    near = near[_in_box(segs[near], (lo[0], lo[1], hi[0], hi[1]))]
+    if len(near) == 0:
+        return out
+    poly = _view_polygon(view, robot, params.enlarge_m, params.enlarge, params.include_viewpoint)
+    near = near[_in_box(segs[near], poly.bounds)]
     if len(near):
         shapely.prepare(poly)
         out[near] = shapely.intersects(poly, shapely.linestrings(segs[near].reshape(-1, 2, 2)))
     return out
+
+
+def _in_box(segs: FloatArray, box: tuple[float, float, float, float]) -> NDArray[np.bool_]:
+    """Which segments' bounding boxes meet ``box`` (x0, y0, x1, y1)."""
+    x0, y0, x1, y1 = box
+    return (
+        (np.minimum(segs[:, 0], segs[:, 2]) <= x1) & (np.maximum(segs[:, 0], segs[:, 2]) >= x0)
+        & (np.minimum(segs[:, 1], segs[:, 3]) <= y1) & (np.maximum(segs[:, 1], segs[:, 3]) >= y0)
+    )  # fmt: skip
 
 
 def check_update_deleted_facing_overlap(
@@ -141,7 +288,13 @@ def check_update_deleted_facing_overlap(
     the robot is on the side it was seen from and enough of it is visible through the view
     (``could_see="visible"``). With ``current_map="touch"`` no surface of the map being
     left touches P at all. (A rule with ``keep_if_all`` may skip an update that would
-    empty the map.)"""
+    empty the map.)
+
+    A surface's verdict is the conjunction of tests that each look at that surface alone,
+    so they run cheapest first, each on the surfaces the earlier ones left: the facing and
+    seen-side tests (arithmetic), the visible share (sight lines, mostly settled by one
+    point), and last P (built only when a surface is still in question, which after a
+    correct update is almost never)."""
     name = "update_deletes_facing_overlap"
     params = m.map.params
     snap = m.map.snapshot()
@@ -153,22 +306,22 @@ def check_update_deleted_facing_overlap(
         return
     segs = snap.segments[older]
     ids = snap.map_ids[older]
-    poly = _view_polygon(view, robot, params.enlarge_m, params.enlarge, params.include_viewpoint)
-    hits = _touching(poly, segs)
-    seeable = hits & _facing(segs, robot, params.facing_test)
+    current = report.map_id - 1
+    seeable = _facing(segs, robot, params.facing_test)
     if params.seen_side == "front":  # the robot on the left of the directed surface
         d = segs[:, 2:] - segs[:, :2]
         r = np.array([robot.x, robot.y]) - segs[:, :2]
         seeable &= d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0] > 0
     if params.could_see == "visible" and seeable.any():
-        share = np.zeros(len(segs))
-        share[seeable] = _seen_samples(
-            segs[seeable], view, robot, params.enlarge_m, params.visible_samples,
-            least_share=params.min_visible_share,
-        ).mean(axis=1)  # fmt: skip
-        seeable &= (share > 0) & (share >= params.min_visible_share)
-    current = report.map_id - 1
-    left = (hits if params.current_map == "touch" else seeable) & (ids == current)
+        idx = np.flatnonzero(seeable)
+        seeable[idx] = _visible(
+            segs[idx], view, robot, params.enlarge_m, params.visible_samples,
+            params.min_visible_share,
+        )  # fmt: skip
+    touch_current = params.current_map == "touch"
+    hits = _touching(view, robot, params, segs, seeable | (touch_current & (ids == current)))
+    seeable &= hits
+    left = (hits if touch_current else seeable) & (ids == current)
     if left.any():
         fail(
             name,
