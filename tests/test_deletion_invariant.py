@@ -21,6 +21,8 @@ from albot2d.mapping.route_map import LocalMap
 from tests.runs import map_frames, simulate
 from worldgen.generate import generate
 
+# The compiled prefilter when numba imports (the fast extra), and the numpy path.
+BACKENDS = ("numpy", "numba") if di._kernels() is not None else ("numpy",)
 PRESETS = {
     "visible": GlobalMapParams(),
     "visible_half": GlobalMapParams(min_visible_share=0.5),
@@ -85,8 +87,13 @@ def frames():  # type: ignore[no-untyped-def]
     return simulate(generate("rooms", seed=4, width_m=14.0, height_m=12.0), 4, length_m=25.0)
 
 
+@pytest.mark.parametrize("backend", ["auto", "numpy"])
 @pytest.mark.parametrize("preset", list(PRESETS))
-def test_the_ordered_check_equals_the_definition(frames, preset: str) -> None:  # type: ignore[no-untyped-def]
+def test_the_ordered_check_equals_the_definition(
+    frames, preset: str, backend: str, monkeypatch
+) -> None:  # type: ignore[no-untyped-def]
+    if backend == "numpy":  # as without numba installed
+        monkeypatch.setattr(di, "_kernels", lambda: None)
     mapper = Albot1(Albot1Params(global_map=PRESETS[preset]))
     rng = np.random.default_rng(len(preset))
     seen: dict[str, int] = {"cases": 0, "violations": 0}
@@ -138,23 +145,32 @@ def test_the_prefilters_drop_only_points_shapely_calls_unseen(seed: int) -> None
         sight = di._SightLines(segs, view, robot, beyond_m, 8)
         every = np.arange(len(sight.dist))
         seen = sight.seen(every)
-        far, outside = sight.out_of_reach(), sight.outside_the_fans(every)
-        assert not (seen & (far | outside)).any()
-        assert far.sum() > 100 and outside.sum() > 100 and seen.sum() > 50  # all three bite
+        far, surely = sight.out_of_reach(), sight.surely_unseen(every)
+        assert not (seen & (far | surely)).any()
+        assert far.sum() > 100 and (surely & ~far).sum() > 100 and seen.sum() > 50  # all bite
+        assert (surely & ~far & sight.meets(every)).sum() > 20  # blocked, proven so
+        expected = di._seen_samples(segs, view, robot, beyond_m, 8).mean(axis=1)
         for share in (0.0, 0.3, 0.5, 1.0):
-            expected = di._seen_samples(segs, view, robot, beyond_m, 8).mean(axis=1)
-            got = di._visible(segs, view, robot, beyond_m, 8, share)
-            assert np.array_equal(got, (expected > 0) & (expected >= share))
+            for backend in BACKENDS:
+                got = di._visible(segs, view, robot, beyond_m, 8, share, backend)
+                assert np.array_equal(got, (expected > 0) & (expected >= share))
+        kernels = di._kernels()
+        if kernels is not None:  # the compiled prefilter drops no seen point either
+            possible = kernels.possible_points(
+                segs, view, robot.x, robot.y, beyond_m, 8, 1, di._MARGIN_M, di._MARGIN_RAD
+            )
+            assert not (seen & ~possible.ravel()).any()
+            assert (~possible.ravel() & ~far).sum() > 100
 
 
 def test_a_view_through_the_viewpoint_turns_the_fan_prefilter_off() -> None:
     robot = Pose(0.0, 0.0, 0.0)
     view = np.array([[-2.0, 0.0, 2.0, 0.0], [1.0, 1.0, 1.0, 2.0]])  # the first through o
     sight = di._SightLines(np.array([[0.0, -3.0, 1.0, -3.0]]), view, robot, 0.5, 8)
-    assert not sight.outside_the_fans(np.arange(8)).any()
+    assert not sight.surely_unseen(np.arange(8)).any()
     view[0] = [-2.0, 1e-9, 2.0, 1e-9]  # passing a nanometre from it: spans nearly π
     sight = di._SightLines(np.array([[0.0, -3.0, 1.0, -3.0]]), view, robot, 0.5, 8)
-    assert not sight.outside_the_fans(np.arange(8)).any()
+    assert not sight.surely_unseen(np.arange(8)).any()
 
 
 def test_the_visible_share_keeps_the_preset_semantics() -> None:

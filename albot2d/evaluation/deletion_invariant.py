@@ -6,7 +6,9 @@ side, sight lines) with shapely, independently of the mapper's own deletion code
 
 from __future__ import annotations
 
+import functools
 import math
+from types import ModuleType
 
 import numpy as np
 import shapely
@@ -124,6 +126,7 @@ class _SightLines:
         self.reach = self.view_reach + 1.0
         self.short = self.dist - beyond_m
         self.ends = ends
+        self.shape = (len(segs), samples)
 
     def meets(self, idx: NDArray[np.intp]) -> NDArray[np.bool_]:
         """Whether the sight lines of points ``idx`` meet the view."""
@@ -163,25 +166,36 @@ class _SightLines:
         none."""
         return self.short > self.view_reach + _MARGIN_M
 
-    def outside_the_fans(self, idx: NDArray[np.intp]) -> NDArray[np.bool_]:
-        """Which of points ``idx`` are provably unseen without asking shapely: their bearing
-        from the viewpoint lies outside every view surface's angular span (widened by a
-        micro-radian), so their sight line meets no view surface. A surface passing within
-        a micrometre of the viewpoint, or spanning nearly half a turn, counts as spanning
-        every bearing."""
+    def surely_unseen(self, idx: NDArray[np.intp]) -> NDArray[np.bool_]:
+        """Which of points ``idx`` are provably unseen without asking shapely, by the view
+        surfaces' angular spans from the viewpoint (their fans):
+
+        - the point's bearing lies outside every fan widened by a micro-radian: its sight
+          line meets no view surface;
+        - or its bearing lies inside some surface's fan narrowed by a micro-radian, so its
+          sight line crosses that surface no farther than the surface's farther end, and
+          the point lies more than ``beyond_m`` (and a micrometre) past that: blocked.
+
+        A surface passing within a micrometre of the viewpoint, or spanning nearly half a
+        turn, turns this test off (the reach test still holds); so does a point within a
+        micrometre of the viewpoint."""
         a, b = self.ends[0::2], self.ends[1::2]
         start = np.arctan2(a[:, 1], a[:, 0])
         span = np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(axis=1))
         start = np.where(span < 0.0, start + span, start)  # counter-clockwise from start
         span = np.abs(span)
-        near = (np.linalg.norm(a, axis=1) < _MARGIN_M) | (np.linalg.norm(b, axis=1) < _MARGIN_M)
-        if (near | (span > math.pi - _MARGIN_RAD)).any():
+        ra, rb = np.linalg.norm(a, axis=1), np.linalg.norm(b, axis=1)
+        if ((ra < _MARGIN_M) | (rb < _MARGIN_M) | (span > math.pi - _MARGIN_RAD)).any():
             return np.zeros(len(idx), dtype=bool)
         unit = self.unit[idx]
         bearing = np.arctan2(unit[:, 1], unit[:, 0])
+        # The bearing's angle past each fan's start, counted from a micro-radian before it.
         off = np.mod(bearing[:, None] - start[None, :] + _MARGIN_RAD, 2.0 * math.pi)
-        inside = (off <= span[None, :] + 2.0 * _MARGIN_RAD).any(axis=1)
-        return ~inside & (self.dist[idx] > _MARGIN_M)
+        outside = ~(off <= span[None, :] + 2.0 * _MARGIN_RAD).any(axis=1)
+        inside = (off >= 2.0 * _MARGIN_RAD) & (off <= span[None, :])
+        crossing = np.where(inside, np.maximum(ra, rb)[None, :], np.inf).min(axis=1)
+        blocked = self.short[idx] > crossing + _MARGIN_M
+        return (outside | blocked) & (self.dist[idx] > _MARGIN_M)
 
 
 # Margins of the provably conservative prefilters (far above float rounding, far below
@@ -197,13 +211,15 @@ def _visible(
     beyond_m: float,
     samples: int,
     min_share: float,
+    backend: str = "auto",
 ) -> NDArray[np.bool_]:
     """``(N,)``: which surfaces reach the visible share the rule asks (more than none and at
     least ``min_share`` of their ``samples`` points seen, as ``_seen_samples`` decides each
     point). Points the cheap tests prove unseen are not asked; then one point of every
     surface still undecided, then the rest of those still undecided: a surface is decided
     once enough points are seen, or too many not, so with ``min_share`` 1 (the default) one
-    unseen point settles it."""
+    unseen point settles it. ``backend``: how the unseen points are proven ("numpy",
+    "numba" or "auto": numba when it imports; the same verdicts)."""
     n = len(segs)
     # A surface with k of its points seen has the share k / samples (a mean of booleans).
     ks = np.arange(1, samples + 1)
@@ -211,35 +227,78 @@ def _visible(
     if n == 0 or len(enough) == 0:
         return np.zeros(n, dtype=bool)
     need = int(enough[0])
-    sight = _SightLines(segs, view, robot, beyond_m, samples)
-    possible = ~sight.out_of_reach().reshape(n, samples)
-    rows = np.flatnonzero(possible.sum(axis=1) >= need)  # the others are decided already
+    kernels = _kernels() if backend != "numpy" else None
+    if kernels is None and backend == "numba":
+        raise ValueError("backend='numba' needs numba (the fast extra)")
+    sight = None
+    if kernels is not None:
+        possible = kernels.possible_points(
+            np.ascontiguousarray(segs), np.ascontiguousarray(view), float(robot.x),
+            float(robot.y), float(beyond_m), int(samples), need, _MARGIN_M, _MARGIN_RAD,
+        )  # fmt: skip
+    else:
+        sight = _SightLines(segs, view, robot, beyond_m, samples)
+        possible = _possible_points(sight, need)
+    # Only surfaces with enough points left can still reach the share: their sight lines
+    # (each point's floats are its own, whichever surfaces are taken with it).
+    rows = np.flatnonzero(possible.sum(axis=1) >= need)
+    out = np.zeros(n, dtype=bool)
     if len(rows) == 0:
-        return np.zeros(n, dtype=bool)
-    flat = possible.ravel()  # a view: marking a point here marks it in ``possible``
-    idx = (rows[:, None] * samples + np.arange(samples)).ravel()
-    idx = idx[flat[idx]]
-    flat[idx] = ~sight.outside_the_fans(idx)
-    seen = np.zeros(n, dtype=int)
+        return out
+    if sight is None or len(rows) < n:
+        sight = _SightLines(segs[rows], view, robot, beyond_m, samples)
+    possible = possible[rows]
+    seen = np.zeros(len(rows), dtype=int)
     unseen = samples - possible.sum(axis=1)
     todo = possible.copy()
+    # A few points are asked at once; many, one per surface first (mostly settling it).
+    steps = ("rest",) if possible.sum() <= _ASK_AT_ONCE else ("one", "rest")
     first = np.argmax(possible, axis=1)  # one askable point per surface
-    for step in ("one", "rest"):
+    for step in steps:
         open_ = (seen < need) & (unseen <= samples - need)
         if step == "one":
             ask = np.zeros_like(todo)
-            rows = np.flatnonzero(open_ & possible.any(axis=1))
-            ask[rows, first[rows]] = True
+            at = np.flatnonzero(open_)
+            ask[at, first[at]] = True
         else:
             ask = todo & open_[:, None]
-        rows, cols = np.nonzero(ask)
-        if len(rows) == 0:
+        at, cols = np.nonzero(ask)
+        if len(at) == 0:
             continue
-        got = sight.seen(rows * samples + cols)
-        todo[rows, cols] = False
-        np.add.at(seen, rows, got)
-        np.add.at(unseen, rows, ~got)
-    return seen >= need
+        got = sight.seen(at * samples + cols)
+        todo[at, cols] = False
+        np.add.at(seen, at, got)
+        np.add.at(unseen, at, ~got)
+    out[rows] = seen >= need
+    return out
+
+
+# Up to this many points left to ask go to shapely in one round.
+_ASK_AT_ONCE = 32
+
+
+def _possible_points(sight: _SightLines, need: int) -> NDArray[np.bool_]:
+    """``(N, samples)``: the points the numpy tests do not prove unseen (a surface's points
+    are all left false when too few are left for it to reach ``need`` seen)."""
+    n, samples = sight.shape
+    possible = ~sight.out_of_reach().reshape(n, samples)
+    rows = np.flatnonzero(possible.sum(axis=1) >= need)  # the others are decided already
+    flat = possible.ravel()  # a view: marking a point here marks it in ``possible``
+    idx = (rows[:, None] * samples + np.arange(samples)).ravel()
+    idx = idx[flat[idx]]
+    flat[idx] = ~sight.surely_unseen(idx)
+    return possible
+
+
+@functools.cache
+def _kernels() -> ModuleType | None:
+    """The compiled prefilter (``deletion_invariant_numba``), imported on first use; None
+    without numba."""
+    try:
+        from albot2d.evaluation import deletion_invariant_numba
+    except ImportError:
+        return None
+    return deletion_invariant_numba
 
 
 def _touching(
