@@ -186,3 +186,18 @@ def test_the_visible_share_keeps_the_preset_semantics() -> None:
 
 def _visible_list(segs: np.ndarray, view: np.ndarray, robot: Pose, share: float) -> list[bool]:
     return di._visible(segs, view, robot, 0.5, 8, share).tolist()
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_facing_and_seen_side_tests_compiled_equal_numpy(seed: int, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    rng = np.random.default_rng(seed)
+    segs = rng.uniform(-5.0, 5.0, (400, 4))
+    segs[:20, 2:] = segs[:20, :2]  # points
+    robot = Pose(*rng.uniform([-1.0, -1.0, -np.pi], [1.0, 1.0, np.pi]))
+    for test in ("any_endpoint", "both_endpoints", "midpoint"):
+        for front in (False, True):
+            got = di._facing_front(segs, robot, test, front)
+            with monkeypatch.context() as patch:
+                patch.setattr(di, "_kernels", lambda: None)
+                assert np.array_equal(got, di._facing_front(segs, robot, test, front))
+            assert 0 < got.sum() < len(segs)

@@ -38,6 +38,26 @@ def _facing(segs: FloatArray, robot: Pose, test: str) -> NDArray[np.bool_]:
     return (fwd0 + fwd1) > 0.0
 
 
+_FACING_TESTS = ("any_endpoint", "both_endpoints", "midpoint")
+
+
+def _facing_front(segs: FloatArray, robot: Pose, test: str, front: bool) -> NDArray[np.bool_]:
+    """The surfaces on the facing side (the rule's facing test) and, with ``front``, with
+    the robot on the side they were seen from (on the left of the directed surface)."""
+    kernels = _kernels()
+    if kernels is not None and test in _FACING_TESTS:
+        return kernels.facing_front(
+            np.ascontiguousarray(segs), float(robot.x), float(robot.y),
+            math.cos(robot.theta), math.sin(robot.theta), _FACING_TESTS.index(test), front,
+        )  # fmt: skip
+    out = _facing(segs, robot, test)
+    if front:
+        d = segs[:, 2:] - segs[:, :2]
+        r = np.array([robot.x, robot.y]) - segs[:, :2]
+        out &= d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0] > 0
+    return out
+
+
 def _ahead(robot: Pose, big: float) -> shapely.Geometry:
     """The square ``x >= 0`` of the robot's frame, ``big`` a side, in the map's frame: the
     corners moved as ``shapely.affinity.affine_transform`` moves them (the same floats),
@@ -366,11 +386,7 @@ def check_update_deleted_facing_overlap(
     segs = snap.segments[older]
     ids = snap.map_ids[older]
     current = report.map_id - 1
-    seeable = _facing(segs, robot, params.facing_test)
-    if params.seen_side == "front":  # the robot on the left of the directed surface
-        d = segs[:, 2:] - segs[:, :2]
-        r = np.array([robot.x, robot.y]) - segs[:, :2]
-        seeable &= d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0] > 0
+    seeable = _facing_front(segs, robot, params.facing_test, params.seen_side == "front")
     if params.could_see == "visible" and seeable.any():
         idx = np.flatnonzero(seeable)
         seeable[idx] = _visible(

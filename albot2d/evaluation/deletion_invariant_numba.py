@@ -8,10 +8,10 @@ dozen view surfaces, so the numpy path's cost is its array calls, not arithmetic
 The kernel proves points unseen by the same three tests as the numpy path
 (``_SightLines.out_of_reach`` and ``surely_unseen``: beyond the view's reach, outside every
 fan, or past the farther end of a fan they lie inside), with the same margins, and a
-fourth: inside a surface's narrowed fan, on the far side of its line and more than
-``beyond_m`` (and a micrometre) from that line (the sight line crosses the surface, and the
-point lies at least that far past the crossing). It stops asking a surface's points once
-too many are unseen for the surface to reach its share.
+fourth: inside a surface's narrowed fan (so the sight line crosses that surface), more
+than ``beyond_m`` (and a micrometre) past the crossing, measured along the sight line
+(where the line through the viewpoint and the point meets the surface's line). It stops
+asking a surface's points once too many are unseen for the surface to reach its share.
 Neither path decides that a point is seen: shapely does, for the points left.
 ``tests/test_deletion_invariant.py`` checks both give the same verdicts.
 """
@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["possible_points"]
+__all__ = ["facing_front", "possible_points"]
 
 
 @njit(cache=True, nogil=True)
@@ -66,23 +66,20 @@ def possible_points(segs, vsegs, ox, oy, beyond_m, samples, need, margin_m, marg
                 inside = False
                 crossing = math.inf
                 behind = False
+                ux, uy = vx / dist, vy / dist
                 for j in range(m):
                     off = (bearing - start[j] + margin_rad) % turn
                     if off <= span[j] + 2.0 * margin_rad:
                         inside = True
                         if off >= 2.0 * margin_rad and off <= span[j]:
                             crossing = min(crossing, far[j])
-                            # Past the surface's line, farther from it than allowed: the
-                            # sight line crosses the surface, and the point lies at least
-                            # that far beyond the crossing.
+                            # The sight line crosses this surface (its bearing is well
+                            # inside the fan): where, along the line from the viewpoint.
                             ex, ey = vsegs[j, 2] - vsegs[j, 0], vsegs[j, 3] - vsegs[j, 1]
                             ax, ay = vsegs[j, 0] - ox, vsegs[j, 1] - oy
-                            side_o = ex * (-ay) - ey * (-ax)
-                            side_p = ex * (vy - ay) - ey * (vx - ax)
-                            if side_o * side_p < 0.0:
-                                gap = abs(side_p) / math.sqrt(ex * ex + ey * ey)
-                                if gap > beyond_m + margin_m:
-                                    behind = True
+                            across = ux * ey - uy * ex
+                            if across != 0.0 and (ax * ey - ay * ex) / across < short - margin_m:
+                                behind = True
                 if not inside or behind or short > crossing + margin_m:
                     ok = False
             out[i, k] = ok
@@ -90,4 +87,28 @@ def possible_points(segs, vsegs, ox, oy, beyond_m, samples, need, margin_m, marg
                 unseen += 1
                 if unseen > samples - need:
                     break
+    return out
+
+
+@njit(cache=True, nogil=True)
+def facing_front(segs, ox, oy, c, s, test, front):
+    """``(N,)``: the surfaces on the facing side (``test`` 0: any endpoint in front of the
+    robot, 1: both, 2: their mean) and, with ``front``, seen from their front (the robot on
+    the left of the directed surface): ``_facing`` and the seen-side test of the numpy
+    path, in the same float operations."""
+    n = segs.shape[0]
+    out = np.zeros(n, np.bool_)
+    for i in range(n):
+        x0, y0, x1, y1 = segs[i, 0], segs[i, 1], segs[i, 2], segs[i, 3]
+        fwd0 = c * (x0 - ox) + s * (y0 - oy)
+        fwd1 = c * (x1 - ox) + s * (y1 - oy)
+        if test == 0:
+            ok = fwd0 > 0.0 or fwd1 > 0.0
+        elif test == 1:
+            ok = fwd0 > 0.0 and fwd1 > 0.0
+        else:
+            ok = (fwd0 + fwd1) > 0.0
+        if ok and front:
+            ok = (x1 - x0) * (oy - y0) - (y1 - y0) * (ox - x0) > 0.0
+        out[i] = ok
     return out
