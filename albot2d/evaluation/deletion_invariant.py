@@ -2,7 +2,15 @@
 update no surface of an earlier map remains that the deletion rule says the robot could
 see. Everything is recomputed here from the definitions (view polygon, facing side, seen
 side, sight lines) with shapely, independently of the mapper's own deletion code;
-``UpdateRecorder`` runs the check after each update of an ``Albot1``."""
+``UpdateRecorder`` runs the check after each update of an ``Albot1``.
+
+A surface's verdict is a conjunction of per-surface tests, asked cheapest first. Before
+shapely is asked whether a sample point is seen, plain geometry proves most points unseen
+with a micrometre / micro-radian margin (beyond the view's reach, outside every view
+surface's fan, or crossing a view surface more than ``enlarge_m`` short of the point);
+those tests are compiled when numba imports (``deletion_invariant_numba``, the ``fast``
+extra), with the numpy path kept. P is built only for a surface still in question. The
+verdicts equal the definition asked in full (``tests/test_deletion_invariant.py``)."""
 
 from __future__ import annotations
 
