@@ -45,7 +45,7 @@ def _reference(m: Albot1, report: UpdateReport, robot: Pose, view: np.ndarray) -
         return None
     segs, ids = snap.segments[older], snap.map_ids[older]
     poly = di._view_polygon(view, robot, params.enlarge_m, params.enlarge, params.include_viewpoint)
-    hits = np.array([poly.intersects(di.shapely.LineString(s.reshape(2, 2))) for s in segs])
+    hits = di.shapely.intersects(poly, di.shapely.linestrings(segs.reshape(-1, 2, 2)))
     seeable = hits & di._facing(segs, robot, params.facing_test)
     if params.seen_side == "front":
         d = segs[:, 2:] - segs[:, :2]
