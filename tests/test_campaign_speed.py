@@ -14,6 +14,7 @@ import pytest
 import shapely
 import shapely.affinity
 
+from albot2d.evaluation import hit_geometry
 from albot2d.evaluation.campaign import CampaignParams
 from albot2d.evaluation.deletion_invariant import _ahead, _seen_samples
 from albot2d.evaluation.episode import EpisodeSpec
@@ -93,9 +94,34 @@ def test_segment_grid_equals_a_within_distance_tree_query(seed: int) -> None:
     expected = np.zeros(len(pts), dtype=bool)
     expected[near] = True
     for cell in (0.5, 1.0, 3.0):
-        assert np.array_equal(SegmentGrid(walls, 0.3, cell).within(pts, tol), expected)
+        for backend in ("numpy", "auto"):  # auto: the compiled kernel when numba imports
+            assert np.array_equal(SegmentGrid(walls, 0.3, cell).within(pts, tol, backend), expected)
     with pytest.raises(ValueError, match="reach"):
         SegmentGrid(walls, 0.1).within(pts, tol)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_ray_ranges_compiled_equal_numpy_and_shapely(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    walls = rng.uniform(0.0, 10.0, (80, 4))
+    walls[:10, 3] = walls[:10, 1]  # axis-parallel walls, rays along them
+    origins = rng.uniform(1.0, 9.0, (300, 2))
+    angles = rng.uniform(-np.pi, np.pi, (300, 3))
+    angles[::7, 1] = np.nan  # no neighbour past a scan's end
+    angles[::11, 2] = 0.0  # parallel to the axis-parallel walls
+    got = {b: hit_geometry.ray_ranges(origins, angles, walls, b) for b in ("numpy", "auto")}
+    assert np.array_equal(got["numpy"], got["auto"])
+    assert np.isinf(got["numpy"][::7, 1]).all() and np.isfinite(got["numpy"]).mean() > 0.5
+    # The nearest crossing, constructed by shapely along each ray (to 1e-9 m).
+    tree = shapely.STRtree(shapely.linestrings(walls.reshape(-1, 2, 2)))
+    for i, j in zip(*np.nonzero(np.isfinite(angles)), strict=True):
+        if (i + j) % 9:
+            continue  # a sample of the rays keeps this quick
+        o, a = origins[i], angles[i, j]
+        ray = shapely.LineString([o, o + 30.0 * np.array([np.cos(a), np.sin(a)])])
+        hits = [ray.intersection(tree.geometries[k]) for k in tree.query(ray, "intersects")]
+        near = min((shapely.distance(shapely.Point(o), h) for h in hits), default=np.inf)
+        assert got["numpy"][i, j] == pytest.approx(near, abs=1e-9)
 
 
 def _visible_share_by_meetings(
