@@ -50,6 +50,7 @@ from albot2d.evaluation.egocentric import (
 )
 from albot2d.frames import Frame, Scan
 from albot2d.geometry import transform_points
+from albot2d.mapping.baselines import IntegratedMap, ViewIntegrator
 from albot2d.mapping.protocol import Mapper, StageTimer, takes_perceived_views
 from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
 from albot2d.validation import check_non_negative, check_positive
@@ -247,10 +248,23 @@ class _Recorder:
 
 
 def _egocentric_map(mapper: Mapper, seen: FloatArray) -> tuple[FloatArray, int]:
-    """The mapper's map surfaces near it, relative to its own pose, and its surface count."""
-    segments = mapper.global_map().segments
+    """The mapper's map surfaces near it, relative to its own pose, and its surface count.
+
+    A map that keeps every view (``IntegratedMap``: the naive and truth mappers) is read
+    block by block, not copied whole: a copy per stop made the memory of driving follow
+    the map's size (the same surfaces, in the same order)."""
     reach = float(np.max(np.hypot(seen[:, 0], seen[:, 1]), initial=0.0)) + 1.0
-    return in_robot_frame(mapper.pose().as_array(), segments, reach), len(segments)
+    pose = mapper.pose().as_array()
+    stored = getattr(mapper, "map", None)
+    # (only where global_map is ViewIntegrator's: a subclass may answer otherwise)
+    plain = isinstance(mapper, ViewIntegrator) and (
+        type(mapper).global_map is ViewIntegrator.global_map
+    )
+    if plain and isinstance(stored, IntegratedMap):
+        near = [in_robot_frame(pose, segments, reach) for segments, _ in stored.blocks()]
+        return (np.vstack(near) if near else np.zeros((0, 4))), len(stored)
+    segments = mapper.global_map().segments
+    return in_robot_frame(pose, segments, reach), len(segments)
 
 
 def _estimate(mapper: Mapper) -> tuple[FloatArray, FloatArray]:

@@ -15,7 +15,14 @@ from numpy.typing import ArrayLike, NDArray
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["colour_buckets", "line_segments", "nan_lines", "new_figure", "png_bytes"]
+__all__ = [
+    "colour_buckets",
+    "line_segments",
+    "nan_lines",
+    "new_figure",
+    "png_bytes",
+    "release_figure",
+]
 
 
 Layout = Literal["constrained", "compressed", "tight"] | None
@@ -84,8 +91,24 @@ def colour_buckets(
     return order, np.r_[starts, len(keys)].astype(np.intp), v[order[starts]]
 
 
-def png_bytes(fig: Figure, dpi: float) -> bytes:
-    """``fig`` saved as PNG, in memory."""
+def png_bytes(fig: Figure, dpi: float, *, release: bool = True) -> bytes:
+    """``fig`` saved as PNG, in memory; then (``release``, the default) emptied with
+    ``release_figure``, as every figure here is drawn once."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
+    if release:
+        release_figure(fig)
     return buf.getvalue()
+
+
+def release_figure(fig: Figure) -> None:
+    """Free what a saved figure holds: its artists (``Figure.clear``) and its Agg canvas,
+    whose renderer keeps the whole RGBA buffer (8 MB for the 4-panel overview at 100 dpi).
+
+    A figure is a web of reference cycles (figure, axes, artists, canvas), so dropping it
+    leaves all of that to the cyclic garbage collector, which may run figures later; a run
+    drawing a dozen figures held them all at its memory peak."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    fig.clear()
+    FigureCanvasBase(fig)  # the figure's canvas now: the Agg one and its buffer are freed
