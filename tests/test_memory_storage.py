@@ -124,3 +124,21 @@ def test_png_bytes_frees_the_figure_and_draws_the_same() -> None:
     assert a == b
     assert isinstance(kept.canvas, FigureCanvasAgg) and kept.axes
     assert not isinstance(freed.canvas, FigureCanvasAgg) and not freed.axes
+
+
+def test_figure_batch_collects_each_figure_and_unfreezes() -> None:
+    pytest.importorskip("matplotlib")
+    import gc
+    import weakref
+
+    from albot2d.viz._figure import figure_batch, new_figure, png_bytes
+
+    frozen = gc.get_freeze_count()
+    with figure_batch():
+        assert gc.get_freeze_count() > frozen
+        fig = new_figure(2.0, 2.0)
+        gone = weakref.ref(fig.subplots())
+        gone().plot([0, 1], [1, 0])  # type: ignore[union-attr]
+        png_bytes(fig, 40)
+        assert gone() is None  # the released axes (a web of cycles) collected already
+    assert gc.get_freeze_count() == frozen
