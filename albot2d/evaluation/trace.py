@@ -256,7 +256,9 @@ class _Recorder:
     @staticmethod
     def column(values: array[Any], dtype: type, width: int = 1) -> NDArray[Any]:
         """A recorded column as a fresh numpy array (``(N, width)`` when ``width > 1``)."""
-        out = np.frombuffer(values, dtype=dtype).copy() if len(values) else np.zeros(0, dtype)
+        out: NDArray[Any] = np.zeros(0, dtype)
+        if len(values):
+            out = np.frombuffer(values, dtype=dtype).copy()
         return out.reshape(-1, width) if width > 1 else out
 
 
