@@ -10,7 +10,12 @@ run's naive map holds at the end (820,000).
 
 - draw: a ``LineCollection`` of one ``(2, 2)`` line per surface (matplotlib makes a Path
   object each) against ``plot_map`` (a few NaN-separated lines per colour of the map);
-- score: ``map_quality`` with completeness (the seen points of the last views).
+- score: ``map_quality`` with completeness (the seen points of the last views);
+- run: the default ``albot2d run --out DIR`` (figures included) in a child process, its
+  whole peak RSS (``ru_maxrss`` of the child, not a growth over imports; the issue's
+  target is 300 MB), and with ``--no-figures``. File-backed pages (numba's LLVM library
+  is ~70 MB of it) count as the kernel maps them, so the number moves by ~10 MB with what
+  other processes keep in the page cache.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ import json
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -83,3 +89,32 @@ def test_peak_memory(benchmark: Any, case: str) -> None:
     benchmark.group = "draw" if case.startswith("draw") else "score"
     peak = benchmark.pedantic(_peak_mb, args=(case, SURFACES), rounds=1, iterations=1)
     benchmark.extra_info.update({"surfaces": SURFACES, "peak_mb": round(peak, 1)})
+
+
+_RUN = """
+import resource, sys
+from albot2d.cli import main
+code = main(sys.argv[1:])
+print("peak_kb", resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+sys.exit(code)
+"""
+
+
+def _run_peak_mb(out: Path, *extra: str) -> float:
+    """Peak RSS (MB) of one ``albot2d run`` in a fresh process (what ``albot2d run`` does:
+    ``albot2d.cli.main``, then the process's own ``ru_maxrss``)."""
+    done = subprocess.run(
+        [sys.executable, "-c", _RUN, "run", "--out", str(out), *extra],
+        check=True, capture_output=True, text=True,
+    )  # fmt: skip
+    line = [x for x in done.stdout.splitlines() if x.startswith("peak_kb ")][-1]
+    return int(line.split()[1]) / 1e3
+
+
+@pytest.mark.parametrize("figures", [True, False], ids=["figures", "no_figures"])
+def test_default_run_peak_rss(benchmark: Any, tmp_path: Path, figures: bool) -> None:
+    benchmark.group = "run"
+    extra = () if figures else ("--no-figures",)
+    peak = benchmark.pedantic(_run_peak_mb, args=(tmp_path / "out", *extra), rounds=1, iterations=1)
+    assert (tmp_path / "out" / "report.json").is_file()
+    benchmark.extra_info.update({"peak_rss_mb": round(peak, 1), "target_mb": 300})

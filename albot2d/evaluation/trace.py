@@ -50,6 +50,7 @@ from albot2d.evaluation.egocentric import (
 )
 from albot2d.frames import Frame, Scan
 from albot2d.geometry import transform_points
+from albot2d.mapping.baselines import IntegratedMap, ViewIntegrator
 from albot2d.mapping.protocol import Mapper, StageTimer, takes_perceived_views
 from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
 from albot2d.validation import check_non_negative, check_positive
@@ -195,19 +196,24 @@ class Trace:
 
 
 class _Recorder:
-    """Accumulates the per-frame rows of a Trace."""
+    """Accumulates the per-frame rows of a Trace, in flat typed arrays (~70 bytes a frame;
+    a list of small arrays and Python numbers per column cost ~400)."""
 
     def __init__(self, last_k_views: int, window_m: float = 30.0) -> None:
-        self.indices: list[int] = []
-        self.stamps: list[float] = []
-        self.odom: list[FloatArray] = []
-        self.truth: list[FloatArray] = []
-        self.collided: list[bool] = []
-        self.travelled: list[float] = []
+        self.indices = array("q")
+        self.stamps = array("d")
+        self.odom = array("d")  # x, y, theta per frame
+        self.truth = array("d")
+        self.collided = array("b")
+        self.travelled = array("d")
         self.recent: deque[FloatArray] = deque(maxlen=last_k_views)
         self.window_m = window_m
         self.window: deque[tuple[float, FloatArray]] = deque()
         self.with_truth: bool | None = None
+        self.last_truth = np.zeros(3)
+
+    def __len__(self) -> int:
+        return len(self.indices)
 
     def add(self, frame: Frame) -> None:
         has_truth = frame.true_pose is not None
@@ -223,11 +229,13 @@ class _Recorder:
         self.travelled.append((self.travelled[-1] if self.travelled else 0.0) + step)
         self.indices.append(frame.index)
         self.stamps.append(frame.timestamp)
-        self.odom.append(frame.odom_pose.as_array())
+        odom = frame.odom_pose
+        self.odom.extend((odom.x, odom.y, odom.theta))
         self.collided.append(bool(frame.collided))
         if frame.true_pose is not None:
             pose = frame.true_pose.as_array()
-            self.truth.append(pose)
+            self.truth.extend(pose.tolist())
+            self.last_truth = pose
             hits = transform_points(pose, frame.scan.points())
             self.recent.append(hits)
             self.window.append((self.travelled[-1], hits))
@@ -238,19 +246,40 @@ class _Recorder:
         """The last window's laser hits relative to the true pose now (None without truth)."""
         if not self.with_truth or not self.window:
             return None
-        return seen_window_local(np.vstack([h for _, h in self.window]), self.truth[-1], grid_m)
+        return seen_window_local(np.vstack([h for _, h in self.window]), self.last_truth, grid_m)
 
     def reference_distance(self) -> float:
         """Straight-line distance from the start now (truth if known, else odometry)."""
         track = self.truth if self.with_truth else self.odom
-        return float(math.hypot(*(track[-1][:2] - track[0][:2])))
+        return math.hypot(track[-3] - track[0], track[-2] - track[1])
+
+    @staticmethod
+    def column(values: array[Any], dtype: type, width: int = 1) -> NDArray[Any]:
+        """A recorded column as a fresh numpy array (``(N, width)`` when ``width > 1``)."""
+        out: NDArray[Any] = np.zeros(0, dtype)
+        if len(values):
+            out = np.frombuffer(values, dtype=dtype).copy()
+        return out.reshape(-1, width) if width > 1 else out
 
 
 def _egocentric_map(mapper: Mapper, seen: FloatArray) -> tuple[FloatArray, int]:
-    """The mapper's map surfaces near it, relative to its own pose, and its surface count."""
-    segments = mapper.global_map().segments
+    """The mapper's map surfaces near it, relative to its own pose, and its surface count.
+
+    A map that keeps every view (``IntegratedMap``: the naive and truth mappers) is read
+    block by block, not copied whole: a copy per stop made the memory of driving follow
+    the map's size (the same surfaces, in the same order)."""
     reach = float(np.max(np.hypot(seen[:, 0], seen[:, 1]), initial=0.0)) + 1.0
-    return in_robot_frame(mapper.pose().as_array(), segments, reach), len(segments)
+    pose = mapper.pose().as_array()
+    stored = getattr(mapper, "map", None)
+    # (only where global_map is ViewIntegrator's: a subclass may answer otherwise)
+    plain = isinstance(mapper, ViewIntegrator) and (
+        type(mapper).global_map is ViewIntegrator.global_map
+    )
+    if plain and isinstance(stored, IntegratedMap):
+        near = [in_robot_frame(pose, segments, reach) for segments, _ in stored.blocks()]
+        return (np.vstack(near) if near else np.zeros((0, 4))), len(stored)
+    segments = mapper.global_map().segments
+    return in_robot_frame(pose, segments, reach), len(segments)
 
 
 def _estimate(mapper: Mapper) -> tuple[FloatArray, FloatArray]:
@@ -294,7 +323,7 @@ def drive_mappers(
 
     def capture() -> Stop:
         estimates = {name: _estimate(m) for name, m in mappers.items()}
-        row, travelled = len(rec.stamps) - 1, rec.travelled[-1]
+        row, travelled = len(rec) - 1, rec.travelled[-1]
         seen = rec.seen_window(ego.grid_m)
         if seen is None:
             return Stop(row, travelled, estimates)
@@ -302,7 +331,7 @@ def drive_mappers(
         if walls is None:
             return Stop(row, travelled, estimates, seen, maps)
         # Scored now; the window and the map copies are dropped with this frame.
-        scores = egocentric_qualities(seen, maps, walls, rec.truth[-1], ego)
+        scores = egocentric_qualities(seen, maps, walls, rec.last_truth, ego)
         return Stop(row, travelled, estimates, egocentric=scores)
 
     def stop_here() -> None:
@@ -311,7 +340,7 @@ def drive_mappers(
         stops.append(capture())
 
     stream = iter(frames)
-    while max_frames is None or len(rec.stamps) < max_frames:
+    while max_frames is None or len(rec) < max_frames:
         t0 = time.perf_counter_ns()
         frame = next(stream, None)
         if frame is None:
@@ -351,21 +380,20 @@ def drive_mappers(
             stop_here()
         if on_frame is not None:
             on_frame(frame, rec.travelled[-1])
-    if not rec.stamps:
+    if not len(rec):
         raise InputError(f"no frames to map: {source} has no laser scans")
-    if params.include_last and (not stops or stops[-1].row != len(rec.stamps) - 1):
+    if params.include_last and (not stops or stops[-1].row != len(rec) - 1):
         stop_here()
-    final = stops[-1] if stops and stops[-1].row == len(rec.stamps) - 1 else capture()
-    n = len(rec.stamps)
-    truth = np.asarray(rec.truth, dtype=np.float64).reshape(n, 3) if rec.with_truth else None
+    final = stops[-1] if stops and stops[-1].row == len(rec) - 1 else capture()
+    truth = rec.column(rec.truth, np.float64, 3) if rec.with_truth else None
     seen = np.vstack(list(rec.recent)) if rec.with_truth and rec.recent else None
     return Trace(
-        frame_indices=np.asarray(rec.indices, dtype=np.int64),
-        timestamps=np.asarray(rec.stamps, dtype=np.float64),
-        odom_poses=np.asarray(rec.odom, dtype=np.float64).reshape(n, 3),
+        frame_indices=rec.column(rec.indices, np.int64),
+        timestamps=rec.column(rec.stamps, np.float64),
+        odom_poses=rec.column(rec.odom, np.float64, 3),
         true_poses=truth,
-        collided=np.asarray(rec.collided, dtype=bool),
-        travelled_m=np.asarray(rec.travelled, dtype=np.float64),
+        collided=rec.column(rec.collided, np.int8).astype(bool),
+        travelled_m=rec.column(rec.travelled, np.float64),
         seen_points=seen,
         stops=stops,
         mappers=mappers,

@@ -6,7 +6,10 @@ works headless and in threads; matplotlib is imported inside the functions.
 
 from __future__ import annotations
 
+import gc
 import io
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -15,7 +18,15 @@ from numpy.typing import ArrayLike, NDArray
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["colour_buckets", "line_segments", "nan_lines", "new_figure", "png_bytes"]
+__all__ = [
+    "colour_buckets",
+    "figure_batch",
+    "line_segments",
+    "nan_lines",
+    "new_figure",
+    "png_bytes",
+    "release_figure",
+]
 
 
 Layout = Literal["constrained", "compressed", "tight"] | None
@@ -84,8 +95,49 @@ def colour_buckets(
     return order, np.r_[starts, len(keys)].astype(np.intp), v[order[starts]]
 
 
-def png_bytes(fig: Figure, dpi: float) -> bytes:
-    """``fig`` saved as PNG, in memory."""
+def png_bytes(fig: Figure, dpi: float, *, release: bool = True) -> bytes:
+    """``fig`` saved as PNG, in memory; then (``release``, the default) emptied with
+    ``release_figure``, as every figure here is drawn once."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
+    if release:
+        release_figure(fig)
+        if _batches:
+            gc.collect()  # only what was made since figure_batch began: see there
     return buf.getvalue()
+
+
+_batches: list[None] = []  # open figure_batch contexts (a list: nested or in threads)
+
+
+@contextmanager
+def figure_batch() -> Iterator[None]:
+    """Draw several figures: each one's garbage is collected as soon as it is saved.
+
+    A released figure still leaves its axes, ticks and texts to the cyclic collector,
+    which runs a full collection rarely: a run's dozen figures piled up ~11 MB at its
+    memory peak. Collecting after each is cheap here because the objects that existed
+    before the batch are frozen (``gc.freeze``) and not traversed again: ~10 ms a figure,
+    not ~150 ms for the whole heap of a run."""
+    if not _batches:
+        gc.freeze()
+    _batches.append(None)
+    try:
+        yield
+    finally:
+        _batches.pop()
+        if not _batches:
+            gc.unfreeze()
+
+
+def release_figure(fig: Figure) -> None:
+    """Free what a saved figure holds: its artists (``Figure.clear``) and its Agg canvas,
+    whose renderer keeps the whole RGBA buffer (8 MB for the 4-panel overview at 100 dpi).
+
+    A figure is a web of reference cycles (figure, axes, artists, canvas), so dropping it
+    leaves all of that to the cyclic garbage collector, which may run figures later; a run
+    drawing a dozen figures held them all at its memory peak."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    fig.clear()
+    FigureCanvasBase(fig)  # the figure's canvas now: the Agg one and its buffer are freed

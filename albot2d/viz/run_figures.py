@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from albot2d.geometry import transform_segments
 from albot2d.mapping.protocol import ViewBasedMapper
-from albot2d.viz._figure import new_figure, png_bytes
+from albot2d.viz._figure import figure_batch, new_figure, png_bytes
 from albot2d.viz.maps import (
     PANEL_IN,
     START_COLOR,
@@ -334,6 +334,11 @@ def render_experiment_figures(
     result: ExperimentResult, *, dpi: int = DEFAULT_DPI
 ) -> dict[str, bytes]:
     """Every figure of a run or replay, as ``{file name: PNG bytes}``."""
+    with figure_batch():
+        return _render_all(result, dpi)
+
+
+def _render_all(result: ExperimentResult, dpi: int) -> dict[str, bytes]:
     from albot2d.evaluation.scoring import route_of
 
     out: dict[str, bytes] = {}
