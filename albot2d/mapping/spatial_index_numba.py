@@ -130,57 +130,47 @@ def remove_kernel(ids, segs, cell_m, keys, heads, node_id, node_next, meta):
     return removed
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _walk_cell(node, node_id, node_next, out, j, write):
+    """Counts a cell's list from ``node`` on, writing its ids to ``out[j:]`` if ``write``."""
+    while node >= 0:
+        if write:
+            out[j] = node_id[node]
+        j += 1
+        node = node_next[node]
+    return j
+
+
+@njit(cache=True, nogil=True)
+def _walk_box(x0, y0, x1, y1, keys, heads, node_id, node_next, meta, out, write):
+    """Counts the ids indexed in the cells ``x0…x1`` × ``y0…y1`` (with repeats), writing
+    them to ``out`` if ``write``: one walk to size ``out``, the same walk to fill it."""
+    j = 0
+    if (x1 - x0 + 1) * (y1 - y0 + 1) > meta[0]:  # a box wider than the map: scan the table
+        for s in range(len(keys)):
+            k = keys[s]
+            if k == _EMPTY:
+                continue
+            ix = k >> np.int64(32)
+            iy = np.int64(np.int32(k & _MASK))
+            if x0 <= ix <= x1 and y0 <= iy <= y1:
+                j = _walk_cell(heads[s], node_id, node_next, out, j, write)
+    else:
+        for ix in range(x0, x1 + 1):
+            for iy in range(y0, y1 + 1):
+                s = _find(keys, _key(ix, iy))
+                if s >= 0:
+                    j = _walk_cell(heads[s], node_id, node_next, out, j, write)
+    return j
+
+
 @njit(cache=True, nogil=True)
 def query_kernel(x0, y0, x1, y1, keys, heads, node_id, node_next, meta):
     """Sorted distinct ids indexed in the cells ``x0…x1`` × ``y0…y1``."""
-    n_cells = (x1 - x0 + 1) * (y1 - y0 + 1)
-    count = 0
-    if n_cells > meta[0]:  # a box wider than the map: scan the table
-        for s in range(len(keys)):
-            k = keys[s]
-            if k == _EMPTY:
-                continue
-            ix = k >> np.int64(32)
-            iy = np.int64(np.int32(k & _MASK))
-            if x0 <= ix <= x1 and y0 <= iy <= y1:
-                node = heads[s]
-                while node >= 0:
-                    count += 1
-                    node = node_next[node]
-    else:
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                s = _find(keys, _key(ix, iy))
-                if s >= 0:
-                    node = heads[s]
-                    while node >= 0:
-                        count += 1
-                        node = node_next[node]
+    none = np.empty(0, np.int64)
+    count = _walk_box(x0, y0, x1, y1, keys, heads, node_id, node_next, meta, none, False)
     out = np.empty(count, np.int64)
-    j = 0
-    if n_cells > meta[0]:
-        for s in range(len(keys)):
-            k = keys[s]
-            if k == _EMPTY:
-                continue
-            ix = k >> np.int64(32)
-            iy = np.int64(np.int32(k & _MASK))
-            if x0 <= ix <= x1 and y0 <= iy <= y1:
-                node = heads[s]
-                while node >= 0:
-                    out[j] = node_id[node]
-                    j += 1
-                    node = node_next[node]
-    else:
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                s = _find(keys, _key(ix, iy))
-                if s >= 0:
-                    node = heads[s]
-                    while node >= 0:
-                        out[j] = node_id[node]
-                        j += 1
-                        node = node_next[node]
+    _walk_box(x0, y0, x1, y1, keys, heads, node_id, node_next, meta, out, True)
     out.sort()
     m = 0
     for i in range(count):
