@@ -195,25 +195,6 @@ class Trace:
         return self.true_poses is not None
 
 
-class _Hits:
-    """One frame's laser hits in the world frame, transformed when first read: the window
-    and the last views are read only at stops and at the end, so transforming every
-    frame's scan as it came (6 % of a fuzzing episode) was mostly wasted."""
-
-    __slots__ = ("_points", "_source")
-
-    def __init__(self, pose: FloatArray, scan: Scan) -> None:
-        self._source: tuple[FloatArray, Scan] | None = (pose, scan)
-        self._points: FloatArray | None = None
-
-    def points(self) -> FloatArray:
-        if self._source is not None:
-            pose, scan = self._source
-            self._points, self._source = transform_points(pose, scan.points()), None
-        assert self._points is not None  # computed above on the first read
-        return self._points
-
-
 class _Recorder:
     """Accumulates the per-frame rows of a Trace, in flat typed arrays (~70 bytes a frame;
     a list of small arrays and Python numbers per column cost ~400)."""
@@ -225,9 +206,9 @@ class _Recorder:
         self.truth = array("d")
         self.collided = array("b")
         self.travelled = array("d")
-        self.recent: deque[_Hits] = deque(maxlen=last_k_views)
+        self.recent: deque[FloatArray] = deque(maxlen=last_k_views)
         self.window_m = window_m
-        self.window: deque[tuple[float, _Hits]] = deque()
+        self.window: deque[tuple[float, FloatArray]] = deque()
         self.with_truth: bool | None = None
         self.last_truth = np.zeros(3)
 
@@ -255,7 +236,7 @@ class _Recorder:
             pose = frame.true_pose.as_array()
             self.truth.extend(pose.tolist())
             self.last_truth = pose
-            hits = _Hits(pose, frame.scan)
+            hits = transform_points(pose, frame.scan.points())
             self.recent.append(hits)
             self.window.append((self.travelled[-1], hits))
             while self.window and self.window[0][0] < self.travelled[-1] - self.window_m:
@@ -265,8 +246,7 @@ class _Recorder:
         """The last window's laser hits relative to the true pose now (None without truth)."""
         if not self.with_truth or not self.window:
             return None
-        points = np.vstack([h.points() for _, h in self.window])
-        return seen_window_local(points, self.last_truth, grid_m)
+        return seen_window_local(np.vstack([h for _, h in self.window]), self.last_truth, grid_m)
 
     def reference_distance(self) -> float:
         """Straight-line distance from the start now (truth if known, else odometry)."""
@@ -406,7 +386,7 @@ def drive_mappers(
         stop_here()
     final = stops[-1] if stops and stops[-1].row == len(rec) - 1 else capture()
     truth = rec.column(rec.truth, np.float64, 3) if rec.with_truth else None
-    seen = np.vstack([h.points() for h in rec.recent]) if rec.with_truth and rec.recent else None
+    seen = np.vstack(list(rec.recent)) if rec.with_truth and rec.recent else None
     return Trace(
         frame_indices=rec.column(rec.indices, np.int64),
         timestamps=rec.column(rec.stamps, np.float64),
