@@ -9,7 +9,9 @@ count are the cost per view, side by side in one run:
 - ``scan_odometry``: surface extraction, one KISS-ICP registration per view (181 beams
   lifted to 3 layers), one map insert;
 - ``slam``: the same front end, plus keyframes, proximity loop candidates verified by
-  registering local maps, and Levenberg–Marquardt on the GTSAM pose graph.
+  registering local maps, and Levenberg–Marquardt on the GTSAM pose graph;
+- ``slam_gnc``: the same, every registration-verified closure admitted and the graph
+  solved by GNC (``PoseGraphParams(optimizer="gnc")``, ``LoopClosureParams(gate="none")``).
 """
 
 from __future__ import annotations
@@ -21,7 +23,9 @@ import pytest
 
 from albot2d.frames import Frame
 from albot2d.mapping import Albot1, Mapper
-from albot2d.mapping.slam import LoopClosingSLAM, ScanMatchingSLAM
+from albot2d.mapping.slam import LoopClosingSLAM, ScanMatchingSLAM, SlamParams
+from albot2d.mapping.slam_graph import PoseGraphParams
+from albot2d.mapping.slam_loops import LoopClosureParams
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
 from worldgen import plan_tour
@@ -46,9 +50,16 @@ def map_all(factory: Callable[[], Mapper], frames: list[Frame]) -> Mapper:
     return mapper
 
 
+def slam_gnc() -> LoopClosingSLAM:
+    return LoopClosingSLAM(SlamParams(loops=LoopClosureParams(gate="none"),
+                                      graph=PoseGraphParams(optimizer="gnc")))  # fmt: skip
+
+
 @pytest.mark.benchmark(group="slam-vs-albot1-per-loop")
 @pytest.mark.parametrize(
-    "factory", [Albot1, ScanMatchingSLAM, LoopClosingSLAM], ids=["albot1", "scan_odometry", "slam"]
+    "factory",
+    [Albot1, ScanMatchingSLAM, LoopClosingSLAM, slam_gnc],
+    ids=["albot1", "scan_odometry", "slam", "slam_gnc"],
 )
 def test_cost_of_one_loop(
     benchmark: Any, factory: Callable[[], Mapper], frames: list[Frame]

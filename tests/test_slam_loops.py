@@ -18,7 +18,7 @@ from albot2d.frames import Frame
 from albot2d.geometry import between_arrays, compose_arrays
 from albot2d.mapping import Mapper
 from albot2d.mapping.registry import BUILTIN_MAPPERS
-from albot2d.mapping.slam import LoopClosingSLAM, ScanMatchingSLAM
+from albot2d.mapping.slam import LoopClosingSLAM, ScanMatchingSLAM, SlamParams
 from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams
 from albot2d.mapping.slam_loops import LoopClosureParams, registration_information
 from tests.runs import map_frames, office_loop
@@ -130,6 +130,76 @@ def test_robust_kernel_limits_a_false_closure_that_got_through(extra: None) -> N
     robust_shift = np.hypot(*(robust[:, :2] - clean[:, :2]).T).max()
     plain_shift = np.hypot(*(plain[:, :2] - clean[:, :2]).T).max()
     assert robust_shift < 0.5 < plain_shift
+
+
+@pytest.mark.parametrize("loss", ["tls", "gm"])
+def test_gnc_drops_false_closures_and_keeps_true_ones(extra: None, loss: str) -> None:
+    """A square of 10 m sides driven twice (80 keyframes), odometry drifting 0.2° per
+    keyframe (8° a lap, the size of the MIT log's big-loop corrections); ten true closures
+    from the second lap to the first, three false ones (a keyframe claimed to be one
+    10–35 m away). GNC, with the chain as known inliers, weighs the false closures to ~0
+    and keeps the true ones, so its result is the one without the false closures; without
+    a robust kernel Levenberg–Marquardt is bent by them."""
+    bias = np.array([0.0, 0.0, np.radians(0.2)])
+    motions = [np.array([1.0, 0.0, np.pi / 2 if (k + 1) % 10 == 0 else 0.0]) for k in range(80)]
+    truth = np.zeros((80, 3))
+    for k in range(1, 80):
+        truth[k] = compose_arrays(truth[k - 1], motions[k - 1])
+    true_loops = [(k, k - 40) for k in range(40, 80, 4)]
+    false_loops = [(50, 15), (65, 42), (75, 53)]
+
+    def two_laps(params: PoseGraphParams, loops: list[tuple[int, int]]) -> PoseGraph:
+        graph = PoseGraph(params)
+        graph.add_keyframe(None, np.zeros(3))
+        for m in motions[:-1]:
+            graph.add_keyframe(m + bias, compose_arrays(graph.estimate[-1], m + bias), m + bias)
+        for i, j in true_loops:
+            graph.add_loop(i, j, between_arrays(truth[i], truth[j]))
+        for i, j in loops:
+            graph.add_loop(i, j, np.zeros(3))  # "keyframe j is keyframe i"
+        assert graph.optimise()
+        return graph
+
+    gnc_params = PoseGraphParams(optimizer="gnc", gnc_loss=loss)
+    gnc = two_laps(gnc_params, false_loops)
+    weights = gnc.loop_weights
+    assert np.all(weights[-3:] < 0.05)
+    # TLS: exactly in or out; Geman–McClure's weights are smooth, < 1 at any residual
+    assert np.all(weights[:-3] > (0.99 if loss == "tls" else 0.8))
+    clean = two_laps(gnc_params, []).estimate
+    assert np.hypot(*(gnc.estimate[:, :2] - clean[:, :2]).T).max() < 0.01
+    plain = two_laps(PoseGraphParams(loop_kernel="none"), false_loops).estimate
+    assert np.hypot(*(plain[:, :2] - clean[:, :2]).T).max() > 1.0
+    # and the true closures did their work: the 16° of drift at the end is mostly gone
+    assert np.degrees(abs(between_arrays(truth[79], gnc.estimate[79])[2])) < 4.0
+
+
+def test_gnc_mapper_weighs_an_injected_false_closure_to_zero(
+    extra: None, frames: list[Frame]
+) -> None:
+    """The office loop with every registration-verified candidate admitted
+    (``gate="none"``) and GNC deciding: the loop closes (end error below the front end's);
+    a false closure forced into the graph (keyframe ``i`` is claimed to be a keyframe 6 m
+    away) gets weight ~0 and leaves the end pose where it was."""
+    params = SlamParams(loops=LoopClosureParams(gate="none"),
+                        graph=PoseGraphParams(optimizer="gnc"))  # fmt: skip
+    slam = map_frames(LoopClosingSLAM(params), frames)
+    stats = slam.slam_stats()
+    assert stats["loop_closures_accepted"] >= 1
+    assert stats["loop_closures_down_weighted"] == int(np.sum(slam.graph.loop_weights < 0.5))
+    front = end_pose_error(frames, map_frames(ScanMatchingSLAM(), frames).trajectory())
+    closed = end_pose_error(frames, slam.trajectory())
+    assert closed[0] < front[0]
+    truth, rows = truth_of(frames), np.array(slam.keyframe_rows)
+    kf_truth = truth[rows]
+    i = len(rows) - 1
+    far = np.flatnonzero(np.hypot(*(kf_truth[:, :2] - kf_truth[i, :2]).T) > 6.0)
+    j = int(far[len(far) // 2])
+    slam.graph.add_loop(i, j, np.zeros(3))
+    assert slam.graph.optimise()
+    assert slam.graph.loop_weights[-1] < 0.05
+    after = end_pose_error(frames, slam.trajectory())
+    assert abs(after[0] - closed[0]) < 0.05 and abs(after[1] - closed[1]) < 0.5
 
 
 def test_relative_covariance_is_the_chain_propagated(extra: None) -> None:
@@ -258,6 +328,12 @@ def test_bad_loop_params_name_the_field() -> None:
         LoopClosureParams(gate_chi2=0.0)
     with pytest.raises(InputError, match="closure_spacing_m"):
         LoopClosureParams(closure_spacing_m=-1.0)
+    with pytest.raises(InputError, match="optimizer"):
+        PoseGraphParams(optimizer="dogleg-ish")
+    with pytest.raises(InputError, match="gnc_loss"):
+        PoseGraphParams(gnc_loss="cauchy")
+    with pytest.raises(InputError, match="gnc_inlier_probability"):
+        PoseGraphParams(gnc_inlier_probability=1.0)
 
 
 def test_missing_gtsam_is_one_clean_error(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -208,15 +208,20 @@ class LoopClosingSLAM:
 
     # -- loop closing ----------------------------------------------------------------------
     def slam_stats(self) -> dict[str, int]:
-        """Keyframes, loop-closure candidates verified / accepted / rejected, optimisations."""
+        """Keyframes, loop-closure candidates verified / accepted / rejected, optimisations;
+        with GNC also the accepted closures it down-weighted (weight < 0.5)."""
         accepted = sum(c.accepted for c in self.checks)
-        return {
+        stats = {
             "keyframes": len(self._kf_fe),
             "loop_candidates": len(self.checks),
             "loop_closures_accepted": accepted,
             "loop_closures_rejected": len(self.checks) - accepted,
             "optimisations": self.graph.optimisations,
         }
+        if self.params.graph.optimizer == "gnc":
+            # accepted closures GNC weighs as outliers in the last optimisation
+            stats["loop_closures_down_weighted"] = int(np.sum(self.graph.loop_weights < 0.5))
+        return stats
 
     def verify_closure(
         self, i: int, j: int, guess: NDArray[np.float64] | None = None

@@ -12,7 +12,12 @@ whole map.
 
 Optimisation is batch Levenberg–Marquardt from the current estimate, run when a closure
 was added and every ``optimise_every`` keyframes (between runs a new keyframe is placed by
-composing the front end's motion onto the latest estimate).
+composing the front end's motion onto the latest estimate). ``optimizer="gnc"`` runs
+Graduated Non-Convexity instead (Yang et al. 2020, GTSAM's ``GncLMOptimizer``): the chain
+(prior, scan-matching and wheel factors) is known inliers, every closure a candidate whose
+weight GNC decides jointly with all the others under a truncated least squares (or
+Geman–McClure) loss; a closure is then Gaussian, as GNC replaces robust kernels by its
+own (GTSAM drops a factor's ``Robust`` wrapper, so the chain is Gaussian too).
 """
 
 from __future__ import annotations
@@ -29,6 +34,8 @@ from albot2d.validation import check_non_negative, check_positive, check_positiv
 __all__ = ["MISSING_GTSAM", "PoseGraph", "PoseGraphParams"]
 
 KERNELS = ("cauchy", "huber", "none")
+OPTIMIZERS = ("lm", "gnc")
+GNC_LOSSES = ("tls", "gm")
 MISSING_GTSAM = "the slam mapper needs the optional extra: pip install 'albot2d[slam]' (gtsam)"
 
 
@@ -53,6 +60,12 @@ class PoseGraphParams:
       width ``loop_kernel_width`` (in sigmas).
     - ``max_iterations`` / ``relative_error_tol``: Levenberg–Marquardt stopping rules.
     - ``optimise_every``: keyframes between optimisations when no closure asks for one.
+    - ``optimizer``: ``"lm"`` (Levenberg–Marquardt, closures under ``loop_kernel``) or
+      ``"gnc"`` (Graduated Non-Convexity around Levenberg–Marquardt: the chain is known
+      inliers, the closures are weighed jointly; ``loop_kernel`` is then unused);
+      ``gnc_loss``: ``"tls"`` (truncated least squares) or ``"gm"`` (Geman–McClure);
+      ``gnc_inlier_probability``: a closure is an inlier while its cost is below the χ²₃
+      quantile at this probability (GTSAM ``setInlierCostThresholdsAtProbability``).
     """
 
     odom_sigma_m: float = 0.02
@@ -77,6 +90,9 @@ class PoseGraphParams:
     max_iterations: int = 100
     relative_error_tol: float = 1e-6
     optimise_every: int = 10
+    optimizer: str = "lm"
+    gnc_loss: str = "tls"
+    gnc_inlier_probability: float = 0.99
 
     def __post_init__(self) -> None:
         check_positive(self, "odom_sigma_m", "odom_sigma_deg", "loop_sigma_m", "loop_sigma_deg",
@@ -87,10 +103,15 @@ class PoseGraphParams:
                            "wheel_sigma_m_per_m", "wheel_sigma_deg_per_m",
                            "wheel_sigma_deg_per_rad")  # fmt: skip
         check_positive_int(self, "max_iterations", "optimise_every")
-        for name in ("loop_kernel", "odom_kernel", "wheel_kernel"):
-            if getattr(self, name) not in KERNELS:
+        if not 0.0 < self.gnc_inlier_probability < 1.0:
+            raise InputError("PoseGraphParams.gnc_inlier_probability must be in (0, 1), "
+                             f"got {self.gnc_inlier_probability!r}")  # fmt: skip
+        choices = [(name, KERNELS) for name in ("loop_kernel", "odom_kernel", "wheel_kernel")]
+        choices += [("optimizer", OPTIMIZERS), ("gnc_loss", GNC_LOSSES)]
+        for name, allowed in choices:
+            if getattr(self, name) not in allowed:
                 raise InputError(
-                    f"PoseGraphParams.{name} must be one of {', '.join(KERNELS)}, "
+                    f"PoseGraphParams.{name} must be one of {', '.join(allowed)}, "
                     f"got {getattr(self, name)!r}"
                 )
 
@@ -108,6 +129,8 @@ class PoseGraph:
         self._graph: Any = gtsam.NonlinearFactorGraph()
         self._estimate = np.zeros((0, 3))
         self.loops: list[tuple[int, int]] = []
+        self._loop_factors: list[int] = []  # each closure's factor index in the graph
+        self._loop_weights = np.ones(0)
         self.optimisations = 0
         self._pending = False
         self._since = 0
@@ -188,10 +211,20 @@ class PoseGraph:
         its shape when ``loop_information`` is on; see ``loop_noise``."""
         g, p = self._gtsam, self.params
         noise = self.loop_noise(information)
-        noise = self._robust(p.loop_kernel, p.loop_kernel_width, noise)
+        if p.optimizer == "lm":
+            noise = self._robust(p.loop_kernel, p.loop_kernel_width, noise)
+        self._loop_factors.append(int(self._graph.size()))
         self._graph.add(g.BetweenFactorPose2(i, j, g.Pose2(*relative), noise))
         self.loops.append((i, j))
+        self._loop_weights = np.append(self._loop_weights, 1.0)
         self._pending = True
+
+    @property
+    def loop_weights(self) -> NDArray[np.float64]:
+        """Each closure's weight (order of ``loops``) after the last optimisation: GNC's
+        (0: rejected as an outlier, 1: inlier); 1 for every closure under ``"lm"`` and for
+        a closure not yet optimised."""
+        return self._loop_weights.copy()
 
     def loop_noise(self, information: NDArray[np.float64] | None) -> Any:
         """A closure's Gaussian noise model (``loop_information_matrix``)."""
@@ -265,7 +298,10 @@ class PoseGraph:
         lm = g.LevenbergMarquardtParams()
         lm.setMaxIterations(p.max_iterations)
         lm.setRelativeErrorTol(p.relative_error_tol)
-        result = g.LevenbergMarquardtOptimizer(self._graph, values, lm).optimize()
+        if p.optimizer == "gnc" and self._loop_factors:
+            result = self._optimise_gnc(values, lm)
+        else:
+            result = g.LevenbergMarquardtOptimizer(self._graph, values, lm).optimize()
         out = np.empty_like(self._estimate)
         for k in range(len(out)):
             pose = result.atPose2(k)
@@ -276,3 +312,18 @@ class PoseGraph:
         self._pending = False
         self._since = 0
         return True
+
+    def _optimise_gnc(self, values: Any, lm: Any) -> Any:
+        """GNC from the current estimate: every factor but the closures is a known inlier;
+        the closures' weights are kept (``loop_weights``)."""
+        g, p = self._gtsam, self.params
+        loops = set(self._loop_factors)
+        params = g.GncLMParams(lm)
+        params.setLossType(g.GncLossType.TLS if p.gnc_loss == "tls" else g.GncLossType.GM)
+        params.setKnownInliers([k for k in range(int(self._graph.size())) if k not in loops])
+        optimizer = g.GncLMOptimizer(self._graph, values, params)
+        optimizer.setInlierCostThresholdsAtProbability(p.gnc_inlier_probability)
+        result = optimizer.optimize()
+        weights = np.asarray(optimizer.getWeights(), dtype=np.float64)
+        self._loop_weights = weights[self._loop_factors]
+        return result

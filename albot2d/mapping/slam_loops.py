@@ -24,7 +24,9 @@ the closure is about the keyframe's own pose. The result is accepted only if
   room is rejected here, and after a long open stretch, where the graph itself says the
   heading may be several degrees off, a true closure is not. ``gate="fixed"`` is the
   older reading: a fixed drift allowance (``max_correction_m`` + ``max_correction_per_m``
-  × path since ``j``, ``max_correction_deg``), applied by the verifier itself.
+  × path since ``j``, ``max_correction_deg``), applied by the verifier itself;
+  ``gate="none"`` admits every registration-verified candidate and leaves the outlier
+  decision to the back end (GNC, ``slam_graph``).
 
 An accepted closure carries the point-to-line Hessian of the scan's registration
 (``registration_information``): the pose graph shapes the closure's information matrix by
@@ -59,7 +61,7 @@ __all__ = [
 ]
 
 
-GATES = ("chi2", "fixed")
+GATES = ("chi2", "fixed", "none")
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,8 +90,10 @@ class LoopClosureParams:
       other map (the part both saw: with a 180° scanner a corridor driven the other way is
       half new surfaces, neither evidence for nor against the match); None: all points.
     - ``gate``: ``"chi2"`` (the closure's innovation against the estimate's and its own
-      covariance, at most ``gate_chi2``: 16.27 is χ²₃ at 99.9 %) or ``"fixed"`` (the
-      allowance below).
+      covariance, at most ``gate_chi2``: 16.27 is χ²₃ at 99.9 %), ``"fixed"`` (the
+      allowance below) or ``"none"`` (every candidate that passes the fitness tests is
+      admitted: for a back end that weighs closures jointly, ``PoseGraphParams(optimizer=
+      "gnc")``).
     - ``max_correction_m`` + ``max_correction_per_m`` × path since ``j``, and
       ``max_correction_deg`` + ``max_correction_deg_per_m`` × that path: with
       ``gate="fixed"``, the largest change to the current relative estimate accepted.
