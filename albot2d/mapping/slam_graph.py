@@ -106,7 +106,9 @@ class PoseGraphParams:
         if not 0.0 < self.gnc_inlier_probability < 1.0:
             raise InputError("PoseGraphParams.gnc_inlier_probability must be in (0, 1), "
                              f"got {self.gnc_inlier_probability!r}")  # fmt: skip
-        choices = [(name, KERNELS) for name in ("loop_kernel", "odom_kernel", "wheel_kernel")]
+        choices: list[tuple[str, tuple[str, ...]]] = [
+            (name, KERNELS) for name in ("loop_kernel", "odom_kernel", "wheel_kernel")
+        ]
         choices += [("optimizer", OPTIMIZERS), ("gnc_loss", GNC_LOSSES)]
         for name, allowed in choices:
             if getattr(self, name) not in allowed:
