@@ -44,7 +44,10 @@ def test_extract_surfaces_speed(benchmark, n_beams: int, backend: str) -> None:
     surfaces = benchmark(extract_surfaces, scan, backend=backend)
     assert len(surfaces) >= 8
     numpy_view = extract_surfaces(scan, backend="numpy")
-    np.testing.assert_array_equal(surfaces.segments, numpy_view.segments)
+    # Equal to the numpy path within 1e-12 m, as tests/test_extraction_numba.py pins it:
+    # LLVM may fuse a corner intersection's multiply-adds (a last-bit difference).
+    np.testing.assert_array_equal(surfaces.beams, numpy_view.beams)
+    np.testing.assert_allclose(surfaces.segments, numpy_view.segments, rtol=0.0, atol=1e-12)
 
 
 def test_rtsv_speed(benchmark) -> None:
