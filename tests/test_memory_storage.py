@@ -93,15 +93,16 @@ def test_naive_mapper_on_real_frames_keeps_its_outputs(monkeypatch: pytest.Monke
 
 
 def test_region_labels_in_blocks_match_one_call(monkeypatch: pytest.MonkeyPatch) -> None:
-    from worldgen.regions import region_kind_at
+    from worldgen import regions
 
     world = build_world(RunSpec())
     rng = np.random.default_rng(3)
     xy = rng.uniform([0.0, 0.0], [world.width_m, world.height_m], (150, 2))
-    monkeypatch.setattr(updates, "_LABEL_BLOCK", 7)
+    monkeypatch.setattr(regions, "_BLOCK_POINTS", 7)  # the isovists in blocks of 7 points
     got = updates.region_labels(world, xy)
+    monkeypatch.setattr(regions, "_BLOCK_POINTS", 1 << 20)  # all points in one block
     assert got.dtype == np.dtype("<U8")
-    assert np.array_equal(got, region_kind_at(world, xy))
+    assert np.array_equal(got, regions.region_kind_at(world, xy))
     assert set(got) > {"outside"}  # some positions are inside: labels were computed
 
 

@@ -52,23 +52,12 @@ def albot1_update_flags(steps: Sequence[Any], frame_indices: ArrayLike) -> np.nd
     return flags
 
 
-# Positions per call of region_kind_at: its isovists are (positions x walls x rays in
-# each wall's span) arrays: 48 MB in its own blocks of 256 positions on the office world
-# (the default run's memory peak), 12 MB in blocks of 64 (~0.15 ms more per position).
-# Each position gets the same answer whatever the block.
-_LABEL_BLOCK = 64
-
-
 def region_labels(world: Any, true_xy: ArrayLike) -> np.ndarray:
-    """The region kind at each true position (``worldgen.regions.region_kind_at``),
-    labelled ``_LABEL_BLOCK`` positions at a time (bounded memory)."""
+    """The region kind at each true position (``worldgen.regions.region_kind_at``, whose
+    isovists are computed in blocks of points: bounded memory)."""
     from worldgen.regions import region_kind_at
 
-    xy = np.asarray(true_xy, dtype=np.float64).reshape(-1, 2)
-    if len(xy) <= _LABEL_BLOCK:
-        return region_kind_at(world, xy)
-    return np.concatenate([region_kind_at(world, xy[i : i + _LABEL_BLOCK])
-                           for i in range(0, len(xy), _LABEL_BLOCK)])  # fmt: skip
+    return region_kind_at(world, true_xy)
 
 
 def _summary(counts: list[int]) -> dict[str, float | int]:

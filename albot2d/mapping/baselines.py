@@ -54,12 +54,16 @@ class IntegratedMap:
         self._blocks: list[tuple[NDArray[np.float64], NDArray[np.int64]]] = []
         self._n = 0
         self._ends = array("q")  # surfaces stored after each update
-        self.n_updates = 0
         self.last_map_id: int | None = None
 
     def __len__(self) -> int:
         """Number of surfaces in the map."""
         return self._n
+
+    @property
+    def n_updates(self) -> int:
+        """Number of updates (``insert`` calls) so far."""
+        return len(self._ends)
 
     def insert(self, segments: NDArray[np.float64], map_id: int) -> None:
         """Add one update's surfaces (``(K, 4)``), all tagged ``map_id``."""
@@ -79,7 +83,6 @@ class IntegratedMap:
             block_ids[at : at + take] = map_id
             done += take
             self._n += take
-        self.n_updates += 1
         self._ends.append(self._n)
         self.last_map_id = map_id
 

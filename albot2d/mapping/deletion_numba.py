@@ -63,13 +63,26 @@ OUT, IN, UNSURE = 0, 1, 2
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _point_seg_dist(px, py, ax, ay, bx, by):
+def _offset_to_seg(px, py, ax, ay, bx, by):
+    """The vector from the point of segment ab nearest to p, to p."""
     dx, dy = bx - ax, by - ay
     den = dx * dx + dy * dy
     t = 0.0
     if den > 0.0:
         t = min(max(((px - ax) * dx + (py - ay) * dy) / den, 0.0), 1.0)
-    return np.hypot(px - (ax + t * dx), py - (ay + t * dy))
+    return px - (ax + t * dx), py - (ay + t * dy)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _point_seg_dist(px, py, ax, ay, bx, by):
+    ex, ey = _offset_to_seg(px, py, ax, ay, bx, by)
+    return np.hypot(ex, ey)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _point_seg_dist2(px, py, ax, ay, bx, by):
+    ex, ey = _offset_to_seg(px, py, ax, ay, bx, by)
+    return ex * ex + ey * ey
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -77,15 +90,21 @@ def _orient(ax, ay, bx, by, cx, cy):
     return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
 
 
-@njit(cache=True, nogil=True)
-def _seg_seg_dist(ax, ay, bx, by, cx, cy, dx, dy):
+@njit(cache=True, nogil=True, inline="always")
+def _cross_properly(ax, ay, bx, by, cx, cy, dx, dy):
+    """Segments ab and cd cross at a point interior to both (strict orientation signs)."""
     o1 = _orient(ax, ay, bx, by, cx, cy)
     o2 = _orient(ax, ay, bx, by, dx, dy)
     o3 = _orient(cx, cy, dx, dy, ax, ay)
     o4 = _orient(cx, cy, dx, dy, bx, by)
-    if ((o1 > 0.0 and o2 < 0.0) or (o1 < 0.0 and o2 > 0.0)) and (
+    return ((o1 > 0.0 and o2 < 0.0) or (o1 < 0.0 and o2 > 0.0)) and (
         (o3 > 0.0 and o4 < 0.0) or (o3 < 0.0 and o4 > 0.0)
-    ):
+    )
+
+
+@njit(cache=True, nogil=True)
+def _seg_seg_dist(ax, ay, bx, by, cx, cy, dx, dy):
+    if _cross_properly(ax, ay, bx, by, cx, cy, dx, dy):
         return 0.0
     return min(
         min(_point_seg_dist(ax, ay, cx, cy, dx, dy), _point_seg_dist(bx, by, cx, cy, dx, dy)),
@@ -107,17 +126,6 @@ def _inside(px, py, ring):
     return inside
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _point_seg_dist2(px, py, ax, ay, bx, by):
-    dx, dy = bx - ax, by - ay
-    den = dx * dx + dy * dy
-    t = 0.0
-    if den > 0.0:
-        t = min(max(((px - ax) * dx + (py - ay) * dy) / den, 0.0), 1.0)
-    ex, ey = px - (ax + t * dx), py - (ay + t * dy)
-    return ex * ex + ey * ey
-
-
 @njit(cache=True, nogil=True)
 def _near_polygon(ax, ay, bx, by, ring, lim):
     """Whether segment ab comes within ``lim`` of the simple polygon ``ring`` (inside
@@ -134,13 +142,7 @@ def _near_polygon(ax, ay, bx, by, ring, lim):
         if (min(cx, dx) - sx1 >= lim or sx0 - max(cx, dx) >= lim
                 or min(cy, dy) - sy1 >= lim or sy0 - max(cy, dy) >= lim):  # fmt: skip
             continue
-        o1 = _orient(ax, ay, bx, by, cx, cy)
-        o2 = _orient(ax, ay, bx, by, dx, dy)
-        o3 = _orient(cx, cy, dx, dy, ax, ay)
-        o4 = _orient(cx, cy, dx, dy, bx, by)
-        if ((o1 > 0.0 and o2 < 0.0) or (o1 < 0.0 and o2 > 0.0)) and (
-            (o3 > 0.0 and o4 < 0.0) or (o3 < 0.0 and o4 > 0.0)
-        ):
+        if _cross_properly(ax, ay, bx, by, cx, cy, dx, dy):
             return True
         if (_point_seg_dist2(ax, ay, cx, cy, dx, dy) < lim2
                 or _point_seg_dist2(bx, by, cx, cy, dx, dy) < lim2
