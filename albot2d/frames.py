@@ -8,7 +8,9 @@ real CARMEN logs both become streams of ``Frame``s, so every mapper runs on both
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -118,9 +120,49 @@ class Frame:
             poses = readonly(self.obstacle_poses, np.float64).reshape(-1, 3)
             object.__setattr__(self, "obstacle_poses", poses)
 
+    def world_hits(self) -> FloatArray:
+        """``(k, 2)`` read-only: the scan's valid hits in the world frame, by the laser mount
+        and then ``true_pose`` (exactly ``transform_points(true_pose, scan.points())``), kept
+        with the frame: the run's trace and the laser-hit check both read them."""
+        got = self.__dict__.get("_world_hits")
+        if got is not None:
+            return got  # type: ignore[no-any-return]
+        true = self.true_pose
+        if true is None:
+            raise ValueError(f"frame {self.index} has no true pose: no world hits")
+        kernel = _hits_kernel()
+        scan = self.scan
+        if kernel is None:
+            got = transform_points(true.as_array(), scan.points())
+        else:
+            mount = scan.laser_pose
+            got = kernel(
+                scan.ranges, np.cos(scan.angles), np.sin(scan.angles), scan.valid,
+                mount.x, mount.y, math.cos(mount.theta), math.sin(mount.theta),
+                true.x, true.y, math.cos(true.theta), math.sin(true.theta),
+            )  # fmt: skip
+        got.flags.writeable = False
+        object.__setattr__(self, "_world_hits", got)
+        return got
+
     def __repr__(self) -> str:
         return (
             f"Frame(index={self.index}, timestamp={self.timestamp:.6g}, "
             f"odom_pose={self.odom_pose!r}, true_pose={self.true_pose!r}, "
             f"collided={self.collided}, scan={self.scan!r})"
         )
+
+
+_kernel: list[Callable[..., Any] | None] = []
+
+
+def _hits_kernel() -> Callable[..., Any] | None:
+    """``geometry.points_numba.hits_kernel`` when numba imports, else None."""
+    if not _kernel:
+        try:
+            from albot2d.geometry.points_numba import hits_kernel
+        except ImportError:
+            _kernel.append(None)
+        else:
+            _kernel.append(hits_kernel)
+    return _kernel[0]

@@ -291,57 +291,52 @@ class FrameChecker:
         if len(self._frames) >= self.batch_frames:
             self._check_batch()
 
-    def _hits(self, frames: list[Frame]) -> dict[str, FloatArray]:
-        """Every valid hit of ``frames``: its world point (the true pose applied to the
-        robot-frame point, as ``transform_points`` does it), range, tolerance, frame index,
-        laser origin, the world angles of its beam and its two neighbours (NaN past the
-        scan's ends) and the scan's maximum range."""
-        n = np.array([len(f.scan.ranges) for f in frames])
-        fid = np.repeat(np.arange(len(frames)), n)
+    def _hits(self, frames: list[Frame]) -> tuple[FloatArray, FloatArray, NDArray[np.intp]]:
+        """Every valid hit of ``frames``: its world point (``Frame.world_hits``: the true
+        pose applied to the robot-frame point, as ``transform_points`` does it), its range,
+        and its beam's row in the batch's concatenated scans."""
+        pts = np.vstack([f.world_hits() for f in frames])
         ranges = np.concatenate([f.scan.ranges for f in frames]).astype(np.float64, copy=False)
+        beams = np.flatnonzero(np.concatenate([f.scan.valid for f in frames]))
+        return pts, ranges[beams], beams
+
+    @staticmethod
+    def _beam_details(frames: list[Frame], beams: NDArray[np.intp]) -> dict[str, FloatArray]:
+        """For the batch's beams ``beams`` (rows of the concatenated scans; only the few
+        hits off every obstacle): frame index, laser origin, the world angles of the beam
+        and its two neighbours (NaN past the scan's ends) and the scan's maximum range."""
+        n = np.array([len(f.scan.ranges) for f in frames])
+        ends = np.cumsum(n)
+        fid = np.searchsorted(ends, beams, side="right")
         angles = np.concatenate([f.scan.angles for f in frames]).astype(np.float64, copy=False)
-        valid = np.concatenate([f.scan.valid for f in frames])
-        # Per frame: the true pose and the laser mount (x, y, cos, sin), the laser's world pose.
-        per = np.empty((len(frames), 11))
-        for i, f in enumerate(frames):
-            true, mount = f.true_pose, f.scan.laser_pose
-            assert true is not None  # checked in __call__
-            laser = true @ mount
-            per[i] = (true.x, true.y, math.cos(true.theta), math.sin(true.theta),
-                      mount.x, mount.y, math.cos(mount.theta), math.sin(mount.theta),
-                      laser.x, laser.y, laser.theta)  # fmt: skip
-        tx, ty, tc, ts, mx, my, mc, ms, lx, ly, lth = per[fid].T
-        world = lth + angles
-        last = np.cumsum(n) - 1
-        before, after = np.roll(world, 1), np.roll(world, -1)  # no neighbour past the ends
-        before[last + 1 - n], after[last] = np.nan, np.nan
-        k = np.flatnonzero(valid)
-        r, a = ranges[k], angles[k]
-        x, y = r * np.cos(a), r * np.sin(a)  # laser frame, then robot, then world
-        x, y = mx[k] + mc[k] * x - ms[k] * y, my[k] + ms[k] * x + mc[k] * y
-        x, y = tx[k] + tc[k] * x - ts[k] * y, ty[k] + ts[k] * x + tc[k] * y
-        index = np.array([f.index for f in frames], dtype=np.float64)
-        max_range = np.array([f.scan.max_range_m for f in frames], dtype=np.float64)
-        return {
-            "pts": np.column_stack([x, y]), "range": r, "tol": self.tolerance_m(r),
-            "frame": index[fid[k]], "origin": np.column_stack([lx[k], ly[k]]),
-            "angles": np.column_stack([world[k], before[k], after[k]]),
-            "max_range": max_range[fid[k]],
-        }  # fmt: skip
+        frame, max_range = np.empty(len(beams)), np.empty(len(beams))
+        origin, world = np.empty((len(beams), 2)), np.empty((len(beams), 3))
+        for row, (i, b) in enumerate(zip(fid.tolist(), beams.tolist(), strict=True)):
+            f = frames[i]
+            assert f.true_pose is not None  # checked in __call__
+            laser = f.true_pose @ f.scan.laser_pose
+            first, last = int(ends[i] - n[i]), int(ends[i] - 1)
+            frame[row], max_range[row] = f.index, f.scan.max_range_m
+            origin[row] = (laser.x, laser.y)
+            world[row] = (
+                laser.theta + angles[b],
+                laser.theta + angles[b - 1] if b > first else np.nan,
+                laser.theta + angles[b + 1] if b < last else np.nan,
+            )
+        return {"frame": frame, "origin": origin, "angles": world, "max_range": max_range}
 
     def _mixed_pixels(
-        self, hits: dict[str, FloatArray], rows: NDArray[np.intp]
+        self, details: dict[str, FloatArray], r: FloatArray, tol: FloatArray
     ) -> NDArray[np.bool_]:
-        """Which off-obstacle hits ``rows`` are mixed pixels of a true depth jump (see the
-        class)."""
+        """Which off-obstacle hits (their ``_beam_details``, ranges ``r`` and tolerances
+        ``tol``) are mixed pixels of a true depth jump (see the class)."""
         nz = self.noise
-        if nz.mixed_pixel_prob == 0.0 or len(rows) == 0:
-            return np.zeros(len(rows), dtype=bool)
-        exact = ray_ranges(hits["origin"][rows], hits["angles"][rows], self.segments)
-        exact[exact > hits["max_range"][rows, None]] = np.inf  # beyond the maximum range
-        r, tol = hits["range"][rows], hits["tol"][rows]
+        if nz.mixed_pixel_prob == 0.0 or len(r) == 0:
+            return np.zeros(len(r), dtype=bool)
+        exact = ray_ranges(details["origin"], details["angles"], self.segments)
+        exact[exact > details["max_range"][:, None]] = np.inf  # beyond the maximum range
         own = exact[:, 0]
-        mixed = np.zeros(len(rows), dtype=bool)
+        mixed = np.zeros(len(r), dtype=bool)
         for j in (1, 2):
             other = exact[:, j]
             with np.errstate(invalid="ignore"):
@@ -357,9 +352,9 @@ class FrameChecker:
     def _check_batch(self) -> None:
         if not self._frames:
             return
-        hits = self._hits(self._frames)
-        self._frames = []
-        pts, tol = hits["pts"], hits["tol"]
+        frames, self._frames = self._frames, []
+        pts, r, beams = self._hits(frames)
+        tol = self.tolerance_m(r)
         self.hits += len(pts)
         if len(pts) == 0:
             return
@@ -368,22 +363,27 @@ class FrameChecker:
             reach = float(tol.max())
             if self._grid is None or self._grid.reach_m < reach:
                 # Reach for the longest range the laser returns, so the grid is made once.
-                longest = float(self.tolerance_m(np.array([hits["max_range"].max()]))[0])
+                longest_m = max(f.scan.max_range_m for f in frames)
+                longest = float(self.tolerance_m(np.array([longest_m]))[0])
                 self._grid = SegmentGrid(self.segments, max(reach, longest))
             off = ~self._grid.within(pts, tol)
         suspects = np.flatnonzero(off)
-        mixed = self._mixed_pixels(hits, suspects)
+        if not len(suspects):
+            return
+        details = self._beam_details(frames, beams[suspects])
+        mixed = self._mixed_pixels(details, r[suspects], tol[suspects])
         self.mixed_pixels += int(mixed.sum())
         off[suspects[mixed]] = False
         if off.any():
             k = int(np.flatnonzero(off)[0])
+            frame = int(details["frame"][int(np.searchsorted(suspects, k))])
             dist = (
                 _nearest_distance(_segment_tree(self.segments), pts[k : k + 1])[0]
                 if len(self.segments)
                 else math.inf
             )
             msg = (
-                f"frame {int(hits['frame'][k])}: {int(off.sum())} valid hit(s) off every "
+                f"frame {frame}: {int(off.sum())} valid hit(s) off every "
                 f"obstacle (and not mixed pixels), e.g. ({pts[k, 0]:.3f}, {pts[k, 1]:.3f}) "
                 f"{dist:.3g} m away (tolerance {tol[k]:.3g} m)"
             )

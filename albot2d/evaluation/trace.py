@@ -49,7 +49,6 @@ from albot2d.evaluation.egocentric import (
     seen_window_local,
 )
 from albot2d.frames import Frame, Scan
-from albot2d.geometry import transform_points
 from albot2d.mapping.baselines import IntegratedMap, ViewIntegrator
 from albot2d.mapping.protocol import Mapper, StageTimer, takes_perceived_views
 from albot2d.perception import ExtractionParams, Surfaces, extract_surfaces
@@ -233,10 +232,10 @@ class _Recorder:
         self.odom.extend((odom.x, odom.y, odom.theta))
         self.collided.append(bool(frame.collided))
         if frame.true_pose is not None:
-            pose = frame.true_pose.as_array()
-            self.truth.extend(pose.tolist())
-            self.last_truth = pose
-            hits = transform_points(pose, frame.scan.points())
+            true = frame.true_pose
+            self.truth.extend((true.x, true.y, true.theta))
+            self.last_truth = true.as_array()
+            hits = frame.world_hits()
             self.recent.append(hits)
             self.window.append((self.travelled[-1], hits))
             while self.window and self.window[0][0] < self.travelled[-1] - self.window_m:

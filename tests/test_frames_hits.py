@@ -1,0 +1,60 @@
+"""``Frame.world_hits``: the compiled laser-hit transform equals ``Scan.points`` then
+``transform_points`` by the true pose bit for bit, is kept with the frame, and is refused
+for a frame without truth."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from albot2d.frames import Frame, Scan, _hits_kernel, beam_angles
+from albot2d.geometry import Pose, transform_points
+
+pytest.importorskip("numba")
+
+coords = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False)
+headings = st.floats(-10.0, 10.0, allow_nan=False)
+poses = st.builds(Pose, coords, coords, headings)
+
+
+@st.composite
+def scans(draw: st.DrawFn) -> Scan:
+    n = draw(st.sampled_from([2, 5, 181, 361]))
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    angles = beam_angles(n) + rng.normal(0.0, draw(st.sampled_from([0.0, 0.01])), n)
+    mount = Pose(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(-math.pi, math.pi))
+    return Scan(
+        ranges=rng.uniform(0.0, 30.0, n),
+        angles=angles,
+        valid=rng.random(n) < draw(st.sampled_from([0.0, 0.5, 1.0])),
+        max_range_m=30.0,
+        laser_pose=draw(st.sampled_from([Pose(), mount])),
+    )
+
+
+def _frame(scan: Scan, true: Pose | None) -> Frame:
+    return Frame(0, 0.0, scan, Pose(), Pose(), true_pose=true)
+
+
+@given(scans(), poses)
+def test_world_hits_are_the_numpy_transforms_bit_for_bit(scan: Scan, true: Pose) -> None:
+    assert _hits_kernel() is not None  # the compiled path is the one under test
+    want = transform_points(true.as_array(), scan.points())
+    got = _frame(scan, true).world_hits()
+    assert got.shape == want.shape == (int(scan.valid.sum()), 2)
+    np.testing.assert_array_equal(got, want)  # exact: same operations, same order
+
+
+def test_world_hits_are_kept_read_only_and_need_a_true_pose() -> None:
+    scan = Scan(np.full(181, 2.0), beam_angles(181), np.ones(181, bool), 30.0)
+    frame = _frame(scan, Pose(1.0, 2.0, 0.5))
+    hits = frame.world_hits()
+    assert frame.world_hits() is hits and not hits.flags.writeable
+    np.testing.assert_allclose(np.hypot(hits[:, 0] - 1.0, hits[:, 1] - 2.0), 2.0)
+    with pytest.raises(ValueError, match="frame 0 has no true pose"):
+        _frame(scan, None).world_hits()
