@@ -126,7 +126,7 @@ class Frame:
         with the frame: the run's trace and the laser-hit check both read them."""
         got = self.__dict__.get("_world_hits")
         if got is not None:
-            return got  # type: ignore[no-any-return]
+            return got
         true = self.true_pose
         if true is None:
             raise ValueError(f"frame {self.index} has no true pose: no world hits")
