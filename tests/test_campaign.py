@@ -416,3 +416,28 @@ def test_pinned_campaign_findings_now_pass(index: int, kind: str, run_seed: int)
     assert (spec.kind, spec.run_seed) == (kind, run_seed)  # still the episode that failed
     record = run_episode(spec).record
     assert record["status"] == "ok", record["violations"]
+
+
+def test_an_episode_runs_with_the_heap_frozen_and_hands_it_back() -> None:
+    """Episodes run with the caller's objects out of the collector's reach (campaign
+    ``_heap_frozen``), and the heap is as it was afterwards, frozen or not."""
+    import gc
+
+    from albot2d.evaluation.campaign import _heap_frozen
+
+    assert gc.get_freeze_count() == 0
+    with _heap_frozen():
+        frozen = gc.get_freeze_count()
+        cycle: list[object] = []
+        cycle.append(cycle)  # made inside: collected as usual
+        del cycle
+        assert gc.collect() >= 1
+    assert frozen > 1000 and gc.get_freeze_count() == 0
+    gc.freeze()  # someone else's freeze is left alone
+    try:
+        held = gc.get_freeze_count()
+        with _heap_frozen():
+            assert gc.get_freeze_count() == held
+        assert gc.get_freeze_count() == held
+    finally:
+        gc.unfreeze()

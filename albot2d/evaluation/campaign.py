@@ -27,6 +27,7 @@ written down, the second stops at once (the backend's workers are terminated); e
 from __future__ import annotations
 
 import contextlib
+import gc
 import json
 import os
 import signal
@@ -215,9 +216,32 @@ def _longest_first(indices: list[int], params: CampaignParams) -> list[int]:
 def _episode_task(params: dict[str, Any], index: int) -> EpisodeOutcome:
     """What a worker runs: everything is rebuilt from the parameters and the index."""
     try:
-        return run_episode(EpisodeSpec.draw(CampaignParams.from_dict(params), index))
+        with _heap_frozen():
+            return run_episode(EpisodeSpec.draw(CampaignParams.from_dict(params), index))
     except Exception as exc:  # still a finding, not a dead worker
         return _crash_outcome(params, index, exc)
+
+
+@contextlib.contextmanager
+def _heap_frozen() -> Iterator[None]:
+    """Run the body with the objects that exist already (modules, the caller's data) out of
+    the cyclic garbage collector's reach (``gc.freeze``), handed back after it
+    (``gc.unfreeze``); what the body makes is collected as usual.
+
+    An episode makes many short-lived containers, so the collector runs often, and each of
+    its full collections walked the whole heap: in a test session or a notebook, ~160,000
+    objects that an episode never touches (GC was 0.27 s of a 5.7 s, 20-episode campaign
+    in a pytest process; 0.10 s with the heap frozen). Where something else froze the heap
+    already, it is left as it is.
+    """
+    if gc.get_freeze_count():
+        yield
+        return
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()
 
 
 def read_campaign(out_dir: str | os.PathLike[str]) -> CampaignParams:
