@@ -96,3 +96,21 @@ def test_bounded_nearest_distance_equals_the_tree_bit_for_bit() -> None:
     assert (expected > 2.0).sum() > 1000 and (expected <= 0.5).sum() > 1000
     assert len(nearest_segment_distance_bounded(np.zeros((0, 2)), walls)) == 0
     assert np.isinf(nearest_segment_distance_bounded(pts[:3], np.zeros((0, 4)))).all()
+
+
+def test_within_a_tolerance_the_bounded_query_answers_as_the_tree() -> None:
+    """``beyond="inf"`` (completeness: only "within the tolerance" is asked) gives the
+    same verdict for every point as the tree's nearest distance, points at the tolerance
+    included, and inf only past it."""
+    rng = np.random.default_rng(9)
+    walls = random_map(rng, 300)
+    tol = 0.1
+    pts = np.vstack([sample_segments(walls, 0.05) + rng.normal(0.0, 0.1, (1, 2)),
+                     rng.uniform(-60.0, 60.0, (3000, 2))])  # fmt: skip
+    expected = nearest_segment_distance(pts, walls)
+    got = nearest_segment_distance_bounded(pts, walls, (tol,), beyond="inf")
+    np.testing.assert_array_equal(got <= tol, expected <= tol)
+    assert (expected <= tol).sum() > 1000 and (expected > tol).sum() > 1000
+    assert np.isinf(got[expected > tol]).all()
+    with pytest.raises(ValueError, match="beyond must be"):
+        nearest_segment_distance_bounded(pts, walls, beyond="none")

@@ -249,13 +249,18 @@ def nearest_segment_distance(
 def nearest_segment_distance_bounded(
     points: NDArray[np.float64], segments: NDArray[np.float64],
     radii_m: tuple[float, ...] = (0.5, 2.0),
+    *,
+    beyond: str = "nearest",
 ) -> NDArray[np.float64]:  # fmt: skip
     """``nearest_segment_distance`` with the same numbers, faster when most points lie near
     a segment: each point's candidates are the segments whose bounding box meets its box
     of half-side ``radii_m[0]``, measured with GEOS's formula (``point_to_segment_geos``);
     a point whose nearest candidate is within that radius has its exact nearest segment
     (any nearer one would be a candidate too). The others try the next radius, then the
-    tree's nearest query."""
+    tree's nearest query; with ``beyond="inf"`` they are ``inf`` instead (for a caller who
+    only asks which points lie within the last radius: the same answer)."""
+    if beyond not in ("nearest", "inf"):
+        raise ValueError(f"beyond must be 'nearest' or 'inf', got {beyond!r}")
     out = np.full(len(points), np.inf)
     if len(points) == 0 or len(segments) == 0:
         return nearest_segment_distance(points, segments)
@@ -274,7 +279,10 @@ def nearest_segment_distance_bounded(
         pending = pending[~(out[pending] <= radius)]
         if not len(pending):
             return out
-    out[pending] = nearest_segment_distance(points[pending], segments)
+    if beyond == "nearest":
+        out[pending] = nearest_segment_distance(points[pending], segments)
+    else:
+        out[pending] = np.inf
     return out
 
 
@@ -349,8 +357,11 @@ def map_quality(
             # few near the last views, not over a long run's whole map (820,000 surfaces
             # cost ~250 MB of GEOS geometries). The same share: farther ones are > tol.
             near = segs_world[_near_points(segs_world, seen, p.coverage_tolerance_m)]
-            cover = nearest_segment_distance(seen, near)
-            completeness = float(np.mean(cover <= p.coverage_tolerance_m))
+            # Whether a point is covered needs only its candidates within the tolerance
+            # (the same distances, so the same verdicts as the nearest query).
+            tol = p.coverage_tolerance_m
+            cover = nearest_segment_distance_bounded(seen, near, (tol,), beyond="inf")
+            completeness = float(np.mean(cover <= tol))
     if len(d) == 0:
         return MapQuality(None, None, None, completeness, 0)
     mean, largest = float(d.mean()), float(d.max())
