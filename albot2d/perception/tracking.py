@@ -426,10 +426,23 @@ def rtsv(
     """
     params = TrackingParams() if params is None else params
     cand = trackable_mask(view, params) if candidates is None else np.asarray(candidates, bool)
+    if cand.shape != (len(view),):
+        raise ValueError(f"candidates must have shape ({len(view)},), got {cand.shape}")
     if candidates is None and params.match_candidates == "all":  # algorithm #1 as printed
         cand = np.ones(len(view), bool)
     predicted = tracked.current.transformed(increment.inverse())
-    ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
+    kernel = _compiled_match() if _compiled_settings(params) else None
+    if kernel is not None:
+        # ``match_surfaces``' compiled path without its argument checks (done above):
+        # RTSV runs two or three times per view (the mapper and the checks).
+        p = predicted.segments
+        ti, vj, dist, angle = kernel(
+            p, predicted.occluded, view.segments, view.occluded, cand,
+            np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]), _directions(view),
+            math.radians(params.match_angle_deg), params.match_distance_m,
+        )  # fmt: skip
+    else:
+        ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
     # ti are distinct indices into a valid tracker state: its invariants hold by
     # construction, so the survivors skip TrackedSurfaces' checks (a third of RTSV's time).
     survivors = object.__new__(TrackedSurfaces)
