@@ -36,7 +36,7 @@ from albot2d.geometry import Pose, between_arrays, wrap_angle
 from albot2d.mapping.albot1 import Albot1
 from albot2d.mapping.route_map import RouteMap
 from albot2d.perception.surfaces import Surfaces
-from albot2d.perception.tracking import TrackingParams, rtsv, start_tracking
+from albot2d.perception.tracking import TrackingParams, recognise, trackable_mask
 from albot2d.sim.driving import DrivingProfile
 from albot2d.sim.odometry import OdometryNoise
 from albot2d.validation import check_non_negative, check_positive
@@ -187,21 +187,26 @@ def recount_tracking(
     out: list[RecountedStep] = []
     if not views:
         return out
+
+    def start(view: Surfaces) -> Surfaces:  # start_tracking's surfaces (ids not needed)
+        return view.select(trackable_mask(view, params))
+
     first, view, _ = views[0]
     out.append(RecountedStep(first, 0, (first,)))
-    tracked = start_tracking(view, params)
+    current = start(view)  # the tracked surfaces' latest observations
     use_vc = True  # V(c-1) (the first view) is the current local map
     for (prev_frame, prev_view, _), (frame, view, increment) in itertools.pairwise(views):
-        counted, _ = rtsv(tracked, view, increment, params)
-        tracked = counted
+        counted = recognise(current, view, increment, params).view_index
+        current = view.select(counted)
         remembered: tuple[int, ...] = ()
         if len(counted) < min_tracked:
             if not use_vc:
                 remembered = (prev_frame,)
-                tracked, _ = rtsv(start_tracking(prev_view, params), view, increment, params)
-            if len(tracked) < min_tracked:
+                kept = recognise(start(prev_view), view, increment, params).view_index
+                current = view.select(kept)
+            if len(current) < min_tracked:
                 remembered += (frame,)
-                tracked = start_tracking(view, params)
+                current = start(view)
         out.append(RecountedStep(frame, len(counted), remembered))
         use_vc = bool(remembered) and remembered[-1] == frame
     return out

@@ -48,6 +48,7 @@ __all__ = [
     "key_endpoints",
     "match_fitness",
     "match_surfaces",
+    "recognise",
     "rtsv",
     "start_tracking",
     "trackable_mask",
@@ -407,6 +408,41 @@ def match_surfaces(
     return mi, mj, dist[mi, mj], angle[mi, mj]
 
 
+def recognise(
+    current: Surfaces,
+    view: Surfaces,
+    increment: Pose,
+    params: TrackingParams | None = None,
+    *,
+    candidates: ArrayLike | None = None,
+) -> MatchInfo:
+    """Algorithm #1's recognition step alone: which of the tracked surfaces' latest
+    observations ``current`` (previous view's frame) are recognised in ``view`` after the
+    odometry ``increment``. ``rtsv`` is this plus the tracker's bookkeeping (ids, local
+    geometry); a replay that only counts (``evaluation.invariants.recount_tracking``)
+    keeps ``view.select(info.view_index)`` as the next ``current``."""
+    params = TrackingParams() if params is None else params
+    cand = trackable_mask(view, params) if candidates is None else np.asarray(candidates, bool)
+    if cand.shape != (len(view),):
+        raise ValueError(f"candidates must have shape ({len(view)},), got {cand.shape}")
+    if candidates is None and params.match_candidates == "all":  # algorithm #1 as printed
+        cand = np.ones(len(view), bool)
+    predicted = current.transformed(increment.inverse())
+    kernel = _compiled_match() if _compiled_settings(params) else None
+    if kernel is not None:
+        # ``match_surfaces``' compiled path without its argument checks (done above):
+        # recognition runs two or three times per view (the mapper and the checks).
+        p = predicted.segments
+        ti, vj, dist, angle = kernel(
+            p, predicted.occluded, view.segments, view.occluded, cand,
+            np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]), _directions(view),
+            math.radians(params.match_angle_deg), params.match_distance_m,
+        )  # fmt: skip
+    else:
+        ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
+    return MatchInfo(ti, vj, dist, angle, predicted, cand)
+
+
 def rtsv(
     tracked: TrackedSurfaces,
     view: Surfaces,
@@ -424,25 +460,8 @@ def rtsv(
     Survivors keep their ``ids`` and ``local`` geometry; ``current`` becomes the matched
     observation in ``view``.
     """
-    params = TrackingParams() if params is None else params
-    cand = trackable_mask(view, params) if candidates is None else np.asarray(candidates, bool)
-    if cand.shape != (len(view),):
-        raise ValueError(f"candidates must have shape ({len(view)},), got {cand.shape}")
-    if candidates is None and params.match_candidates == "all":  # algorithm #1 as printed
-        cand = np.ones(len(view), bool)
-    predicted = tracked.current.transformed(increment.inverse())
-    kernel = _compiled_match() if _compiled_settings(params) else None
-    if kernel is not None:
-        # ``match_surfaces``' compiled path without its argument checks (done above):
-        # RTSV runs two or three times per view (the mapper and the checks).
-        p = predicted.segments
-        ti, vj, dist, angle = kernel(
-            p, predicted.occluded, view.segments, view.occluded, cand,
-            np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]), _directions(view),
-            math.radians(params.match_angle_deg), params.match_distance_m,
-        )  # fmt: skip
-    else:
-        ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
+    info = recognise(tracked.current, view, increment, params, candidates=candidates)
+    ti = info.tracked_index
     # ti are distinct indices into a valid tracker state: its invariants hold by
     # construction, so the survivors skip TrackedSurfaces' checks (a third of RTSV's time).
     survivors = object.__new__(TrackedSurfaces)
@@ -453,6 +472,7 @@ def rtsv(
     else:
         ids, local = tracked.ids[ti], tracked.local.select(ti)
         ids.flags.writeable = False
-    for name, value in (("ids", ids), ("local", local), ("current", view.select(vj))):
+    current = view.select(info.view_index)
+    for name, value in (("ids", ids), ("local", local), ("current", current)):
         object.__setattr__(survivors, name, value)
-    return survivors, MatchInfo(ti, vj, dist, angle, predicted, cand)
+    return survivors, info
