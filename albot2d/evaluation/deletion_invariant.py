@@ -23,11 +23,12 @@ import shapely
 from numpy.typing import NDArray
 
 from albot2d.evaluation.invariant_base import InvariantError, fail
-from albot2d.geometry import Pose, transform_segments
+from albot2d.geometry import Pose
 from albot2d.mapping.albot1 import Albot1
 from albot2d.mapping.deletion import GlobalMapParams
 from albot2d.mapping.global_map import UpdateReport
 from albot2d.mapping.route_map import LocalMap
+from albot2d.perception.surfaces import transform_segments_fast
 
 __all__ = ["UpdateRecorder", "check_update_deleted_facing_overlap"]
 
@@ -445,7 +446,7 @@ class UpdateRecorder:
             raise RuntimeError("UpdateRecorder: attach it to a mapper first")
         self.updates += 1
         try:
-            view = transform_segments(lm.pose.as_array(), lm.view.segments)
+            view = transform_segments_fast(lm.pose, lm.view.segments)
             check_update_deleted_facing_overlap(self.mapper, report, lm.pose, view)
         except InvariantError as exc:
             if self.raise_at_once:
