@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.arrays import readonly
+from albot2d.compiled import compiled_kernel
 from albot2d.geometry import Pose, transform_points
 
 __all__ = ["Frame", "Scan", "beam_angles"]
@@ -153,16 +154,6 @@ class Frame:
         )
 
 
-_kernel: list[Callable[..., Any] | None] = []
-
-
 def _hits_kernel() -> Callable[..., Any] | None:
     """``geometry.points_numba.hits_kernel`` when numba imports, else None."""
-    if not _kernel:
-        try:
-            from albot2d.geometry.points_numba import hits_kernel
-        except ImportError:
-            _kernel.append(None)
-        else:
-            _kernel.append(hits_kernel)
-    return _kernel[0]
+    return compiled_kernel("albot2d.geometry.points_numba", "hits_kernel")

@@ -58,3 +58,10 @@ def test_world_hits_are_kept_read_only_and_need_a_true_pose() -> None:
     np.testing.assert_allclose(np.hypot(hits[:, 0] - 1.0, hits[:, 1] - 2.0), 2.0)
     with pytest.raises(ValueError, match="frame 0 has no true pose"):
         _frame(scan, None).world_hits()
+
+
+def test_a_kernel_module_that_does_not_import_gives_the_numpy_path() -> None:
+    from albot2d.compiled import compiled_kernel
+
+    assert compiled_kernel("albot2d.geometry.points_numba", "hits_kernel") is _hits_kernel()
+    assert compiled_kernel("albot2d.geometry.no_such_kernels", "hits_kernel") is None

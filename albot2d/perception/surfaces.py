@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from albot2d.arrays import readonly
+from albot2d.compiled import compiled_kernel
 from albot2d.geometry import (
     Pose,
     as_segments,
@@ -173,19 +174,9 @@ class Surfaces:
         return (self.surface(i) for i in range(len(self)))
 
 
-_kernel: list[Callable[..., FloatArray] | None] = []
-
-
 def _transform_kernel() -> Callable[..., FloatArray] | None:
     """``surfaces_numba.transform_kernel`` when numba imports, else None."""
-    if not _kernel:
-        try:
-            from albot2d.perception.surfaces_numba import transform_kernel
-        except ImportError:
-            _kernel.append(None)
-        else:
-            _kernel.append(transform_kernel)
-    return _kernel[0]
+    return compiled_kernel("albot2d.perception.surfaces_numba", "transform_kernel")
 
 
 def transform_segments_fast(pose: ArrayLike | Pose, segments: ArrayLike) -> FloatArray:

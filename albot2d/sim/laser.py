@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from albot2d.compiled import compiled_kernel
 from albot2d.errors import InputError
 from albot2d.frames import Scan, beam_angles
 from albot2d.geometry import Pose
@@ -302,19 +303,9 @@ _NO_DRAWS = np.zeros(0)
 _NO_DRAWS_2D = np.zeros((3, 0))
 
 
-_kernel: list[Callable[..., tuple[FloatArray, NDArray[np.bool_]]] | None] = []
-
-
 def _noise_kernel() -> Callable[..., tuple[FloatArray, NDArray[np.bool_]]] | None:
     """``laser_numba.apply_noise`` when numba imports, else None (the numpy path)."""
-    if not _kernel:
-        try:
-            from albot2d.sim.laser_numba import apply_noise
-        except ImportError:
-            _kernel.append(None)
-        else:
-            _kernel.append(apply_noise)
-    return _kernel[0]
+    return compiled_kernel("albot2d.sim.laser_numba", "apply_noise")
 
 
 def _mix_pixels(
