@@ -69,6 +69,32 @@ class Scan:
         object.__setattr__(self, "angles", angles)
         object.__setattr__(self, "valid", valid)
 
+    @classmethod
+    def adopt(
+        cls,
+        ranges: FloatArray,
+        angles: FloatArray,
+        valid: NDArray[np.bool_],
+        max_range_m: float,
+        timestamp: float,
+        laser_pose: Pose,
+    ) -> Scan:
+        """A scan taking ownership of arrays its producer has just made, of the right
+        dtypes and one length (the simulated laser, every step): ``ranges`` and ``valid``
+        are made read-only, ``angles`` must be read-only already (shared between scans);
+        nothing is copied or checked again."""
+        if angles.flags.writeable:
+            raise ValueError("Scan.adopt shares angles between scans: pass a read-only array")
+        ranges.flags.writeable = False
+        valid.flags.writeable = False
+        out = object.__new__(cls)
+        # Frozen: the fields go straight into the instance dict (what __init__ would set).
+        out.__dict__.update(
+            ranges=ranges, angles=angles, valid=valid, max_range_m=max_range_m,
+            timestamp=timestamp, laser_pose=laser_pose,
+        )  # fmt: skip
+        return out
+
     def __repr__(self) -> str:
         hits = self.ranges[self.valid]
         span = f", {hits.min():.3g}–{hits.max():.3g} m" if len(hits) else ""

@@ -65,3 +65,18 @@ def test_a_kernel_module_that_does_not_import_gives_the_numpy_path() -> None:
 
     assert compiled_kernel("albot2d.geometry.points_numba", "hits_kernel") is _hits_kernel()
     assert compiled_kernel("albot2d.geometry.no_such_kernels", "hits_kernel") is None
+
+
+def test_a_simulated_scan_owns_read_only_arrays_and_shares_its_angles() -> None:
+    from albot2d.sim.laser import Laser, LaserParams
+
+    laser = Laser(np.array([[5.0, -5.0, 5.0, 5.0]]), LaserParams())
+    rng = np.random.default_rng(0)
+    a, b = laser.scan(Pose(), rng), laser.scan(Pose(), rng)
+    assert a.angles is b.angles and not a.angles.flags.writeable
+    for scan in (a, b):
+        assert not scan.ranges.flags.writeable and not scan.valid.flags.writeable
+        assert scan.ranges.dtype == np.float64 and scan.valid.dtype == np.bool_
+    np.testing.assert_allclose(a.points()[:, 0], 5.0, atol=0.1)
+    with pytest.raises(ValueError, match="read-only array"):
+        Scan.adopt(np.zeros(3), np.zeros(3), np.ones(3, bool), 30.0, 0.0, Pose())

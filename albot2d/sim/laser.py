@@ -251,14 +251,8 @@ class Laser:
             ranges, valid = self._compiled_noise(r, hit, rng)
         else:
             ranges, valid = self._numpy_noise(r, hit, rng)
-        return Scan(
-            ranges=ranges,
-            angles=self.angles,
-            valid=valid,
-            max_range_m=p.max_range_m,
-            timestamp=float(timestamp),
-            laser_pose=self._mount,
-        )
+        # The noise made ``ranges`` and ``valid`` fresh; the angles are read-only.
+        return Scan.adopt(ranges, self.angles, valid, p.max_range_m, float(timestamp), self._mount)
 
     def _compiled_noise(
         self, r: FloatArray, hit: NDArray[np.bool_], rng: np.random.Generator
