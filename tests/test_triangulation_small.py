@@ -92,3 +92,26 @@ def test_other_heuristics_take_the_array_path() -> None:
     assert not tri._small_path_covers(TriangulationParams(heading="selected"))
     assert not tri._small_path_covers(TriangulationParams(choose="fitness"))
     assert not tri._small_path_covers(TriangulationParams(use_outlier_heuristic=False))
+
+
+@pytest.mark.parametrize("seed", range(200))
+def test_compiled_kernel_equals_the_python_floats(seed: int) -> None:
+    """The compiled small path (numba) against the same path in Python floats, which the
+    tests above hold equal to the array path: many views, near and far from path
+    integration, tight and loose gates and consensus, flipped and occluded ends."""
+    pytest.importorskip("numba")
+    from albot2d.compiled import compiled_kernel
+    from albot2d.mapping.triangulation_scalar import triangulate_small, triangulate_small_python
+
+    assert compiled_kernel("albot2d.mapping.triangulation_numba", "triangulate_kernel")
+    rng = np.random.default_rng(1000 + seed)
+    local, current, true = random_pair(rng, int(rng.integers(0, 8)))
+    spread = float(rng.choice([0.01, 0.2, 2.0]))
+    pi = Pose(true.x + rng.normal(0, spread), true.y + rng.normal(0, spread),
+              float(rng.normal(0, spread)))  # fmt: skip
+    params = TriangulationParams(heading_consensus_deg=float(rng.choice([0.0, 1.0, 3.0, 30.0])))
+    k = int(rng.integers(1, 5))
+    gate_m, gate_deg = float(rng.uniform(0.05, 1.0)), float(rng.uniform(0.5, 20.0))
+    fast = triangulate_small(local, current, pi, params, k, gate_m, gate_deg)
+    slow = triangulate_small_python(local, current, pi, params, k, gate_m, gate_deg)
+    assert repr(fast) == repr(slow)

@@ -17,13 +17,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from albot2d.compiled import compiled_kernel
 from albot2d.geometry import Pose
 from albot2d.perception.surfaces import Surfaces
 
 if TYPE_CHECKING:
     from albot2d.mapping.triangulation import TriangulationParams
 
-__all__ = ["triangulate_small"]
+__all__ = ["triangulate_small", "triangulate_small_python"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -63,7 +64,34 @@ def triangulate_small(
 ) -> Pose | None:
     """``triangulate`` for fewer than ``triangulation._SMALL`` surfaces with the default
     heuristics (``triangulation._small_path_covers``): the same float operations in the same
-    order as the array path, so the same pose bit for bit."""
+    order as the array path, so the same pose bit for bit; in one compiled call when numba
+    imports (``triangulation_numba``), else in Python floats (``triangulate_small_python``)."""
+    kernel = compiled_kernel("albot2d.mapping.triangulation_numba", "triangulate_kernel")
+    if kernel is None or not len(local):
+        return triangulate_small_python(local, current, pi, params, k, gate_m, gate_deg)
+    ls, cs = local.segments, current.segments
+    ang_l = np.arctan2(ls[:, 3] - ls[:, 1], ls[:, 2] - ls[:, 0]) - np.arctan2(
+        cs[:, 3] - cs[:, 1], cs[:, 2] - cs[:, 0]
+    )
+    found, x, y, heading = kernel(
+        ang_l, ls, cs, local.localisable, current.localisable, local.beams, current.beams,
+        float(pi.x), float(pi.y), float(pi.theta), k * gate_m, k * math.radians(gate_deg),
+        math.radians(params.heading_consensus_deg), bool(params.use_outlier_heuristic),
+    )  # fmt: skip
+    return Pose(float(x), float(y), float(heading)) if found else None
+
+
+def triangulate_small_python(
+    local: Surfaces,
+    current: Surfaces,
+    pi: Pose,
+    params: TriangulationParams,
+    k: int,
+    gate_m: float,
+    gate_deg: float,
+) -> Pose | None:
+    """``triangulate_small`` in Python floats (without numba; the reference the compiled
+    kernel is tested against)."""
     n = len(local)
     if n == 0:
         return None
