@@ -234,15 +234,12 @@ def perturb_increment(
         if rng is None:
             raise ValueError("perturb_increment: random odometry noise needs an rng")
         a_rot1, a_trans, a_rot2 = abs(rot1), abs(trans), abs(rot2)
-        std = np.array(
-            [
-                noise.alpha1 * a_rot1 + noise.alpha2 * a_trans,
-                noise.alpha3 * a_trans + noise.alpha4 * (a_rot1 + a_rot2),
-                noise.alpha1 * a_rot2 + noise.alpha2 * a_trans,
-            ]
-        )
-        e_rot1, e_trans, e_rot2 = (rng.standard_normal(3) * std).tolist()
-        rot1, trans, rot2 = rot1 + e_rot1, trans + e_trans, rot2 + e_rot2
+        # Three standard normals scaled by each part's sigma (in Python floats: the same
+        # products as numpy's, without two small arrays per step).
+        n_rot1, n_trans, n_rot2 = rng.standard_normal(3).tolist()
+        rot1 += n_rot1 * (noise.alpha1 * a_rot1 + noise.alpha2 * a_trans)
+        trans += n_trans * (noise.alpha3 * a_trans + noise.alpha4 * (a_rot1 + a_rot2))
+        rot2 += n_rot2 * (noise.alpha1 * a_rot2 + noise.alpha2 * a_trans)
     rot1 *= 1.0 + noise.turn_scale_error
     rot2 *= 1.0 + noise.turn_scale_error
     rot2 += math.radians(noise.heading_drift_deg_per_m) * abs(trans)
