@@ -228,19 +228,26 @@ class LoopClosingSLAM:
         return stats
 
     def verify_closure(
-        self, i: int, j: int, guess: NDArray[np.float64] | None = None
-    ) -> ClosureCheck:
+        self, i: int, j: int, guess: NDArray[np.float64] | None = None, *,
+        local: bool = False,
+    ) -> ClosureCheck:  # fmt: skip
         """Register keyframe ``i``'s local map onto keyframe ``j``'s (``guess``: ``i``'s pose
         in ``j``'s frame to start from; default the current estimate; the correction is
-        always judged against the current estimate). Adds nothing."""
+        always judged against the current estimate). ``local``: a short-range constraint
+        under ``LoopClosureParams.local_query="scan"`` (keyframe ``i``'s own scan onto the
+        keyframes up to ``j``). Adds nothing."""
         n, est = self.params.loops.submap_keyframes, self.graph.estimate
         if not (0 <= j < len(est) and 0 <= i < len(est) and i != j):
             raise ValueError(f"keyframes {i}, {j}: need two different ones of {len(est)}")
         estimate = between_arrays(est[j], est[i])
         guess = estimate if guess is None else np.asarray(guess, dtype=np.float64)
-        query_ids = range(max(0, i - n + 1), i + 1)
-        lo, hi = max(0, j - n), min(len(est), j + n + 1)
-        target_ids = [k for k in range(lo, hi) if abs(k - i) >= n]
+        if local and self.params.loops.local_query == "scan":
+            query_ids: Any = [i]
+            target_ids = list(range(max(0, j - n + 1), j + 1))
+        else:
+            query_ids = range(max(0, i - n + 1), i + 1)
+            lo, hi = max(0, j - n), min(len(est), j + n + 1)
+            target_ids = [k for k in range(lo, hi) if abs(k - i) >= n]
         query = self._submap(query_ids, i)
         target = self._submap(target_ids, j)
         path = abs(self._kf_path_m[i] - self._kf_path_m[j])
@@ -291,7 +298,7 @@ class LoopClosingSLAM:
         verifier and gate; if accepted it joins the graph as a closure does (same noise
         model and kernel), without touching the loop-closure spacing or counts."""
         with self.timer.stage("loop_closure"):
-            check = self.verify_closure(i, j)
+            check = self.verify_closure(i, j, local=True)
         self.local_checks.append(check)
         if check.accepted:
             self.graph.add_loop(i, j, check.relative, check.information)

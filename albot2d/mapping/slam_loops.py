@@ -53,6 +53,7 @@ from albot2d.validation import (
 
 __all__ = [
     "GATES",
+    "LOCAL_QUERIES",
     "ClosureCheck",
     "LoopClosureParams",
     "LoopVerifier",
@@ -62,6 +63,7 @@ __all__ = [
 
 
 GATES = ("chi2", "fixed", "none")
+LOCAL_QUERIES = ("submap", "scan")
 
 
 @dataclass(frozen=True, slots=True)
@@ -86,6 +88,11 @@ class LoopClosureParams:
       (the newest one at least this far back), so a front-end slip between the two is
       measured against an older scan that the slip did not smear. None (the default):
       off; ``min_separation_m`` still bounds the loop-closure candidates.
+      ``local_query``: what is registered: ``"submap"`` (as a closure: the last
+      ``submap_keyframes`` keyframes up to the new one onto those around the older one
+      that are not among them) or ``"scan"`` (the new keyframe's own scan onto the
+      ``submap_keyframes`` keyframes up to the older one: scan-to-submap, Cartographer's
+      reading, nothing in either the slip could have smeared).
     - ``submap_keyframes``: keyframes whose scans form a local map (query: the last ones up
       to ``i``; target: as many on each side of ``j``).
     - ``voxel_size_m``: voxel size of the registration map and of the query's downsampling.
@@ -114,6 +121,7 @@ class LoopClosureParams:
     max_candidates: int = 1
     closure_spacing_m: float = 0.0
     local_separation_m: float | None = None
+    local_query: str = "submap"
     submap_keyframes: int = 10
     voxel_size_m: float = 0.10
     max_correspondence_m: float = 1.0
@@ -132,6 +140,9 @@ class LoopClosureParams:
     gate_chi2: float = 16.27
 
     def __post_init__(self) -> None:
+        if self.local_query not in LOCAL_QUERIES:
+            raise InputError(f"LoopClosureParams.local_query must be one of "
+                             f"{', '.join(LOCAL_QUERIES)}, got {self.local_query!r}")  # fmt: skip
         if self.gate not in GATES:
             raise InputError(
                 f"LoopClosureParams.gate must be one of {', '.join(GATES)}, got {self.gate!r}"
