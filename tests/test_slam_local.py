@@ -138,3 +138,24 @@ def test_hessian_chain_information_changes_the_mapper_graph(
     assert len(a) == len(b) > 5
     gap = between_arrays(a, b)
     assert np.max(np.hypot(gap[:, 0], gap[:, 1])) > 1e-4
+
+
+def test_hessian_xy_shapes_the_position_only(extra: None) -> None:
+    """``odom_information="hessian_xy"``: along the corridor as loose as ``"hessian"``, but
+    the heading keeps its configured sigma and is not coupled to the position."""
+    verifier = LoopVerifier(LoopClosureParams(), np.array([-0.5, 0.0, 0.5]))
+    motion = np.array([0.5, 0.0, 0.0])
+    info = verifier.chain_information(motion, _corridor_scan(np.zeros(3)),
+                                      _corridor_scan(motion))  # fmt: skip
+    sigmas = np.array([0.03, 0.03, np.radians(0.2)])
+    graph = PoseGraph(PoseGraphParams(odom_information="hessian_xy"))
+    shaped = graph.odom_information_matrix(info, sigmas)
+    assert shaped[2, 2] == pytest.approx(sigmas[2] ** -2)
+    np.testing.assert_array_equal(shaped[:2, 2], 0.0)
+    cov = np.linalg.inv(shaped)
+    assert np.sqrt(cov[0, 0]) == pytest.approx(0.03 * graph.params.odom_max_sigma_ratio)
+    assert np.sqrt(cov[1, 1]) == pytest.approx(0.03)
+    full = PoseGraph(PoseGraphParams(odom_information="hessian")).odom_information_matrix(
+        info, sigmas
+    )
+    assert np.sqrt(np.linalg.inv(full)[2, 2]) > 1.5 * sigmas[2]  # "hessian" loosens the heading

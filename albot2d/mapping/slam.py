@@ -341,8 +341,8 @@ class LoopClosingSLAM:
             recent = np.array(self._wheel_gaps[-self.params.wheel_noise_window :])
             floor = self.params.wheel_noise_factor * np.median(recent, axis=0)
             information = None
-            if self.params.graph.odom_information == "hessian":
-                with self.timer.stage("optimisation"):
+            if self.params.graph.odom_information != "fixed":
+                with self.timer.stage("chain_information"):
                     information = self.verifier.chain_information(
                         motion, self._kf_points[-1], np.asarray(points, dtype=np.float64))
             self.graph.add_keyframe(

@@ -36,7 +36,7 @@ __all__ = ["MISSING_GTSAM", "PoseGraph", "PoseGraphParams", "shaped_information"
 KERNELS = ("cauchy", "huber", "none")
 OPTIMIZERS = ("lm", "gnc")
 GNC_LOSSES = ("tls", "gm")
-ODOM_INFORMATION = ("fixed", "hessian")
+ODOM_INFORMATION = ("fixed", "hessian", "hessian_xy")
 MISSING_GTSAM = "the slam mapper needs the optional extra: pip install 'albot2d[slam]' (gtsam)"
 
 
@@ -59,7 +59,8 @@ class PoseGraphParams:
       for closures; the best-constrained direction keeps the configured sigmas, a weaker
       one gets up to ``odom_max_sigma_ratio`` × them), so where scan matching is weakly
       constrained (along a corridor; a heading fixed by few, near points) the wheel
-      odometry factor carries the motion.
+      odometry factor carries the motion; ``"hessian_xy"``: the same for the position
+      only, the heading keeping its configured sigma.
     - ``loop_sigma_m`` / ``loop_sigma_deg``: sigma of a verified loop closure in its
       best-constrained direction; ``loop_information``: shape the closure's information
       matrix by the registration's Hessian (off: those sigmas on every axis), a direction
@@ -216,9 +217,9 @@ class PoseGraph:
             d = float(np.hypot(motion[0], motion[1]))
             sigmas = np.array([p.odom_sigma_m + p.odom_sigma_m_per_m * d] * 2
                               + [np.radians(p.odom_sigma_deg + p.odom_sigma_deg_per_m * d)])
-            if p.odom_information == "hessian" and information is not None:
-                shaped = shaped_information(information, sigmas, p.odom_max_sigma_ratio)
-                noise = self._gtsam.noiseModel.Gaussian.Information(shaped)
+            if p.odom_information != "fixed" and information is not None:
+                noise = self._gtsam.noiseModel.Gaussian.Information(
+                    self.odom_information_matrix(information, sigmas))
             else:
                 noise = self._gtsam.noiseModel.Diagonal.Sigmas(sigmas)
             noise = self._robust(p.odom_kernel, p.odom_kernel_width, noise)
@@ -265,6 +266,20 @@ class PoseGraph:
         (0: rejected as an outlier, 1: inlier); 1 for every closure under ``"lm"`` and for
         a closure not yet optimised."""
         return self._loop_weights.copy()
+
+    def odom_information_matrix(
+        self, information: NDArray[np.float64], sigmas: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """A scan-matching chain factor's 3×3 information matrix (``odom_information``):
+        ``"hessian"`` the Hessian's shape at the scale of ``sigmas`` (``shaped_information``);
+        ``"hessian_xy"`` that for the position alone (the Hessian's position block, i.e.
+        what the scans fix with the heading known), the heading at its configured sigma."""
+        ratio = self.params.odom_max_sigma_ratio
+        if self.params.odom_information == "hessian":
+            return shaped_information(information, sigmas, ratio)
+        out = np.diag(sigmas**-2)
+        out[:2, :2] = shaped_information(np.asarray(information)[:2, :2], sigmas[:2], ratio)
+        return out
 
     def loop_noise(self, information: NDArray[np.float64] | None) -> Any:
         """A closure's Gaussian noise model (``loop_information_matrix``)."""
