@@ -344,7 +344,8 @@ class LoopClosingSLAM:
             if self.params.graph.odom_information != "fixed":
                 with self.timer.stage("chain_information"):
                     information = self.verifier.chain_information(
-                        motion, self._kf_points[-1], np.asarray(points, dtype=np.float64))
+                        motion, self._kf_points[-1], np.asarray(points, dtype=np.float64)
+                    )
             self.graph.add_keyframe(
                 motion, compose_arrays(self.graph.estimate[-1], motion),
                 wheel if self.params.use_wheel_odometry else None, (floor[0], floor[1]),

@@ -120,8 +120,11 @@ class PoseGraphParams:
         choices: list[tuple[str, tuple[str, ...]]] = [
             (name, KERNELS) for name in ("loop_kernel", "odom_kernel", "wheel_kernel")
         ]
-        choices += [("optimizer", OPTIMIZERS), ("gnc_loss", GNC_LOSSES),
-                    ("odom_information", ODOM_INFORMATION)]
+        choices += [
+            ("optimizer", OPTIMIZERS),
+            ("gnc_loss", GNC_LOSSES),
+            ("odom_information", ODOM_INFORMATION),
+        ]
         for name, allowed in choices:
             if getattr(self, name) not in allowed:
                 raise InputError(
@@ -215,11 +218,14 @@ class PoseGraph:
             if motion is None:
                 raise ValueError("every keyframe after the first needs its motion")
             d = float(np.hypot(motion[0], motion[1]))
-            sigmas = np.array([p.odom_sigma_m + p.odom_sigma_m_per_m * d] * 2
-                              + [np.radians(p.odom_sigma_deg + p.odom_sigma_deg_per_m * d)])
+            sigmas = np.array(
+                [p.odom_sigma_m + p.odom_sigma_m_per_m * d] * 2
+                + [np.radians(p.odom_sigma_deg + p.odom_sigma_deg_per_m * d)]
+            )
             if p.odom_information != "fixed" and information is not None:
                 noise = self._gtsam.noiseModel.Gaussian.Information(
-                    self.odom_information_matrix(information, sigmas))
+                    self.odom_information_matrix(information, sigmas)
+                )
             else:
                 noise = self._gtsam.noiseModel.Diagonal.Sigmas(sigmas)
             noise = self._robust(p.odom_kernel, p.odom_kernel_width, noise)
