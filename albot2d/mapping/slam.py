@@ -115,9 +115,14 @@ class LoopClosingSLAM:
     ``global_map()`` (every view's surfaces, none deleted) follow the optimised keyframes:
     the map changes shape when a loop closes.
 
+    Options (off by default, docs/albot-x.md): short-range constraints
+    (``LoopClosureParams.local_separation_m``: each new keyframe also verified against the
+    keyframe a few metres back, ``propose_local``) and scan-matching chain factors shaped
+    by the registration's Hessian (``PoseGraphParams.odom_information``).
+
     Counts: ``local_maps`` are the keyframes, ``triangulations`` the views localised by
     scan matching, ``path_integrations`` those placed by odometry alone; ``slam_stats()``
-    adds the loop-closure counts.
+    adds the loop-closure counts (and the short-range constraints' when on).
     """
 
     name = "slam"
@@ -210,7 +215,8 @@ class LoopClosingSLAM:
     # -- loop closing ----------------------------------------------------------------------
     def slam_stats(self) -> dict[str, int]:
         """Keyframes, loop-closure candidates verified / accepted / rejected, optimisations;
-        with GNC also the accepted closures it down-weighted (weight < 0.5)."""
+        with short-range constraints their candidates and accepted ones; with GNC also the
+        accepted closures it down-weighted (weight < 0.5)."""
         accepted = sum(c.accepted for c in self.checks)
         stats = {
             "keyframes": len(self._kf_fe),

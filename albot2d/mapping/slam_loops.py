@@ -28,6 +28,9 @@ the closure is about the keyframe's own pose. The result is accepted only if
   ``gate="none"`` admits every registration-verified candidate and leaves the outlier
   decision to the back end (GNC, ``slam_graph``).
 
+Short-range constraints (``local_separation_m``, off by default) reuse the same
+verification between a new keyframe and the keyframe a few metres back along the path.
+
 An accepted closure carries the point-to-line Hessian of the scan's registration
 (``registration_information``): the pose graph shapes the closure's information matrix by
 it, so a closure in a corridor does not pin the position along the corridor.
