@@ -115,9 +115,14 @@ class LoopClosingSLAM:
     ``global_map()`` (every view's surfaces, none deleted) follow the optimised keyframes:
     the map changes shape when a loop closes.
 
+    Options (off by default, docs/albot-x.md): short-range constraints
+    (``LoopClosureParams.local_separation_m``: each new keyframe also verified against the
+    keyframe a few metres back, ``propose_local``) and scan-matching chain factors shaped
+    by the registration's Hessian (``PoseGraphParams.odom_information``).
+
     Counts: ``local_maps`` are the keyframes, ``triangulations`` the views localised by
     scan matching, ``path_integrations`` those placed by odometry alone; ``slam_stats()``
-    adds the loop-closure counts.
+    adds the loop-closure counts (and the short-range constraints' when on).
     """
 
     name = "slam"
@@ -136,6 +141,7 @@ class LoopClosingSLAM:
             self.params.loops, np.asarray(self.params.scan_matching.layer_heights_m)
         )
         self.checks: list[ClosureCheck] = []
+        self.local_checks: list[ClosureCheck] = []  # short-range constraints
         self._origin: NDArray[np.float64] | None = None
         self._last_fe = np.zeros(3)
         self._path_m = 0.0
@@ -209,7 +215,8 @@ class LoopClosingSLAM:
     # -- loop closing ----------------------------------------------------------------------
     def slam_stats(self) -> dict[str, int]:
         """Keyframes, loop-closure candidates verified / accepted / rejected, optimisations;
-        with GNC also the accepted closures it down-weighted (weight < 0.5)."""
+        with short-range constraints their candidates and accepted ones; with GNC also the
+        accepted closures it down-weighted (weight < 0.5)."""
         accepted = sum(c.accepted for c in self.checks)
         stats = {
             "keyframes": len(self._kf_fe),
@@ -218,25 +225,35 @@ class LoopClosingSLAM:
             "loop_closures_rejected": len(self.checks) - accepted,
             "optimisations": self.graph.optimisations,
         }
+        if self.params.loops.local_separation_m is not None:
+            stats["local_candidates"] = len(self.local_checks)
+            stats["local_constraints_accepted"] = sum(c.accepted for c in self.local_checks)
         if self.params.graph.optimizer == "gnc":
             # accepted closures GNC weighs as outliers in the last optimisation
             stats["loop_closures_down_weighted"] = int(np.sum(self.graph.loop_weights < 0.5))
         return stats
 
     def verify_closure(
-        self, i: int, j: int, guess: NDArray[np.float64] | None = None
-    ) -> ClosureCheck:
+        self, i: int, j: int, guess: NDArray[np.float64] | None = None, *,
+        local: bool = False,
+    ) -> ClosureCheck:  # fmt: skip
         """Register keyframe ``i``'s local map onto keyframe ``j``'s (``guess``: ``i``'s pose
         in ``j``'s frame to start from; default the current estimate; the correction is
-        always judged against the current estimate). Adds nothing."""
+        always judged against the current estimate). ``local``: a short-range constraint
+        under ``LoopClosureParams.local_query="scan"`` (keyframe ``i``'s own scan onto the
+        keyframes up to ``j``). Adds nothing."""
         n, est = self.params.loops.submap_keyframes, self.graph.estimate
         if not (0 <= j < len(est) and 0 <= i < len(est) and i != j):
             raise ValueError(f"keyframes {i}, {j}: need two different ones of {len(est)}")
         estimate = between_arrays(est[j], est[i])
         guess = estimate if guess is None else np.asarray(guess, dtype=np.float64)
-        query_ids = range(max(0, i - n + 1), i + 1)
-        lo, hi = max(0, j - n), min(len(est), j + n + 1)
-        target_ids = [k for k in range(lo, hi) if abs(k - i) >= n]
+        if local and self.params.loops.local_query == "scan":
+            query_ids: Any = [i]
+            target_ids = list(range(max(0, j - n + 1), j + 1))
+        else:
+            query_ids = range(max(0, i - n + 1), i + 1)
+            lo, hi = max(0, j - n), min(len(est), j + n + 1)
+            target_ids = [k for k in range(lo, hi) if abs(k - i) >= n]
         query = self._submap(query_ids, i)
         target = self._submap(target_ids, j)
         path = abs(self._kf_path_m[i] - self._kf_path_m[j])
@@ -281,6 +298,27 @@ class LoopClosingSLAM:
                 self.graph.optimise()
         return check
 
+    def propose_local(self, i: int, j: int) -> ClosureCheck:
+        """A short-range constraint (``LoopClosureParams.local_separation_m``): keyframe
+        ``i`` registered against the keyframe ``j`` a few metres back by the closure
+        verifier and gate; if accepted it joins the graph as a closure does (same noise
+        model and kernel), without touching the loop-closure spacing or counts."""
+        with self.timer.stage("loop_closure"):
+            check = self.verify_closure(i, j, local=True)
+        self.local_checks.append(check)
+        if check.accepted:
+            self.graph.add_loop(i, j, check.relative, check.information)
+        return check
+
+    def _local_target(self, i: int) -> int | None:
+        """The newest keyframe at least ``local_separation_m`` of path before keyframe
+        ``i`` (None when off, too early, or ``i``'s scan is too sparse)."""
+        sep = self.params.loops.local_separation_m
+        if sep is None or len(self._kf_points[i]) < self.params.scan_matching.min_points:
+            return None
+        back = np.flatnonzero(self._kf_path_m[i] - np.array(self._kf_path_m[:i]) >= sep)
+        return int(back[-1]) if len(back) else None
+
     def _submap(self, ids: Any, frame_kf: int) -> NDArray[np.float64]:
         est = self.graph.estimate
         parts = [transform_points(between_arrays(est[frame_kf], est[k]), self._kf_points[k])
@@ -308,9 +346,16 @@ class LoopClosingSLAM:
             self._wheel_gaps.append((float(np.hypot(gap[0], gap[1])), abs(float(gap[2]))))
             recent = np.array(self._wheel_gaps[-self.params.wheel_noise_window :])
             floor = self.params.wheel_noise_factor * np.median(recent, axis=0)
+            information = None
+            if self.params.graph.odom_information != "fixed":
+                with self.timer.stage("chain_information"):
+                    information = self.verifier.chain_information(
+                        motion, self._kf_points[-1], np.asarray(points, dtype=np.float64)
+                    )
             self.graph.add_keyframe(
                 motion, compose_arrays(self.graph.estimate[-1], motion),
                 wheel if self.params.use_wheel_odometry else None, (floor[0], floor[1]),
+                information,
             )  # fmt: skip
         else:
             self.graph.add_keyframe(None, fe)
@@ -319,8 +364,12 @@ class LoopClosingSLAM:
         self._kf_points.append(np.asarray(points, dtype=np.float64))
         self._kf_path_m.append(self._path_m)
         self.keyframe_rows.append(len(self._segments))
-        for j in self._candidates(len(self._kf_fe) - 1):
-            self.propose_closure(len(self._kf_fe) - 1, j)
+        i = len(self._kf_fe) - 1
+        for j in self._candidates(i):
+            self.propose_closure(i, j)
+        local = self._local_target(i)
+        if local is not None:
+            self.propose_local(i, local)
         with self.timer.stage("optimisation"):
             self.graph.optimise()  # runs only when due
 

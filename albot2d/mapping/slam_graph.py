@@ -31,11 +31,12 @@ from numpy.typing import NDArray
 from albot2d.errors import InputError
 from albot2d.validation import check_non_negative, check_positive, check_positive_int
 
-__all__ = ["MISSING_GTSAM", "PoseGraph", "PoseGraphParams"]
+__all__ = ["MISSING_GTSAM", "PoseGraph", "PoseGraphParams", "shaped_information"]
 
 KERNELS = ("cauchy", "huber", "none")
 OPTIMIZERS = ("lm", "gnc")
 GNC_LOSSES = ("tls", "gm")
+ODOM_INFORMATION = ("fixed", "hessian", "hessian_xy")
 MISSING_GTSAM = "the slam mapper needs the optional extra: pip install 'albot2d[slam]' (gtsam)"
 
 
@@ -52,6 +53,14 @@ class PoseGraphParams:
       with good odometry; the mapper raises them to what it measures (see ``slam.py``);
       ``wheel_kernel`` / ``wheel_kernel_width`` its robust kernel (wheel odometry slips too:
       a wheel that spun or a log's odometry jump is then out-voted like a scan-matching slip).
+    - ``odom_information``: ``"fixed"`` (those sigmas on every axis) or ``"hessian"``: the
+      scan-matching factor's information matrix shaped by the point-to-line Hessian of the
+      two keyframes' scans aligned at the front end's motion (as ``loop_information`` does
+      for closures; the best-constrained direction keeps the configured sigmas, a weaker
+      one gets up to ``odom_max_sigma_ratio`` × them), so where scan matching is weakly
+      constrained (along a corridor; a heading fixed by few, near points) the wheel
+      odometry factor carries the motion; ``"hessian_xy"``: the same for the position
+      only, the heading keeping its configured sigma.
     - ``loop_sigma_m`` / ``loop_sigma_deg``: sigma of a verified loop closure in its
       best-constrained direction; ``loop_information``: shape the closure's information
       matrix by the registration's Hessian (off: those sigmas on every axis), a direction
@@ -74,6 +83,8 @@ class PoseGraphParams:
     odom_sigma_deg_per_m: float = 0.2
     odom_kernel: str = "cauchy"
     odom_kernel_width: float = 5.0
+    odom_information: str = "fixed"
+    odom_max_sigma_ratio: float = 20.0
     wheel_sigma_m: float = 0.02
     wheel_sigma_deg: float = 0.3
     wheel_sigma_m_per_m: float = 0.05
@@ -98,7 +109,7 @@ class PoseGraphParams:
         check_positive(self, "odom_sigma_m", "odom_sigma_deg", "loop_sigma_m", "loop_sigma_deg",
                        "loop_kernel_width", "odom_kernel_width", "relative_error_tol",
                        "wheel_sigma_m", "wheel_sigma_deg", "wheel_kernel_width",
-                       "loop_max_sigma_ratio")  # fmt: skip
+                       "loop_max_sigma_ratio", "odom_max_sigma_ratio")  # fmt: skip
         check_non_negative(self, "odom_sigma_m_per_m", "odom_sigma_deg_per_m",
                            "wheel_sigma_m_per_m", "wheel_sigma_deg_per_m",
                            "wheel_sigma_deg_per_rad")  # fmt: skip
@@ -109,13 +120,38 @@ class PoseGraphParams:
         choices: list[tuple[str, tuple[str, ...]]] = [
             (name, KERNELS) for name in ("loop_kernel", "odom_kernel", "wheel_kernel")
         ]
-        choices += [("optimizer", OPTIMIZERS), ("gnc_loss", GNC_LOSSES)]
+        choices += [
+            ("optimizer", OPTIMIZERS),
+            ("gnc_loss", GNC_LOSSES),
+            ("odom_information", ODOM_INFORMATION),
+        ]
         for name, allowed in choices:
             if getattr(self, name) not in allowed:
                 raise InputError(
                     f"PoseGraphParams.{name} must be one of {', '.join(allowed)}, "
                     f"got {getattr(self, name)!r}"
                 )
+
+
+def shaped_information(
+    information: NDArray[np.float64], sigmas: NDArray[np.float64], max_sigma_ratio: float
+) -> NDArray[np.float64]:
+    """A 3×3 information matrix with the shape of a registration's Hessian and the scale of
+    ``sigmas`` (x, y, θ): the Hessian in units of those sigmas, scaled so its
+    best-constrained direction has exactly those sigmas; a direction it constrains ``r``
+    times less (eigenvalue ratio) gets ``1/√r`` times the sigma, at most
+    ``max_sigma_ratio`` times. A Hessian that is not finite or has no positive eigenvalue
+    gives the plain diagonal."""
+    diagonal = np.diag(sigmas**-2)
+    whitened = sigmas[:, None] * np.asarray(information, dtype=np.float64) * sigmas[None, :]
+    if not np.all(np.isfinite(whitened)):
+        return diagonal
+    values, vectors = np.linalg.eigh(whitened)
+    if not values[-1] > 0:
+        return diagonal
+    values = np.maximum(values / values[-1], max_sigma_ratio**-2)
+    shaped = (vectors * values) @ vectors.T
+    return np.asarray(shaped / sigmas[:, None] / sigmas[None, :])
 
 
 class PoseGraph:
@@ -165,11 +201,14 @@ class PoseGraph:
         initial: NDArray[np.float64],
         wheel_motion: NDArray[np.float64] | None = None,
         wheel_floor: tuple[float, float] = (0.0, 0.0),
+        information: NDArray[np.float64] | None = None,
     ) -> int:
         """Add a keyframe at ``initial``; ``motion``: its pose in the previous keyframe's frame
         by scan matching, ``wheel_motion`` by wheel odometry (None for the first keyframe,
         which is anchored there); ``wheel_floor``: lower bounds (m, rad) on the wheel
-        factor's sigmas, e.g. measured on this robot. Returns its index."""
+        factor's sigmas, e.g. measured on this robot; ``information``: the scan matching's
+        point-to-line Hessian of ``motion`` (used with ``odom_information="hessian"``).
+        Returns its index."""
         g, p = self._gtsam, self.params
         k = len(self._estimate)
         if k == 0:
@@ -179,10 +218,16 @@ class PoseGraph:
             if motion is None:
                 raise ValueError("every keyframe after the first needs its motion")
             d = float(np.hypot(motion[0], motion[1]))
-            noise = self._diagonal(
-                p.odom_sigma_m + p.odom_sigma_m_per_m * d,
-                np.radians(p.odom_sigma_deg + p.odom_sigma_deg_per_m * d),
+            sigmas = np.array(
+                [p.odom_sigma_m + p.odom_sigma_m_per_m * d] * 2
+                + [np.radians(p.odom_sigma_deg + p.odom_sigma_deg_per_m * d)]
             )
+            if p.odom_information != "fixed" and information is not None:
+                noise = self._gtsam.noiseModel.Gaussian.Information(
+                    self.odom_information_matrix(information, sigmas)
+                )
+            else:
+                noise = self._gtsam.noiseModel.Diagonal.Sigmas(sigmas)
             noise = self._robust(p.odom_kernel, p.odom_kernel_width, noise)
             self._graph.add(g.BetweenFactorPose2(k - 1, k, g.Pose2(*motion), noise))
             if wheel_motion is not None:
@@ -228,6 +273,20 @@ class PoseGraph:
         a closure not yet optimised."""
         return self._loop_weights.copy()
 
+    def odom_information_matrix(
+        self, information: NDArray[np.float64], sigmas: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """A scan-matching chain factor's 3×3 information matrix (``odom_information``):
+        ``"hessian"`` the Hessian's shape at the scale of ``sigmas`` (``shaped_information``);
+        ``"hessian_xy"`` that for the position alone (the Hessian's position block, i.e.
+        what the scans fix with the heading known), the heading at its configured sigma."""
+        ratio = self.params.odom_max_sigma_ratio
+        if self.params.odom_information == "hessian":
+            return shaped_information(information, sigmas, ratio)
+        out = np.diag(sigmas**-2)
+        out[:2, :2] = shaped_information(np.asarray(information)[:2, :2], sigmas[:2], ratio)
+        return out
+
     def loop_noise(self, information: NDArray[np.float64] | None) -> Any:
         """A closure's Gaussian noise model (``loop_information_matrix``)."""
         information = self.loop_information_matrix(information)
@@ -247,16 +306,9 @@ class PoseGraph:
         points' errors are correlated)."""
         p = self.params
         sigmas = np.array([p.loop_sigma_m, p.loop_sigma_m, np.radians(p.loop_sigma_deg)])
-        diagonal = np.diag(sigmas**-2)
         if information is None or not p.loop_information:
-            return diagonal
-        whitened = sigmas[:, None] * np.asarray(information, dtype=np.float64) * sigmas[None, :]
-        values, vectors = np.linalg.eigh(whitened)
-        if not (np.all(np.isfinite(values)) and values[-1] > 0):
-            return diagonal
-        values = np.maximum(values / values[-1], p.loop_max_sigma_ratio**-2)
-        shaped = (vectors * values) @ vectors.T
-        return np.asarray(shaped / sigmas[:, None] / sigmas[None, :])
+            return np.diag(sigmas**-2)
+        return shaped_information(information, sigmas, p.loop_max_sigma_ratio)
 
     def relative_covariance(self, a: int, b: int) -> NDArray[np.float64] | None:
         """Covariance (3×3) of keyframe ``b``'s pose in ``a``'s frame under the graph as it

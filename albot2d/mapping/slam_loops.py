@@ -28,6 +28,9 @@ the closure is about the keyframe's own pose. The result is accepted only if
   ``gate="none"`` admits every registration-verified candidate and leaves the outlier
   decision to the back end (GNC, ``slam_graph``).
 
+Short-range constraints (``local_separation_m``, off by default) reuse the same
+verification between a new keyframe and the keyframe a few metres back along the path.
+
 An accepted closure carries the point-to-line Hessian of the scan's registration
 (``registration_information``): the pose graph shapes the closure's information matrix by
 it, so a closure in a corridor does not pin the position along the corridor.
@@ -53,6 +56,7 @@ from albot2d.validation import (
 
 __all__ = [
     "GATES",
+    "LOCAL_QUERIES",
     "ClosureCheck",
     "LoopClosureParams",
     "LoopVerifier",
@@ -62,6 +66,7 @@ __all__ = [
 
 
 GATES = ("chi2", "fixed", "none")
+LOCAL_QUERIES = ("submap", "scan")
 
 
 @dataclass(frozen=True, slots=True)
@@ -80,6 +85,17 @@ class LoopClosureParams:
       ``min_edge_interval`` (5 m there): consecutive keyframes closing onto the same
       target local map share its registration error, and the graph would count them as
       independent (docs/albot-x.md). 0 (the default): every keyframe searches.
+    - ``local_separation_m``: short-range constraints (as Cartographer's and Karto's
+      constraints to nearby scans): every new keyframe is also registered, by the same
+      verifier and gate as a closure, against the keyframe this far back along the path
+      (the newest one at least this far back), so a front-end slip between the two is
+      measured against an older scan that the slip did not smear. None (the default):
+      off; ``min_separation_m`` still bounds the loop-closure candidates.
+      ``local_query``: what is registered: ``"submap"`` (as a closure: the last
+      ``submap_keyframes`` keyframes up to the new one onto those around the older one
+      that are not among them) or ``"scan"`` (the new keyframe's own scan onto the
+      ``submap_keyframes`` keyframes up to the older one: scan-to-submap, Cartographer's
+      reading, nothing in either the slip could have smeared).
     - ``submap_keyframes``: keyframes whose scans form a local map (query: the last ones up
       to ``i``; target: as many on each side of ``j``).
     - ``voxel_size_m``: voxel size of the registration map and of the query's downsampling.
@@ -107,6 +123,8 @@ class LoopClosureParams:
     max_search_radius_m: float = 6.0
     max_candidates: int = 1
     closure_spacing_m: float = 0.0
+    local_separation_m: float | None = None
+    local_query: str = "submap"
     submap_keyframes: int = 10
     voxel_size_m: float = 0.10
     max_correspondence_m: float = 1.0
@@ -125,6 +143,9 @@ class LoopClosureParams:
     gate_chi2: float = 16.27
 
     def __post_init__(self) -> None:
+        if self.local_query not in LOCAL_QUERIES:
+            raise InputError(f"LoopClosureParams.local_query must be one of "
+                             f"{', '.join(LOCAL_QUERIES)}, got {self.local_query!r}")  # fmt: skip
         if self.gate not in GATES:
             raise InputError(
                 f"LoopClosureParams.gate must be one of {', '.join(GATES)}, got {self.gate!r}"
@@ -135,6 +156,8 @@ class LoopClosureParams:
                        "max_correction_deg", "gate_chi2")  # fmt: skip
         if self.overlap_distance_m is not None:
             check_positive(self, "overlap_distance_m")
+        if self.local_separation_m is not None:
+            check_positive(self, "local_separation_m")
         check_non_negative(self, "min_separation_m", "search_radius_per_m", "closure_spacing_m",
                            "max_correction_per_m", "max_correction_deg_per_m")  # fmt: skip
         check_positive_int(self, "max_candidates", "submap_keyframes", "max_iterations",
@@ -323,6 +346,25 @@ class LoopVerifier:
             reason = f"scan fitness: inlier ratio {scan_ratio:.2f}, {scan_inliers} inliers"
         return self._verdict(i, j, refined, estimate, ratio, inliers, path_m, reason,
                              self._information(refined, scan, target))  # fmt: skip
+
+    def chain_information(
+        self,
+        motion: NDArray[np.float64],
+        previous: NDArray[np.float64],
+        scan: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """The point-to-line Hessian of a keyframe-to-keyframe motion (the scan-matching
+        chain factor ``previous → scan`` measuring ``motion``, the newer keyframe's pose in
+        the previous one's frame): the previous keyframe's scan placed in the newer one's
+        frame at the front end's estimate, on the newer scan's lines. That is a left
+        perturbation of ``motion⁻¹``, i.e. the factor's own (right) perturbation of
+        ``motion``, as for a closure."""
+        p = self.params
+        points = voxel_downsample_2d(previous, p.voxel_size_m)
+        target = voxel_downsample_2d(scan, p.voxel_size_m / 2)
+        if len(points) == 0 or len(target) == 0:
+            return np.zeros((3, 3))
+        return self._information(between_arrays(motion, np.zeros(3)), points, target)
 
     def _information(
         self, pose: NDArray[np.float64], points: NDArray[np.float64], target: NDArray[np.float64]
