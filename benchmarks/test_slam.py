@@ -8,10 +8,13 @@ count are the cost per view, side by side in one run:
 - ``albot1``: tracking, triangulation, the transient global map;
 - ``scan_odometry``: surface extraction, one KISS-ICP registration per view (181 beams
   lifted to 3 layers), one map insert;
-- ``slam``: the same front end, plus keyframes, proximity loop candidates verified by
-  registering local maps, and Levenberg–Marquardt on the GTSAM pose graph;
-- ``slam_gnc``: the same, every registration-verified closure admitted and the graph
-  solved by GNC (``PoseGraphParams(optimizer="gnc")``, ``LoopClosureParams(gate="none")``).
+- ``slam``: the same front end, plus keyframes, proximity loop candidates and short-range
+  constraints verified by registering local maps, Hessian-shaped chain factors, and GNC
+  on the GTSAM pose graph (its defaults);
+- ``slam_previous``: the previous defaults (no short-range constraints, fixed chain
+  information, Levenberg–Marquardt with Cauchy kernels);
+- ``slam_gnc_all``: the defaults with every registration-verified closure admitted
+  (``LoopClosureParams(gate="none")``) for GNC to weigh.
 """
 
 from __future__ import annotations
@@ -50,16 +53,22 @@ def map_all(factory: Callable[[], Mapper], frames: list[Frame]) -> Mapper:
     return mapper
 
 
-def slam_gnc() -> LoopClosingSLAM:
-    return LoopClosingSLAM(SlamParams(loops=LoopClosureParams(gate="none"),
-                                      graph=PoseGraphParams(optimizer="gnc")))  # fmt: skip
+def slam_previous() -> LoopClosingSLAM:
+    return LoopClosingSLAM(
+        SlamParams(loops=LoopClosureParams(local_separation_m=None),
+                   graph=PoseGraphParams(optimizer="lm", odom_information="fixed"))
+    )  # fmt: skip
+
+
+def slam_gnc_all() -> LoopClosingSLAM:
+    return LoopClosingSLAM(SlamParams(loops=LoopClosureParams(gate="none")))
 
 
 @pytest.mark.benchmark(group="slam-vs-albot1-per-loop")
 @pytest.mark.parametrize(
     "factory",
-    [Albot1, ScanMatchingSLAM, LoopClosingSLAM, slam_gnc],
-    ids=["albot1", "scan_odometry", "slam", "slam_gnc"],
+    [Albot1, ScanMatchingSLAM, LoopClosingSLAM, slam_previous, slam_gnc_all],
+    ids=["albot1", "scan_odometry", "slam", "slam_previous", "slam_gnc_all"],
 )
 def test_cost_of_one_loop(
     benchmark: Any, factory: Callable[[], Mapper], frames: list[Frame]

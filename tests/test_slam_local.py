@@ -55,7 +55,8 @@ def test_short_range_constraints_join_the_graph(
     """With short-range constraints each keyframe is checked against the one ≥ 3 m back,
     the accepted ones join the graph beside the loop closures (and move the estimate),
     and the loop-closure counts stay apart from theirs."""
-    plain = map_frames(LoopClosingSLAM(), opening)
+    off = LoopClosureParams(local_separation_m=None)  # the rule off (3 m is the default)
+    plain = map_frames(LoopClosingSLAM(SlamParams(loops=off)), opening)
     loops = LoopClosureParams(local_separation_m=3.0, local_query=query)
     local = map_frames(LoopClosingSLAM(SlamParams(loops=loops)), opening)
     assert "local_candidates" not in plain.slam_stats() and not plain.local_checks
@@ -128,7 +129,8 @@ def test_hessian_chain_information_changes_the_mapper_graph(
 ) -> None:
     """On the office run the shaped chain factors give a different optimised path than
     the fixed ones, from the same front end."""
-    plain = map_frames(LoopClosingSLAM(), opening[:120])
+    fixed = SlamParams(graph=PoseGraphParams(odom_information="fixed"))
+    plain = map_frames(LoopClosingSLAM(fixed), opening[:120])
     shaped = map_frames(
         LoopClosingSLAM(SlamParams(graph=PoseGraphParams(odom_information="hessian"))),
         opening[:120],

@@ -114,7 +114,7 @@ def test_robust_kernel_limits_a_false_closure_that_got_through(extra: None) -> N
     motions = [np.array([1.0, 0.0, np.pi / 2 if (k + 1) % 10 == 0 else 0.0]) for k in range(40)]
 
     def square(kernel: str, false_closure: bool) -> np.ndarray:
-        graph = PoseGraph(PoseGraphParams(loop_kernel=kernel))
+        graph = PoseGraph(PoseGraphParams(optimizer="lm", loop_kernel=kernel))
         graph.add_keyframe(None, np.zeros(3))
         for m in motions[:-1]:
             graph.add_keyframe(m, compose_arrays(graph.estimate[-1], m))
@@ -168,7 +168,7 @@ def test_gnc_drops_false_closures_and_keeps_true_ones(extra: None, loss: str) ->
     assert np.all(weights[:-3] > (0.99 if loss == "tls" else 0.8))
     clean = two_laps(gnc_params, []).estimate
     assert np.hypot(*(gnc.estimate[:, :2] - clean[:, :2]).T).max() < 0.01
-    plain = two_laps(PoseGraphParams(loop_kernel="none"), false_loops).estimate
+    plain = two_laps(PoseGraphParams(optimizer="lm", loop_kernel="none"), false_loops).estimate
     assert np.hypot(*(plain[:, :2] - clean[:, :2]).T).max() > 1.0
     # and the true closures did their work: the 16° of drift at the end is mostly gone
     assert np.degrees(abs(between_arrays(truth[79], gnc.estimate[79])[2])) < 4.0

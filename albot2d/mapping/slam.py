@@ -1,8 +1,9 @@
 """The paper's Albot_x as SLAM robots (optional ``[slam]`` extra: kiss-icp, gtsam).
 
 - ``LoopClosingSLAM`` (``slam``): the scan-matching front end below, keyframes, loop
-  closures found by proximity and verified by registration (``slam_loops``), and a GTSAM
-  pose graph (``slam_graph``); every view is placed by its keyframe's optimised pose.
+  closures found by proximity and short-range constraints to the keyframe 3 m back, each
+  verified by registration (``slam_loops``), and a GTSAM pose graph solved by GNC
+  (``slam_graph``); every view is placed by its keyframe's optimised pose.
 - ``ScanMatchingSLAM`` (``scan_odometry``): the front end alone.
 
 Front end (``KissIcpOdometry``, ``slam_front``): every scan is registered against a local

@@ -4,20 +4,24 @@ Nodes are keyframe poses (``gtsam.Pose2``); the first is anchored by a tight pri
 Consecutive keyframes are joined by two factors: the scan-matching front end's relative
 motion (under a robust kernel: scan matching now and then slips by a degree or two in a
 corridor) and the wheel odometry's, each with a sigma growing with the motion (the wheel's
-may get a robust kernel too, ``wheel_kernel``). A verified loop closure adds a between factor
-whose information matrix takes its shape from the registration's point-to-line Hessian
-(a corridor fixes the position across it, not along it) under a robust kernel too, so a
-false closure that slipped through verification is down-weighted instead of bending the
-whole map.
+may get a robust kernel too, ``wheel_kernel``); by default the scan-matching factor's
+position information takes the shape of its registration's Hessian (``odom_information=
+"hessian_xy"``: along a corridor, where the scans do not fix the motion, the wheels do).
+A verified loop closure (and a short-range constraint) adds a between factor whose
+information matrix takes its shape from the registration's point-to-line Hessian (a
+corridor fixes the position across it, not along it), under a robust kernel or GNC's
+weights, so a false closure that slipped through verification is down-weighted instead of
+bending the whole map.
 
-Optimisation is batch Levenberg–Marquardt from the current estimate, run when a closure
-was added and every ``optimise_every`` keyframes (between runs a new keyframe is placed by
-composing the front end's motion onto the latest estimate). ``optimizer="gnc"`` runs
-Graduated Non-Convexity instead (Yang et al. 2020, GTSAM's ``GncLMOptimizer``): the chain
+Optimisation runs from the current estimate when a closure was added and every
+``optimise_every`` keyframes (between runs a new keyframe is placed by composing the front
+end's motion onto the latest estimate). By default (``optimizer="gnc"``) it is
+Graduated Non-Convexity (Yang et al. 2020, GTSAM's ``GncLMOptimizer``): the chain
 (prior, scan-matching and wheel factors) is known inliers, every closure a candidate whose
 weight GNC decides jointly with all the others under a truncated least squares (or
 Geman–McClure) loss; a closure is then Gaussian, as GNC replaces robust kernels by its
-own (GTSAM drops a factor's ``Robust`` wrapper, so the chain is Gaussian too).
+own (GTSAM drops a factor's ``Robust`` wrapper, so the chain is Gaussian too);
+``optimizer="lm"`` is batch Levenberg–Marquardt with the kernels above.
 """
 
 from __future__ import annotations
@@ -59,8 +63,8 @@ class PoseGraphParams:
       for closures; the best-constrained direction keeps the configured sigmas, a weaker
       one gets up to ``odom_max_sigma_ratio`` × them), so where scan matching is weakly
       constrained (along a corridor; a heading fixed by few, near points) the wheel
-      odometry factor carries the motion; ``"hessian_xy"``: the same for the position
-      only, the heading keeping its configured sigma.
+      odometry factor carries the motion; ``"hessian_xy"`` (the default): the same for
+      the position only, the heading keeping its configured sigma.
     - ``loop_sigma_m`` / ``loop_sigma_deg``: sigma of a verified loop closure in its
       best-constrained direction; ``loop_information``: shape the closure's information
       matrix by the registration's Hessian (off: those sigmas on every axis), a direction
@@ -69,9 +73,10 @@ class PoseGraphParams:
       width ``loop_kernel_width`` (in sigmas).
     - ``max_iterations`` / ``relative_error_tol``: Levenberg–Marquardt stopping rules.
     - ``optimise_every``: keyframes between optimisations when no closure asks for one.
-    - ``optimizer``: ``"lm"`` (Levenberg–Marquardt, closures under ``loop_kernel``) or
-      ``"gnc"`` (Graduated Non-Convexity around Levenberg–Marquardt: the chain is known
-      inliers, the closures are weighed jointly; ``loop_kernel`` is then unused);
+    - ``optimizer``: ``"gnc"`` (the default: Graduated Non-Convexity around
+      Levenberg–Marquardt; the chain is known inliers, the closures and short-range
+      constraints are weighed jointly; ``loop_kernel`` is then unused) or ``"lm"``
+      (Levenberg–Marquardt alone, closures under ``loop_kernel``);
       ``gnc_loss``: ``"tls"`` (truncated least squares) or ``"gm"`` (Geman–McClure);
       ``gnc_inlier_probability``: a closure is an inlier while its cost is below the χ²₃
       quantile at this probability (GTSAM ``setInlierCostThresholdsAtProbability``).
@@ -83,7 +88,7 @@ class PoseGraphParams:
     odom_sigma_deg_per_m: float = 0.2
     odom_kernel: str = "cauchy"
     odom_kernel_width: float = 5.0
-    odom_information: str = "fixed"
+    odom_information: str = "hessian_xy"
     odom_max_sigma_ratio: float = 20.0
     wheel_sigma_m: float = 0.02
     wheel_sigma_deg: float = 0.3
@@ -101,7 +106,7 @@ class PoseGraphParams:
     max_iterations: int = 100
     relative_error_tol: float = 1e-6
     optimise_every: int = 10
-    optimizer: str = "lm"
+    optimizer: str = "gnc"
     gnc_loss: str = "tls"
     gnc_inlier_probability: float = 0.99
 

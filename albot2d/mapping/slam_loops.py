@@ -28,7 +28,7 @@ the closure is about the keyframe's own pose. The result is accepted only if
   ``gate="none"`` admits every registration-verified candidate and leaves the outlier
   decision to the back end (GNC, ``slam_graph``).
 
-Short-range constraints (``local_separation_m``, off by default) reuse the same
+Short-range constraints (``local_separation_m``, 3 m by default) reuse the same
 verification between a new keyframe and the keyframe a few metres back along the path.
 
 An accepted closure carries the point-to-line Hessian of the scan's registration
@@ -89,8 +89,10 @@ class LoopClosureParams:
       constraints to nearby scans): every new keyframe is also registered, by the same
       verifier and gate as a closure, against the keyframe this far back along the path
       (the newest one at least this far back), so a front-end slip between the two is
-      measured against an older scan that the slip did not smear. None (the default):
-      off; ``min_separation_m`` still bounds the loop-closure candidates.
+      measured against an older scan that the slip did not smear. 3 m by default (with
+      the chain's ``hessian_xy`` information and the GNC back end: the combination chosen
+      on the office runs, the fig6 route and the MIT log, docs/albot-x.md); None: off.
+      ``min_separation_m`` still bounds the loop-closure candidates.
       ``local_query``: what is registered: ``"submap"`` (as a closure: the last
       ``submap_keyframes`` keyframes up to the new one onto those around the older one
       that are not among them) or ``"scan"`` (the new keyframe's own scan onto the
@@ -123,7 +125,7 @@ class LoopClosureParams:
     max_search_radius_m: float = 6.0
     max_candidates: int = 1
     closure_spacing_m: float = 0.0
-    local_separation_m: float | None = None
+    local_separation_m: float | None = 3.0
     local_query: str = "submap"
     submap_keyframes: int = 10
     voxel_size_m: float = 0.10
