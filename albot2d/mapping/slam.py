@@ -116,10 +116,11 @@ class LoopClosingSLAM:
     ``global_map()`` (every view's surfaces, none deleted) follow the optimised keyframes:
     the map changes shape when a loop closes.
 
-    Options (off by default, docs/albot-x.md): short-range constraints
-    (``LoopClosureParams.local_separation_m``: each new keyframe also verified against the
-    keyframe a few metres back, ``propose_local``) and scan-matching chain factors shaped
-    by the registration's Hessian (``PoseGraphParams.odom_information``).
+    Beyond loop closures (both on by default, docs/albot-x.md "The defaults"): short-range
+    constraints (``LoopClosureParams.local_separation_m``, 3 m: each new keyframe also
+    verified against the keyframe that far back, ``propose_local``) and scan-matching chain
+    factors whose position information is shaped by the registration's Hessian
+    (``PoseGraphParams.odom_information="hessian_xy"``).
 
     Counts: ``local_maps`` are the keyframes, ``triangulations`` the views localised by
     scan matching, ``path_integrations`` those placed by odometry alone; ``slam_stats()``
