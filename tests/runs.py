@@ -61,6 +61,17 @@ def simulate(
     return list(sim.drive(tour, profile=profile))
 
 
+SLAM_MISSING = "the [slam] extra is not installed (pip install -e '.[slam]')"
+
+
+def require_slam_extra() -> None:
+    """Skip (with the reason) unless kiss-icp and gtsam import."""
+    import pytest
+
+    pytest.importorskip("kiss_icp", reason=SLAM_MISSING)
+    pytest.importorskip("gtsam", reason=SLAM_MISSING)
+
+
 def office_loop() -> tuple[World, list[Frame]]:
     """The SLAM tests' run: a ~30 m loop through a small office, dataset3 profile, typical
     odometry noise."""

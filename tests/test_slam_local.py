@@ -18,15 +18,12 @@ from albot2d.geometry import between_arrays
 from albot2d.mapping.slam import LoopClosingSLAM, SlamParams
 from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams
 from albot2d.mapping.slam_loops import LoopClosureParams, LoopVerifier
-from tests.runs import map_frames, office_loop
-
-MISSING = "the [slam] extra is not installed (pip install -e '.[slam]')"
+from tests.runs import map_frames, office_loop, require_slam_extra
 
 
 @pytest.fixture(scope="module")
 def extra() -> None:
-    pytest.importorskip("kiss_icp", reason=MISSING)
-    pytest.importorskip("gtsam", reason=MISSING)
+    require_slam_extra()
 
 
 @pytest.fixture(scope="module")

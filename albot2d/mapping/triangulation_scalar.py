@@ -53,6 +53,14 @@ def _fit_weights(surfaces: Surfaces, index: list[int]) -> list[float]:
     return out
 
 
+def _direction_differences(ls: np.ndarray, cs: np.ndarray) -> np.ndarray:
+    """Each local surface's direction minus its current one's (numpy's ``arctan2``: both
+    paths start from these same numbers)."""
+    return np.arctan2(ls[:, 3] - ls[:, 1], ls[:, 2] - ls[:, 0]) - np.arctan2(
+        cs[:, 3] - cs[:, 1], cs[:, 2] - cs[:, 0]
+    )
+
+
 def triangulate_small(
     local: Surfaces,
     current: Surfaces,
@@ -70,9 +78,7 @@ def triangulate_small(
     if kernel is None or not len(local):
         return triangulate_small_python(local, current, pi, params, k, gate_m, gate_deg)
     ls, cs = local.segments, current.segments
-    ang_l = np.arctan2(ls[:, 3] - ls[:, 1], ls[:, 2] - ls[:, 0]) - np.arctan2(
-        cs[:, 3] - cs[:, 1], cs[:, 2] - cs[:, 0]
-    )
+    ang_l = _direction_differences(ls, cs)
     found, x, y, heading = kernel(
         ang_l, ls, cs, local.localisable, current.localisable, local.beams, current.beams,
         float(pi.x), float(pi.y), float(pi.theta), k * gate_m, k * math.radians(gate_deg),
@@ -96,9 +102,7 @@ def triangulate_small_python(
     if n == 0:
         return None
     ls, cs = local.segments, current.segments
-    ang_l = np.arctan2(ls[:, 3] - ls[:, 1], ls[:, 2] - ls[:, 0]) - np.arctan2(
-        cs[:, 3] - cs[:, 1], cs[:, 2] - cs[:, 0]
-    )
+    ang_l = _direction_differences(ls, cs)
     dtheta = [_wrap(a) for a in ang_l.tolist()]
     hint = pi.theta
     flipped = [abs(_wrap(d - hint)) > np.pi / 2 for d in dtheta]

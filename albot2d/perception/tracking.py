@@ -335,6 +335,22 @@ def _compiled_settings(params: TrackingParams) -> bool:
             and params.match_order == "distance" and params.fitness_floor <= 0)  # fmt: skip
 
 
+def _match_compiled(
+    kernel: Callable[..., tuple[Any, ...]],
+    predicted: Surfaces,
+    view: Surfaces,
+    params: TrackingParams,
+    cand: BoolArray,
+) -> tuple[Any, ...]:
+    """The compiled matcher on checked arguments: ``(tracked, view, distance, angle)``."""
+    p = predicted.segments
+    return kernel(
+        p, predicted.occluded, view.segments, view.occluded, cand,
+        np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]), _directions(view),
+        math.radians(params.match_angle_deg), params.match_distance_m,
+    )  # fmt: skip
+
+
 def match_surfaces(
     predicted: Surfaces,
     view: Surfaces,
@@ -363,12 +379,7 @@ def match_surfaces(
     if backend != "numpy":
         kernel = _compiled_match() if _compiled_settings(params) else None
         if kernel is not None:
-            p = predicted.segments
-            return kernel(
-                p, predicted.occluded, view.segments, view.occluded, cand,
-                np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]), _directions(view),
-                math.radians(params.match_angle_deg), params.match_distance_m,
-            )  # fmt: skip
+            return _match_compiled(kernel, predicted, view, params, cand)
         if backend == "numba":
             raise ValueError(
                 "backend='numba' needs numba (the fast extra) and the paper's "
@@ -432,12 +443,7 @@ def recognise(
     if kernel is not None:
         # ``match_surfaces``' compiled path without its argument checks (done above):
         # recognition runs two or three times per view (the mapper and the checks).
-        p = predicted.segments
-        ti, vj, dist, angle = kernel(
-            p, predicted.occluded, view.segments, view.occluded, cand,
-            np.arctan2(p[:, 3] - p[:, 1], p[:, 2] - p[:, 0]), _directions(view),
-            math.radians(params.match_angle_deg), params.match_distance_m,
-        )  # fmt: skip
+        ti, vj, dist, angle = _match_compiled(kernel, predicted, view, params, cand)
     else:
         ti, vj, dist, angle = match_surfaces(predicted, view, params, cand)
     return MatchInfo(ti, vj, dist, angle, predicted, cand)
