@@ -13,6 +13,7 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from albot2d.evaluation import heading_bound as hb
 from albot2d.evaluation import invariants as inv
 from albot2d.evaluation import sim_invariants as sim_inv
 from albot2d.evaluation.campaign import CampaignParams
@@ -55,11 +56,8 @@ def test_a_real_run_passes_every_check(run) -> None:  # type: ignore[no-untyped-
     for f in frames:
         checker(f)
     assert checker.finish() == [] and checker.hits > 100 * len(frames)
-    bound = inv.heading_error_bound(
-        truth,
-        NOISE_PRESETS["typical"],
-        get_profile("dataset3"),
-        inv.local_maps_per_row(m.route, index),
+    bound = hb.heading_error_bound(
+        m.route, index, truth, NOISE_PRESETS["typical"], get_profile("dataset3"), LaserNoise()
     )
     inv.check_heading_error_bound(m.trajectory(), truth, bound)
 
@@ -149,11 +147,8 @@ def test_hits_seen_from_the_wrong_pose_are_caught(run, laser: LaserNoise) -> Non
 
 def test_a_heading_that_jumps_is_caught(run) -> None:  # type: ignore[no-untyped-def]
     m, truth, index = run[2], run[4], run[5]
-    bound = inv.heading_error_bound(
-        truth,
-        NOISE_PRESETS["typical"],
-        get_profile("dataset3"),
-        inv.local_maps_per_row(m.route, index),
+    bound = hb.heading_error_bound(
+        m.route, index, truth, NOISE_PRESETS["typical"], get_profile("dataset3"), LaserNoise()
     )
     estimate = m.trajectory().copy()
     estimate[len(estimate) // 2 :, 2] += math.radians(60.0)
@@ -161,17 +156,22 @@ def test_a_heading_that_jumps_is_caught(run) -> None:  # type: ignore[no-untyped
         inv.check_heading_error_bound(estimate, truth, bound)
 
 
-def test_the_heading_bound_grows_with_noise_travel_and_local_maps(run) -> None:  # type: ignore[no-untyped-def]
-    truth = run[4]
+def test_the_heading_bound_grows_with_odometry_noise(run) -> None:  # type: ignore[no-untyped-def]
+    """The same route's bound: path-integration links and the offsets from each local map
+    carry odometry's error, so more noise never lowers it; with none, only the laser's
+    triangulation error and the floor remain."""
+    m, truth, index = run[2], run[4], run[5]
     d1 = get_profile("dataset3")
-    zero_maps = np.zeros(len(truth), dtype=np.int64)
-    none = inv.heading_error_bound(truth, NOISE_PRESETS["none"], d1, zero_maps)
-    typical = inv.heading_error_bound(truth, NOISE_PRESETS["typical"], d1, zero_maps)
-    high = inv.heading_error_bound(truth, NOISE_PRESETS["high"], d1, zero_maps)
-    assert np.all(none == math.radians(inv.InvariantParams().heading_floor_deg))
-    assert np.all(np.diff(typical) >= 0) and np.all(high >= typical) and high[-1] > typical[-1]
-    maps = np.arange(len(truth))
-    assert np.all(inv.heading_error_bound(truth, NOISE_PRESETS["none"], d1, maps)[1:] > none[1:])
+
+    def bound(noise: str) -> np.ndarray:
+        return hb.heading_error_bound(m.route, index, truth, NOISE_PRESETS[noise], d1, LaserNoise())
+
+    none, typical, high = bound("none"), bound("typical"), bound("high")
+    floor = math.radians(hb.HeadingBoundParams().floor_deg)
+    assert np.all(none >= floor) and none[-1] > floor  # the laser's error accumulates
+    eps = 1e-12  # the same sums in another order
+    assert np.all(typical >= none - eps) and np.all(high >= typical - eps)
+    assert high.max() > typical.max() > none.max()
 
 
 def test_a_misplaced_local_map_breaks_zero_noise_localisation(run) -> None:  # type: ignore[no-untyped-def]
@@ -217,8 +217,10 @@ def test_albot1_heading_error_stays_within_the_noise_bound(world, seed, noise) -
     frames = simulate(world, seed, noise=noise)
     m = run_albot1(frames).mapper
     truth = np.array([f.true_pose.as_array() for f in frames])
-    maps = inv.local_maps_per_row(m.route, np.array([f.index for f in frames]))
-    bound = inv.heading_error_bound(truth, NOISE_PRESETS[noise], get_profile("dataset3"), maps)
+    index = np.array([f.index for f in frames])
+    bound = hb.heading_error_bound(
+        m.route, index, truth, NOISE_PRESETS[noise], get_profile("dataset3"), LaserNoise()
+    )
     inv.check_heading_error_bound(m.trajectory(), truth, bound)
 
 

@@ -423,7 +423,9 @@ def check_update_deleted_facing_overlap(
 
 
 class UpdateRecorder:
-    """An Albot1 ``on_update`` hook checking algorithm #5's postcondition after every update.
+    """An Albot1 ``on_update`` hook checking algorithm #5 after every update, both ways
+    (``deletion_partition.check_update_partition``: the surfaces deleted are exactly those
+    the rule deletes, recomputed from its definition).
 
     With ``raise_at_once`` (tests) a violation propagates out of ``observe``; otherwise
     (the campaign) the run goes on and the messages collect in ``violations``.
@@ -446,8 +448,15 @@ class UpdateRecorder:
             raise RuntimeError("UpdateRecorder: attach it to a mapper first")
         self.updates += 1
         try:
+            from albot2d.evaluation.deletion_partition import check_update_partition
+
+            m = self.mapper
             view = transform_segments_fast(lm.pose, lm.view.segments)
-            check_update_deleted_facing_overlap(self.mapper, report, lm.pose, view)
+            check_update_partition(
+                m.global_map(report.update - 1), m.global_map(report.update), report.update,
+                report.map_id, lm.pose, view, m.map.params,
+                {x.map_id for x in m.route if x.map_id <= report.map_id},
+            )  # fmt: skip
         except InvariantError as exc:
             if self.raise_at_once:
                 raise

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from albot2d.errors import InputError
+from albot2d.evaluation import heading_bound as hb
 from albot2d.evaluation import invariants as inv
 from albot2d.evaluation import sim_invariants as sim_inv
 from albot2d.evaluation.episode_metrics import complete_scores, episode_metrics
@@ -179,6 +180,7 @@ class _Checks:
         self.clearance: sim_inv.ClearanceChecker | None = None
         self.updates: inv.UpdateRecorder | None = None
         self.views: inv.ViewRecorder | None = None
+        self.reference: hb.ReferenceLinks | None = None
         self.world: Any = None
         self.checked: list[str] = []
         self.violations: dict[str, list[str]] = {}
@@ -198,6 +200,8 @@ class _Checks:
             self.clearance(frame)
         if self.frames is not None:
             self.frames(frame)
+        if self.reference is not None:
+            self.reference(frame)
 
     def chain(self, other: Any) -> Any:
         """``on_frame``, then ``other`` (a progress display) when given."""
@@ -215,6 +219,8 @@ class _Checks:
             if isinstance(mapper, Albot1):
                 self.updates = inv.UpdateRecorder(raise_at_once=False).attach(mapper)
                 self.views = inv.ViewRecorder().attach(mapper)
+            elif route_of(mapper) is None:  # held to a view-based localiser's links
+                self.reference = hb.ReferenceLinks()
 
     def add(self, name: str, messages: list[str]) -> None:
         if messages:
@@ -264,11 +270,18 @@ class _Checks:
                     trace.frame_indices,
                     truth,
                 )
-            maps = inv.local_maps_per_row(route, trace.frame_indices)
-            bound = inv.heading_error_bound(truth, noise, get_profile(self.spec.profile), maps)
-            err = inv.heading_errors(estimate, truth)
+        links = route
+        if links is None and self.reference is not None:
+            links = self.reference.route
+        if links is not None and len(estimate) == len(truth):
+            tracking = mapper.params.tracking if isinstance(mapper, Albot1) else None
+            bound = hb.heading_error_bound(
+                links, trace.frame_indices, truth, noise_preset(self.spec.noise),
+                get_profile(self.spec.profile), self.laser, tracking,
+            )  # fmt: skip
+            err = hb.heading_errors(estimate, truth)
             metrics["heading_bound_ratio_max"] = float(np.max(err / bound))
-            self.run("heading_error_bound", inv.check_heading_error_bound, estimate, truth, bound)
+            self.run("heading_error_bound", hb.check_heading_error_bound, estimate, truth, bound)
         err = np.degrees(inv.heading_errors(estimate, truth))
         odo = np.degrees(inv.heading_errors(trace.odom_poses, truth))
         metrics |= {

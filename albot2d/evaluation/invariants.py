@@ -9,8 +9,9 @@ records the name and message. Which checks apply:
 - view-based mappers (with a route map): ``route_connected`` (every local map after the
   first has a pose in its predecessor and composing the chain gives every map's pose),
   ``zero_noise_localisation`` (with no odometry or laser noise, each local map is placed in
-  its predecessor within 5 cm / 0.5°) and ``heading_error_bound`` (see
-  :func:`heading_error_bound`);
+  its predecessor within 5 cm / 0.5°);
+- every mapper that reports a trajectory: ``heading_error_bound`` (the heading error stays
+  within the mapper's own localisation error model, ``albot2d.evaluation.heading_bound``);
 - Albot1 only: ``local_map_rule`` (algorithm #2's remembering rule with Use-Vc, its
   tracked counts recounted from the views a ``ViewRecorder`` kept) and
   ``update_deletes_facing_overlap`` (algorithm #5's postcondition after every update, in
@@ -31,14 +32,17 @@ from albot2d.evaluation.deletion_invariant import (
     UpdateRecorder,
     check_update_deleted_facing_overlap,
 )
+from albot2d.evaluation.heading_bound import (
+    check_heading_error_bound,
+    heading_error_bound,
+    heading_errors,
+)
 from albot2d.evaluation.invariant_base import InvariantError, fail
 from albot2d.geometry import Pose, between_arrays, wrap_angle
 from albot2d.mapping.albot1 import Albot1
 from albot2d.mapping.route_map import RouteMap
 from albot2d.perception.surfaces import Surfaces
 from albot2d.perception.tracking import TrackingParams, recognise, trackable_mask
-from albot2d.sim.driving import DrivingProfile
-from albot2d.sim.odometry import OdometryNoise
 from albot2d.validation import check_non_negative, check_positive
 
 __all__ = [
@@ -57,7 +61,6 @@ __all__ = [
     "heading_error_bound",
     "heading_errors",
     "local_map_errors",
-    "local_maps_per_row",
     "recount_tracking",
 ]
 
@@ -84,8 +87,7 @@ class InvariantParams:
       + the jitter's lateral offset at that many sigmas): how far a hit may lie off a wall.
     - ``zero_noise_position_m`` / ``zero_noise_heading_deg``: the largest error of a local
       map's pose in its predecessor when neither odometry nor laser is noisy.
-    - ``heading_sigmas``, ``heading_floor_deg``, ``triangulation_heading_deg``: the heading
-      bound (see :func:`heading_error_bound`).
+    (The heading bound's constants are ``heading_bound.HeadingBoundParams``.)
     """
 
     chain_atol_m: float = 1e-9
@@ -94,9 +96,6 @@ class InvariantParams:
     hit_sigmas: float = 7.0
     zero_noise_position_m: float = 0.05
     zero_noise_heading_deg: float = 0.5
-    heading_sigmas: float = 5.0
-    heading_floor_deg: float = 1.0
-    triangulation_heading_deg: float = 0.6
 
     def __post_init__(self) -> None:
         check_non_negative(
@@ -104,12 +103,8 @@ class InvariantParams:
             "chain_atol_m",
             "overlap_tolerance_m",
             "hit_tolerance_m",
-            "heading_floor_deg",
-            "triangulation_heading_deg",
         )
-        check_positive(
-            self, "hit_sigmas", "zero_noise_position_m", "zero_noise_heading_deg", "heading_sigmas"
-        )
+        check_positive(self, "hit_sigmas", "zero_noise_position_m", "zero_noise_heading_deg")
 
 
 # -- the route map and algorithm #2 ---------------------------------------------------------
@@ -301,71 +296,4 @@ def check_zero_noise_localisation(
             f"{lm.frame_index}, {lm.method}, {lm.tracked} tracked): {pos[k]:.3f} m, "
             f"{math.degrees(head[k]):.2f}° (bounds {p.zero_noise_position_m} m, "
             f"{p.zero_noise_heading_deg}°)",
-        )
-
-
-def heading_errors(estimate: FloatArray, truth: FloatArray) -> FloatArray:
-    """Absolute heading error (rad) of each pose relative to the run's first pose."""
-    est = np.asarray(estimate)[:, 2] - estimate[0, 2]
-    true = np.asarray(truth)[:, 2] - truth[0, 2]
-    return np.abs(np.asarray(wrap_angle(est - true)))
-
-
-def heading_error_bound(
-    true_poses: FloatArray,
-    noise: OdometryNoise,
-    profile: DrivingProfile,
-    local_maps: NDArray[np.int64],
-    params: InvariantParams | None = None,
-) -> FloatArray:
-    """The largest plausible heading error (rad) at each pose of a run, for a view-based
-    mapper fed odometry with ``noise`` and driven with ``profile``.
-
-    Odometry's own error envelope over the true motion so far — ``heading_sigmas`` standard
-    deviations of its random error (α1 per radian turned, α2 per metre, as in
-    ``perturb_increment``), plus the systematic part at full strength (turn scale error ×
-    radians turned, drift × metres, the induced error × turn steps) — widened by a random
-    walk of ``triangulation_heading_deg`` per local map remembered (the laser-based
-    localisation's own error) and a floor of ``heading_floor_deg``. A mapper that places
-    views by the laser should stay well inside it; one that breaks (a flipped triangulation,
-    a lost local map) leaves it.
-    """
-    p = params or InvariantParams()
-    poses = np.asarray(true_poses, dtype=np.float64)
-    inc = between_arrays(poses[:-1], poses[1:]) if len(poses) > 1 else np.zeros((0, 3))
-    dist = np.hypot(inc[:, 0], inc[:, 1])
-    turn = np.abs(np.asarray(wrap_angle(inc[:, 2])))
-    turn_steps = np.ceil(turn / math.radians(profile.turn_step_deg) - 1e-9)
-    var = (noise.alpha1 * turn + noise.alpha2 * dist) ** 2 + (noise.alpha2 * dist) ** 2
-    induced_rad = math.radians(abs(noise.induced_step_deg) + abs(profile.induced_step_deg))
-    systematic = (
-        abs(noise.turn_scale_error) * turn
-        + math.radians(abs(noise.heading_drift_deg_per_m)) * dist
-        + induced_rad * turn_steps
-    )
-    zero = np.zeros(1)
-    var_total = np.concatenate([zero, np.cumsum(var)])
-    var_total += math.radians(p.triangulation_heading_deg) ** 2 * np.asarray(local_maps)
-    sys_total = np.concatenate([zero, np.cumsum(systematic)])
-    return math.radians(p.heading_floor_deg) + p.heading_sigmas * np.sqrt(var_total) + sys_total
-
-
-def local_maps_per_row(route: RouteMap, frame_indices: NDArray[np.int64]) -> NDArray[np.int64]:
-    """How many local maps had been remembered by each trace row's view."""
-    made = np.sort(np.array([lm.frame_index for lm in route], dtype=np.int64))
-    return np.searchsorted(made, np.asarray(frame_indices), side="right").astype(np.int64)
-
-
-def check_heading_error_bound(
-    estimate: FloatArray, true_poses: FloatArray, bound: FloatArray
-) -> None:
-    """The heading error relative to the start stays within ``bound`` at every pose."""
-    err = heading_errors(estimate, true_poses)
-    over = err > bound
-    if over.any():
-        k = int(np.argmax(err - bound))
-        fail(
-            "heading_error_bound",
-            f"row {k}: heading error {math.degrees(err[k]):.2f}° exceeds the bound "
-            f"{math.degrees(bound[k]):.2f}° ({int(over.sum())} of {len(err)} poses over)",
         )
