@@ -38,15 +38,17 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.compiled import compiled_kernel
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, segment_angles, wrap_angle
-from albot2d.mapping.albot1.triangulation_scalar import triangulate_small
 from albot2d.perception.surfaces import Surfaces
 from albot2d.perception.tracking import TrackingParams, key_endpoints
 from albot2d.validation import check_non_negative
@@ -289,8 +291,12 @@ def triangulate(
     """
     gate_m, gate_deg = _gate_limits(params, gate)
     k = max(int(steps), 1)
-    if len(local) < _SMALL and len(local) == len(current) and _small_path_covers(params):
-        return triangulate_small(local, current, path_integration, params, k, gate_m, gate_deg)
+    if 0 < len(local) < _SMALL and len(local) == len(current) and _small_path_covers(params):
+        kernel = compiled_kernel("albot2d.mapping.albot1.triangulation_numba", "triangulate_kernel")
+        if kernel is not None:
+            return _triangulate_compiled(
+                kernel, local, current, path_integration, params, k, gate_m, gate_deg
+            )
     aff = pose_affordances(local, current, path_integration.theta, params)
     consistent = (
         np.hypot(aff.poses[:, 0] - path_integration.x, aff.poses[:, 1] - path_integration.y)
@@ -375,16 +381,43 @@ def heading_from_directions(
     return float(wrap_angle(path_integration.theta + fused[0]))
 
 
-# -- a few surfaces: the same triangulation in scalars (``triangulation_scalar``) --------
-# Its sums run left to right, which is what numpy's pairwise summation does below 8 terms,
-# hence ``_SMALL``; ``tests/test_triangulation_small.py`` checks the two paths equal.
+# -- a few surfaces: one compiled call (``triangulation_numba``) -------------------------
+# For fewer than ``_SMALL`` surfaces numpy's small-array overhead costs more than the work,
+# so with numba the default heuristics run in one compiled call: the array path's float
+# operations in its order (sums left to right, which is what numpy's pairwise summation
+# does below 8 terms), hence the same pose bit for bit (tests/test_triangulation_small.py).
+# The kernel takes numpy's direction differences: numpy's vectorised arctan2 differs from
+# numba's in the last bit on some CPUs.
 _SMALL = 8
 
 
 @functools.lru_cache(maxsize=16)
 def _small_path_covers(params: TriangulationParams) -> bool:
-    """The scalar path implements the default heuristics (any gate and consensus)."""
+    """The compiled path implements the default heuristics (any gate and consensus)."""
     general = dataclasses.replace(
         params, max_pi_deviation_m=None, max_pi_deviation_deg=None, heading_consensus_deg=1.0
     )
     return general == TriangulationParams()
+
+
+def _triangulate_compiled(
+    kernel: Callable[..., tuple[bool, float, float, float]],
+    local: Surfaces,
+    current: Surfaces,
+    pi: Pose,
+    params: TriangulationParams,
+    k: int,
+    gate_m: float,
+    gate_deg: float,
+) -> Pose | None:
+    """``triangulate``'s array path for a few surfaces in one compiled call."""
+    ls, cs = local.segments, current.segments
+    ang_l = np.arctan2(ls[:, 3] - ls[:, 1], ls[:, 2] - ls[:, 0]) - np.arctan2(
+        cs[:, 3] - cs[:, 1], cs[:, 2] - cs[:, 0]
+    )
+    found, x, y, heading = kernel(
+        ang_l, ls, cs, local.localisable, current.localisable, local.beams, current.beams,
+        float(pi.x), float(pi.y), float(pi.theta), k * gate_m, k * math.radians(gate_deg),
+        math.radians(params.heading_consensus_deg), bool(params.use_outlier_heuristic),
+    )  # fmt: skip
+    return Pose(float(x), float(y), float(heading)) if found else None
