@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 
 from albot2d.geometry import Pose
 from albot2d.mapping import Albot1
-from albot2d.mapping.global_map import GlobalMap, UpdateReport
+from albot2d.mapping.albot1.global_map import GlobalMap, UpdateReport
 
 __all__ = ["OverDeletingAlbot1", "OverDeletingMap", "UnderDeletingMap"]
 

@@ -1,4 +1,4 @@
-"""Algorithm #5 checked both ways (albot2d.evaluation.deletion_partition): on real runs
+"""Algorithm #5 checked both ways (albot2d.evaluation.checks.deletion_partition): on real runs
 every deletion reading deletes exactly what its rule says; an update that deletes too
 much or too little is caught, by the check and by a fuzzing campaign's episode."""
 
@@ -9,16 +9,16 @@ import dataclasses
 import numpy as np
 import pytest
 
-from albot2d.evaluation import deletion_partition as dp
-from albot2d.evaluation.campaign import CampaignParams
-from albot2d.evaluation.episode import EpisodeSpec, run_episode
-from albot2d.evaluation.invariant_base import InvariantError
-from albot2d.evaluation.invariants import UpdateRecorder
+from albot2d.evaluation.checks import deletion_partition as dp
+from albot2d.evaluation.checks.invariants import UpdateRecorder
+from albot2d.evaluation.checks.violation import InvariantError
+from albot2d.evaluation.fuzz.campaign import CampaignParams
+from albot2d.evaluation.fuzz.episode import EpisodeSpec, run_episode
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
 from albot2d.mapping import Albot1, Albot1Params
-from albot2d.mapping.deletion import DELETION_PRESETS, GlobalMapParams
-from albot2d.mapping.global_map import GlobalMap
+from albot2d.mapping.albot1.deletion import DELETION_PRESETS, GlobalMapParams
+from albot2d.mapping.albot1.global_map import GlobalMap
 from albot2d.mapping.protocol import MapSnapshot
 from tests.plants import OverDeletingMap, UnderDeletingMap
 from tests.runs import map_frames, simulate

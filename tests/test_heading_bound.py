@@ -1,4 +1,4 @@
-"""The heading bound (albot2d.evaluation.heading_bound): its error model checked against
+"""The heading bound (albot2d.evaluation.checks.heading_bound): its error model checked against
 independent computations (a Monte Carlo line fit, hand-worked odometry envelopes), and
 the invariant shown to catch what it is for: a 10° heading error planted half-way, a
 flipped triangulation and raw odometry, while Albot1 and the exact poses hold it."""
@@ -10,13 +10,13 @@ import math
 import numpy as np
 import pytest
 
-from albot2d.evaluation import heading_bound as hb
-from albot2d.evaluation.invariant_base import InvariantError
+from albot2d.evaluation.checks import heading_bound as hb
+from albot2d.evaluation.checks.violation import InvariantError
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
 from albot2d.mapping import Albot1
+from albot2d.mapping.albot1.route_map import Method
 from albot2d.mapping.baselines import GroundTruthIntegration, NaiveIntegration
-from albot2d.mapping.route_map import Method
 from albot2d.perception import TrackedSurfaces
 from albot2d.perception.surfaces import Surfaces
 from albot2d.sim.driving import get_profile
@@ -186,7 +186,7 @@ def test_path_integration_links_carry_odometry_over_the_link_only(typical: _Run)
     over the run (the links' variances and systematic parts add up to the whole); with no
     odometry noise it is the floor."""
     m = map_frames(Albot1(), typical.frames)
-    from albot2d.mapping.route_map import RouteMap
+    from albot2d.mapping.albot1.route_map import RouteMap
 
     pi = RouteMap()
     for lm in m.route:

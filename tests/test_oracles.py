@@ -14,12 +14,12 @@ import math
 import numpy as np
 import pytest
 
-import albot2d.mapping.triangulation as tri
-from albot2d.evaluation.rpe import relation_errors, relative_pose_error
+import albot2d.mapping.albot1.triangulation as tri
+from albot2d.evaluation.metrics.rpe import relation_errors, relative_pose_error
 from albot2d.frames import Scan
 from albot2d.geometry import Pose, between_arrays
-from albot2d.mapping.deletion import group_maps
-from albot2d.mapping.triangulation import TriangulationParams, triangulate
+from albot2d.mapping.albot1.deletion import group_maps
+from albot2d.mapping.albot1.triangulation import triangulate
 from albot2d.perception.extraction import ExtractionParams, extract_surfaces, numba_available
 from albot2d.perception.surfaces import Surfaces
 
@@ -217,7 +217,7 @@ def _observed(walls: np.ndarray, pose: Pose) -> np.ndarray:
 
 
 def _both_paths(local: Surfaces, current: Surfaces, pi: Pose) -> list[Pose | None]:
-    """The small (scalar / compiled) path and the array path."""
+    """The small (compiled) path and the array path."""
     fast = triangulate(local, current, pi, steps=3)
     small, tri._SMALL = tri._SMALL, 0
     try:
@@ -276,22 +276,19 @@ def test_a_mistracked_surface_is_outvoted_on_both_paths() -> None:
 
 
 @pytest.mark.parametrize("seed", range(40))
-def test_compiled_and_python_triangulation_agree_where_a_pose_is_afforded(seed: int) -> None:
-    """The twin comparison on views that do afford a pose (no trivial None/None): a few
-    surfaces seen from a pose near path integration with noise, some ends occluded or
-    swapped; both give the same pose, and it lies near the true one."""
-    pytest.importorskip("numba")
-    from albot2d.mapping.triangulation_scalar import triangulate_small, triangulate_small_python
-
+def test_both_triangulation_paths_find_the_true_pose_where_one_is_afforded(seed: int) -> None:
+    """The twin comparison on views that do afford a pose (no trivial None/None), with
+    the true pose as the oracle: a few surfaces seen from a random heading (any, ±π
+    included) with noise, some ends occluded or swapped, path integration near the truth."""
     rng = np.random.default_rng(5000 + seed)
     n = int(rng.integers(1, 8))
     start = rng.uniform(-4.0, 4.0, (n, 2))
     ang = rng.uniform(-np.pi, np.pi, n)
     length = rng.uniform(0.5, 3.0, n)
-    walls = np.hstack(
-        [start, start + length[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])]
-    )
-    true = Pose(*rng.normal(0.0, 0.3, 2), float(rng.uniform(-np.pi, np.pi)))
+    direction = np.column_stack([np.cos(ang), np.sin(ang)])
+    walls = np.hstack([start, start + length[:, None] * direction])
+    x, y = rng.normal(0.0, 0.3, 2)
+    true = Pose(float(x), float(y), float(rng.uniform(-np.pi, np.pi)))
     seen = _observed(walls, true) + rng.normal(0.0, 0.005, (n, 4))
     swap = rng.random(n) < 0.3
     seen[swap] = seen[swap][:, [2, 3, 0, 1]]
@@ -301,9 +298,7 @@ def test_compiled_and_python_triangulation_agree_where_a_pose_is_afforded(seed: 
     current = Surfaces.from_segments(seen, np.where(swap[:, None], occluded[:, ::-1], occluded))
     pi = Pose(true.x + rng.normal(0, 0.05), true.y + rng.normal(0, 0.05),
               true.theta + rng.normal(0, 0.02))  # fmt: skip
-    params = TriangulationParams()
-    fast = triangulate_small(local, current, pi, params, 2, 0.4, 5.0)
-    slow = triangulate_small_python(local, current, pi, params, 2, 0.4, 5.0)
+    fast, slow = _both_paths(local, current, pi)
     assert fast is not None and slow is not None
     assert repr(fast) == repr(slow)
     assert math.hypot(fast.x - true.x, fast.y - true.y) < 0.05
