@@ -9,10 +9,12 @@ from __future__ import annotations
 import pytest
 
 from albot2d.seeding import make_rng
-from worldgen import KINDS, generate
+from worldgen import generate
+from worldgen.kinds import world_kinds
 from worldgen.tours import make_tour
 
 SIZES_M = (50.0, 200.0)
+KINDS = tuple(world_kinds())
 
 
 @pytest.mark.parametrize("size_m", SIZES_M)

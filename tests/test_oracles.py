@@ -303,3 +303,22 @@ def test_both_triangulation_paths_find_the_true_pose_where_one_is_afforded(seed:
     assert repr(fast) == repr(slow)
     assert math.hypot(fast.x - true.x, fast.y - true.y) < 0.05
     assert abs(math.remainder(fast.theta - true.theta, 2 * math.pi)) < math.radians(1.0)
+
+
+def test_rpe_matches_timestamps_within_the_tolerance_only() -> None:
+    """A relation whose times lie 0.5 s from every pose is not used (tolerance 1 ms), and
+    one 0.5 ms off still is."""
+    t = np.arange(4, dtype=np.float64)
+    truth = np.column_stack([t, np.zeros(4), np.zeros(4)])
+    rel = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    _, _, used = relation_errors(t, truth, [0.5, 1.0005], [1.5, 2.0005], rel)
+    assert used.tolist() == [False, True]
+
+
+def test_rpe_counts_a_relation_of_exactly_split_s_as_long() -> None:
+    """Short relations span less than ``split_s``; one of exactly ``split_s`` is long."""
+    t = np.arange(5, dtype=np.float64)
+    truth = np.column_stack([t, np.zeros(5), np.zeros(5)])
+    rel = between_arrays(truth[[0, 0]], truth[[1, 2]])
+    r = relative_pose_error(t, truth, [0.0, 0.0], [1.0, 2.0], rel, split_s=2.0)
+    assert r.short.relations == 1 and r.long.relations == 1
