@@ -22,6 +22,7 @@ from typing import Any
 
 from albot2d.cli.common import (
     ALBOT1_OPTION_KEYS,
+    add_export_option,
     add_json_option,
     add_run_options,
     add_scoring_options,
@@ -90,6 +91,7 @@ def register(subparsers: Any) -> None:
         help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
         "over time beside the truth",
     )
+    add_export_option(p)
     p.add_argument(
         "--cprofile",
         metavar="FILE",
@@ -114,6 +116,28 @@ def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]
             profiler.dump_stats(path)
 
     return profiled
+
+
+def _keeps_frames(names: list[str]) -> bool:
+    from albot2d.cli.exporters import EXPORTERS
+
+    return any(EXPORTERS[name].needs_frames for name in names)
+
+
+def _exporting(
+    out: Path, names: list[str], frames: list[Any], args: argparse.Namespace
+) -> Callable[[Any], list[str]] | None:
+    """``finish``'s hook writing the ``--export`` files of a finished run, if any."""
+    if not names:
+        return None
+
+    def write(result: Any) -> list[str]:
+        from albot2d.cli.exporters import ExportSource, write_exports
+
+        options = {"bag_storage": args.bag_storage}
+        return write_exports(out, names, ExportSource(frames, result.world, result, options))
+
+    return write
 
 
 def run(args: argparse.Namespace) -> int:
@@ -143,6 +167,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
     out, created = prepare_out_dir(args.out)
     bar = None
+    exports = list(getattr(args, "export", None) or [])
+    kept: list[Any] = []  # the run's frames, for the exports that need them
+    keep = _keeps_frames(exports)
 
     def start(world: Any, tour: Any) -> None:
         # With --max-frames the run ends after that many views, not at the tour's end.
@@ -153,6 +180,8 @@ def run(args: argparse.Namespace) -> int:
             bar = progress_bar(round(tour.length_m, 1), "m", "run")
 
     def frame(f: Any, travelled: float) -> None:
+        if keep:
+            kept.append(f)
         if bar is None:
             return
         if spec.max_frames is not None:
@@ -173,6 +202,7 @@ def run(args: argparse.Namespace) -> int:
             _profiled(args.cprofile, lambda: run_experiment(
                 spec, params, on_start=start, on_frame=frame, on_stage=stage)),
             args.no_figures, stage, animate=args.animate,
+            extra_exports=_exporting(out, exports, kept, args),
         )  # fmt: skip
     finally:
         if bar is not None:
