@@ -211,9 +211,8 @@ def _open(path: Path) -> Iterator[_Bag]:
     if not path.is_dir() and sniffed is None:
         raise InputError(f"{path}: not a ROS bag (no ROS 1, MCAP or sqlite3 header)")
     if sniffed is not None and path.suffix != sniffed:
-        raise InputError(
-            f"{path}: the file is a {sniffed} bag by its header; name it *{sniffed} to read it"
-        )
+        kind = {".bag": "ROS 1 bag", ".mcap": "MCAP file", ".db3": "sqlite3 file"}[sniffed]
+        raise InputError(f"{path}: the file is a {kind} by its header; name it *{sniffed}")
     try:
         reader = AnyReader([path], default_typestore=typestore_for(1 if sniffed == ".bag" else 2))
         reader.open()
