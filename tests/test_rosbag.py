@@ -353,3 +353,13 @@ def test_simulate_writes_a_bag_that_replays_with_its_relations(
     assert main([*argv, "--mapper", "naive"]) == 0
     report = json.loads((out / "report.json").read_text())
     assert report["run"]["relations_used"] == report["run"]["relations"] > 0
+
+
+@pytest.mark.parametrize("command", ["simulate", "run"])
+def test_bag_storage_needs_a_ros2_export(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out"
+    argv = [command, "--out", str(out), "--bag-storage", "sqlite3", "--export", "rosbag1"]
+    refused(capsys, argv, "--bag-storage sqlite3 applies to --export rosbag2 only")
+    assert not out.exists()

@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from albot2d.errors import InputError
+
 __all__ = [
     "EXPORTERS",
     "ROSBAG1_NAME",
@@ -27,6 +29,7 @@ __all__ = [
     "ExportSource",
     "Exporter",
     "export_names",
+    "export_options",
     "write_exports",
 ]
 
@@ -82,6 +85,15 @@ EXPORTERS: dict[str, Exporter] = {
         Exporter("rosbag1", f"ROS 1 bag {ROSBAG1_NAME}", _rosbag(1), needs_frames=True),
     )
 }
+
+
+def export_options(args: Any) -> dict[str, Any]:
+    """The exporters' options from ``args`` (``--bag-storage``), refused where unused."""
+    names = list(getattr(args, "export", None) or [])
+    storage = getattr(args, "bag_storage", None)
+    if storage is not None and "rosbag2" not in names:
+        raise InputError(f"--bag-storage {storage} applies to --export rosbag2 only")
+    return {"bag_storage": storage}
 
 
 def export_names() -> list[str]:

@@ -125,19 +125,25 @@ def _keeps_frames(names: list[str]) -> bool:
 
 
 def _exporting(
-    out: Path, names: list[str], frames: list[Any], args: argparse.Namespace
-) -> Callable[[Any], list[str]] | None:
-    """``finish``'s hook writing the ``--export`` files of a finished run, if any."""
+    args: argparse.Namespace, frames: list[Any]
+) -> Callable[[Path], Callable[[Any], list[str]]] | None:
+    """``finish``'s hook writing the ``--export`` files of a finished run (its options
+    checked now), given the output directory; None without ``--export``."""
+    from albot2d.cli.exporters import ExportSource, export_options, write_exports
+
+    options = export_options(args)
+    names = list(args.export or [])
     if not names:
         return None
 
-    def write(result: Any) -> list[str]:
-        from albot2d.cli.exporters import ExportSource, write_exports
+    def hook(out: Path) -> Callable[[Any], list[str]]:
+        def write(result: Any) -> list[str]:
+            source = ExportSource(frames, result.world, result, options)
+            return write_exports(out, names, source)
 
-        options = {"bag_storage": args.bag_storage}
-        return write_exports(out, names, ExportSource(frames, result.world, result, options))
+        return write
 
-    return write
+    return hook
 
 
 def run(args: argparse.Namespace) -> int:
@@ -163,13 +169,13 @@ def run(args: argparse.Namespace) -> int:
         spec = spec_from_args(args)
         params = scoring_params(args)
     check_spec(spec)
+    kept: list[Any] = []  # the run's frames, for the exports that need them
+    extra = _exporting(args, kept)
     if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():
         raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
     out, created = prepare_out_dir(args.out)
     bar = None
-    exports = list(getattr(args, "export", None) or [])
-    kept: list[Any] = []  # the run's frames, for the exports that need them
-    keep = _keeps_frames(exports)
+    keep = _keeps_frames(list(args.export or []))
 
     def start(world: Any, tour: Any) -> None:
         # With --max-frames the run ends after that many views, not at the tour's end.
@@ -202,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
             _profiled(args.cprofile, lambda: run_experiment(
                 spec, params, on_start=start, on_frame=frame, on_stage=stage)),
             args.no_figures, stage, animate=args.animate,
-            extra_exports=_exporting(out, exports, kept, args),
+            extra_exports=extra(out) if extra is not None else None,
         )  # fmt: skip
     finally:
         if bar is not None:

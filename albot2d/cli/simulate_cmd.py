@@ -89,11 +89,13 @@ def _render_png(world: Any, frames: list[Any], title: str) -> bytes | None:
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.cli.common import spec_from_args
+    from albot2d.cli.exporters import export_options
     from albot2d.evaluation.setup import build_run
     from albot2d.logs import write_run
     from albot2d.logs.run_files import LOG_NAME, MANIFEST_NAME, RELATIONS_NAME, TRUTH_NAME
 
     out = _out_dir(args.out)
+    options = export_options(args)
     spec = spec_from_args(args)
     setup = build_run(spec)
     world, tour, profile, sim = setup.world, setup.tour, setup.profile, setup.simulator
@@ -126,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
         if args.export:
             from albot2d.cli.exporters import ExportSource, write_exports
 
-            source = ExportSource(frames, world, None, {"bag_storage": args.bag_storage})
+            source = ExportSource(frames, world, None, options)
             exported = write_exports(out, args.export, source)
         if png is not None:
             atomic_write_bytes(out / PNG_NAME, png)

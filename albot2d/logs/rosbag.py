@@ -169,6 +169,8 @@ class _Bag:
     def messages(self, topic: str) -> Iterator[tuple[int, Any]]:
         """``(index, message)`` of every message on ``topic``, decoded, in bag order."""
         connections = [c for c in self.reader.connections if c.topic == topic]
+        if not connections:  # (no connections would mean every message to rosbags)
+            return
         stream = self.reader.messages(connections=connections)
         index = 0
         while True:
