@@ -363,3 +363,25 @@ def test_bag_storage_needs_a_ros2_export(
     argv = [command, "--out", str(out), "--bag-storage", "sqlite3", "--export", "rosbag1"]
     refused(capsys, argv, "--bag-storage sqlite3 applies to --export rosbag2 only")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("name", ["log.bag", "log_ros2"])
+def test_evo_reads_the_bags_trajectories_and_tf_tree(simulated: Path, name: str) -> None:
+    """A ROS user's tool on the bag: evo's bag readers give the run's odometry and truth
+    (evo's /tf reading needs ROS's tf2_py, so the tf tree is checked with rosbags above)."""
+    pytest.importorskip("evo", reason="evo is the [eval] extra (also in the test extra)")
+    from evo.tools import file_interface
+    from rosbags.rosbag1 import Reader as Reader1
+    from rosbags.rosbag2 import Reader as Reader2
+
+    run = read_run(simulated)
+    reader_type = Reader1 if name.endswith(".bag") else Reader2
+    with reader_type(simulated / name) as reader:
+        odom = file_interface.read_bag_trajectory(reader, "/odom")
+        truth = file_interface.read_bag_trajectory(reader, "/ground_truth")
+    stamps = [f.timestamp for f in run.frames]
+    np.testing.assert_allclose(odom.timestamps, stamps, rtol=0, atol=1e-6)
+    odom_xy = np.array([[f.odom_pose.x, f.odom_pose.y] for f in run.frames])
+    np.testing.assert_allclose(odom.positions_xyz[:, :2], odom_xy, rtol=0, atol=1e-6)
+    true_xy = np.array([[f.true_pose.x, f.true_pose.y] for f in run.frames])
+    np.testing.assert_allclose(truth.positions_xyz[:, :2], true_xy, rtol=0, atol=1e-12)
