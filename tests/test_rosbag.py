@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from albot2d.cli import main
-from albot2d.evaluation.setup import RunSpec, build_run
+from albot2d.evaluation.run.setup import RunSpec, build_run
 from albot2d.logs import read_frames, read_run
 from albot2d.logs.rosbag import read_bag, typestore_for
 from albot2d.logs.rosbag_writer import write_bag
