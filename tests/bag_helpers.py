@@ -55,6 +55,8 @@ def bag_messages(
         return t["std_msgs/msg/Header"](stamp=time, frame_id=frame, **extra)
 
     def quat(theta: float) -> Any:
+        if not math.isfinite(theta):  # a bad heading: the quaternion holds it as it is
+            return t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=theta, w=theta)
         return t["geometry_msgs/msg/Quaternion"](
             x=0.0, y=0.0, z=math.sin(theta / 2), w=math.cos(theta / 2)
         )

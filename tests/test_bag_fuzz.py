@@ -102,8 +102,11 @@ def test_byte_mutations_raise_only_input_error(
 def _field_scans(draw: st.DrawFn) -> list[BagScan]:
     scans = []
     for k in range(draw(st.integers(1, 3))):
-        n = draw(st.sampled_from([1, 2, 31, 181]))
-        ranges = draw(st.lists(st.floats(width=32) | _NASTY_FLOAT32, min_size=n, max_size=n))
+        n = draw(st.sampled_from([0, 1, 2, 31, 181, MAX_BEAMS + 1]))
+        value = st.floats(width=32) | _NASTY_FLOAT32
+        # Too many beams: one value repeated (drawing each would be slow).
+        big = n > 181
+        ranges = [draw(value)] * n if big else draw(st.lists(value, min_size=n, max_size=n))
         fields: dict[str, Any] = {}
         for name in ("angle_min", "angle_increment", "range_min", "range_max", "angle_max"):
             if draw(st.booleans()):
@@ -118,6 +121,10 @@ def _field_scans(draw: st.DrawFn) -> list[BagScan]:
 
 @given(scans=_field_scans(), ros1=st.booleans(), odom=st.booleans())
 @example(scans=[BagScan(t=1.0, ranges=[float("nan")] * 181)], ros1=True, odom=True)
+@example(scans=[BagScan(t=0.0, ranges=[0.0] * 31, pose=(0.0, 0.0, math.inf))], ros1=False,
+         odom=False)  # fmt: skip
+@example(scans=[BagScan(t=1.0, ranges=[1.0] * (MAX_BEAMS + 1))], ros1=True, odom=True)
+@example(scans=[BagScan(t=1.0, ranges=[])], ros1=False, odom=True)
 @example(scans=[BagScan(t=1.0, ranges=[1.0] * 181, range_max=float("inf"))], ros1=False,
          odom=False)  # fmt: skip
 def test_field_values_raise_only_input_error(
