@@ -385,3 +385,27 @@ def test_evo_reads_the_bags_trajectories_and_tf_tree(simulated: Path, name: str)
     np.testing.assert_allclose(odom.positions_xyz[:, :2], odom_xy, rtol=0, atol=1e-6)
     true_xy = np.array([[f.true_pose.x, f.true_pose.y] for f in run.frames])
     np.testing.assert_allclose(truth.positions_xyz[:, :2], true_xy, rtol=0, atol=1e-12)
+
+
+def test_zero_header_stamps_use_the_record_time_and_a_bare_storage_dir_reads(
+    tmp_path: Path,
+) -> None:
+    """Drivers that leave header stamps at 0: the bag's record time stamps the frames; a
+    ROS 2 bag directory that lost its metadata.yaml is read from its one storage file."""
+    store = typestore_for(2)
+    real = [
+        BagScan(t=5.0 + 0.1 * k, ranges=[2.0] * 181, pose=(0.1 * k, 0.0, 0.0)) for k in range(4)
+    ]
+    zero = [BagScan(t=0.0, ranges=s.ranges, pose=s.pose) for s in real]
+    timed = bag_messages(store, False, real)
+    messages = [
+        (topic, kind, ns, message)
+        for (topic, kind, ns, _), (*_, message) in zip(
+            timed, bag_messages(store, False, zero), strict=True
+        )
+    ]
+    bag = write_test_bag(tmp_path / "zero", messages, ros1=False)
+    (bag / "metadata.yaml").unlink()
+    frames = read_bag(bag).frames
+    assert [f.timestamp for f in frames] == pytest.approx([5.0, 5.1, 5.2, 5.3], abs=1e-9)
+    assert [f.odom_pose.x for f in frames] == pytest.approx([0.0, 0.1, 0.2, 0.3])

@@ -1,9 +1,11 @@
 """ROS bags as albot2d frames: the topic and frame conventions, and the bag reader.
 
 :func:`read_bag` reads a ROS 1 bag (``.bag``) or a ROS 2 bag (a directory with
-``metadata.yaml``, or one ``.mcap`` / ``.db3`` storage file) with the pure-Python ``rosbags``
-library (no ROS install) and turns each ``sensor_msgs/msg/LaserScan`` on the scan topic into
-one :class:`~albot2d.frames.Frame`, stamped with the message's header stamp:
+``metadata.yaml``, one without it holding one storage file, or one ``.mcap`` / ``.db3``
+storage file) with the pure-Python ``rosbags`` library (no ROS install) and turns each
+``sensor_msgs/msg/LaserScan`` on the scan topic into one :class:`~albot2d.frames.Frame`,
+stamped with the message's header stamp (its record time in the bag when the header stamp
+is zero, as some drivers leave it):
 
 - Odometry: the ``nav_msgs/msg/Odometry`` of the odometry topic; when the bag has no such
   topic, the ``/tf`` transforms from ``odom`` to the robot's base frame (``base_link`` or
@@ -166,8 +168,8 @@ class _Bag:
         text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         return InputError(f"{self.path}: {what} ({text})")
 
-    def messages(self, topic: str) -> Iterator[tuple[int, Any]]:
-        """``(index, message)`` of every message on ``topic``, decoded, in bag order."""
+    def messages(self, topic: str) -> Iterator[tuple[int, Any, int]]:
+        """``(index, message, record time ns)`` of each message on ``topic``, in bag order."""
         connections = [c for c in self.reader.connections if c.topic == topic]
         if not connections:  # (no connections would mean every message to rosbags)
             return
@@ -180,12 +182,12 @@ class _Bag:
                 raise self._fail(exc, f"cannot read {topic} message {index}") from None
             if item is None:
                 return
-            connection, _, raw = item
+            connection, record_ns, raw = item
             try:
                 message = self.reader.deserialize(raw, connection.msgtype)
             except Exception as exc:
                 raise self._fail(exc, f"cannot decode {topic} message {index}") from None
-            yield index, message
+            yield index, message, int(record_ns)
             index += 1
 
     def listing(self) -> str:
@@ -209,6 +211,10 @@ def _open(path: Path) -> Iterator[_Bag]:
 
     if not path.exists():
         raise InputError(f"{path}: no such bag")
+    if path.is_dir() and not (path / "metadata.yaml").exists():
+        storage = sorted(p for p in path.iterdir() if p.suffix in (".mcap", ".db3"))
+        if len(storage) == 1:  # a ROS 2 bag without its metadata: read the storage file
+            path = storage[0]
     sniffed = None if path.is_dir() else _sniff(path)
     if not path.is_dir() and sniffed is None:
         raise InputError(f"{path}: not a ROS bag (no ROS 1, MCAP or sqlite3 header)")
@@ -230,9 +236,12 @@ def _open(path: Path) -> Iterator[_Bag]:
             reader.close()
 
 
-def _stamp_s(header: Any, where: str) -> float:
-    """A header stamp in seconds, correctly rounded (``sec.nanosec`` read as decimal text)."""
+def _stamp_s(header: Any, where: str, record_ns: int) -> float:
+    """A header stamp in seconds, correctly rounded (``sec.nanosec`` read as decimal text);
+    the bag's record time when the stamp is zero (a driver that leaves it unset)."""
     sec, nanosec = int(header.stamp.sec), int(header.stamp.nanosec)
+    if sec == 0 and nanosec == 0:
+        sec, nanosec = divmod(record_ns, 1_000_000_000)
     if not 0 <= nanosec < 1_000_000_000:
         raise InputError(f"{where}: stamp nanosec {nanosec} is not in [0, 1e9)")
     value = float(f"{sec}.{nanosec:09d}") if sec >= 0 else sec + nanosec * 1e-9
@@ -265,9 +274,9 @@ def _odometry_from_topic(bag: _Bag, topic: str) -> tuple[FloatArray, FloatArray,
     stamps: list[float] = []
     poses: list[tuple[float, float, float]] = []
     base = ""
-    for k, msg in bag.messages(topic):
+    for k, msg, record_ns in bag.messages(topic):
         where = f"{bag.path}: {topic} message {k}"
-        stamps.append(_stamp_s(msg.header, where))
+        stamps.append(_stamp_s(msg.header, where, record_ns))
         p = _pose(msg.pose.pose.position, msg.pose.pose.orientation, where)
         poses.append((p.x, p.y, p.theta))
         base = base or _frame_id(msg.child_frame_id)
@@ -279,11 +288,11 @@ def _transforms(bag: _Bag, topic: str) -> Iterator[tuple[str, str, float, Pose, 
     if topic not in bag.topics:
         return
     bag.require(topic, _TF_MESSAGE, topic)
-    for k, msg in bag.messages(topic):
+    for k, msg, record_ns in bag.messages(topic):
         for j, t in enumerate(msg.transforms):
             where = f"{bag.path}: {topic} message {k} transform {j}"
             pose = _pose(t.transform.translation, t.transform.rotation, where)
-            stamp = _stamp_s(t.header, where)
+            stamp = _stamp_s(t.header, where, record_ns)
             yield _frame_id(t.header.frame_id), _frame_id(t.child_frame_id), stamp, pose, where
 
 
@@ -413,9 +422,9 @@ def read_bag(
         dropped = 0
         laser = ""
         prev: Pose | None = None
-        for k, msg in bag.messages(scan_topic):
+        for k, msg, record_ns in bag.messages(scan_topic):
             where = f"{bag_path}: {scan_topic} message {k}"
-            stamp = _stamp_s(msg.header, where)
+            stamp = _stamp_s(msg.header, where, record_ns)
             odom = odometry.at(stamp)
             if odom is None:
                 dropped += 1
