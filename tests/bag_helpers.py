@@ -45,8 +45,10 @@ def bag_messages(
     odom_topic: str | None = "/odom",
     tf: bool = True,
     mount: tuple[float, float, float] | None = (0.1, 0.0, 0.0),
+    mount_rotation: tuple[float, float, float, float] | None = None,
 ) -> list[tuple[str, str, int, Any]]:
-    """``(topic, msgtype, ns, message)`` of a bag holding ``scans``."""
+    """``(topic, msgtype, ns, message)`` of a bag holding ``scans``; ``mount_rotation``
+    (a quaternion x, y, z, w) replaces the mount's yaw-only rotation."""
     t = store.types
 
     def header(s: tuple[int, int], frame: str) -> Any:
@@ -61,13 +63,15 @@ def bag_messages(
             x=0.0, y=0.0, z=math.sin(theta / 2), w=math.cos(theta / 2)
         )
 
-    def transform(s: tuple[int, int], parent: str, child: str, pose: tuple[float, ...]) -> Any:
+    def transform(
+        s: tuple[int, int], parent: str, child: str, pose: tuple[float, ...], rotation: Any = None
+    ) -> Any:
         return t["geometry_msgs/msg/TransformStamped"](
             header=header(s, parent),
             child_frame_id=child,
             transform=t["geometry_msgs/msg/Transform"](
                 translation=t["geometry_msgs/msg/Vector3"](x=pose[0], y=pose[1], z=0.0),
-                rotation=quat(pose[2]),
+                rotation=quat(pose[2]) if rotation is None else rotation,
             ),
         )
 
@@ -77,7 +81,11 @@ def bag_messages(
         s = _stamp(scan.t)
         ns = s[0] * 1_000_000_000 + s[1]
         if k == 0 and mount is not None:
-            static = transform(s, "base_link", "laser", mount)
+            rotation = None
+            if mount_rotation is not None:
+                x, y, z, w = mount_rotation
+                rotation = t["geometry_msgs/msg/Quaternion"](x=x, y=y, z=z, w=w)
+            static = transform(s, "base_link", "laser", mount, rotation)
             out.append(("/tf_static", tf_type, ns, t[tf_type](transforms=[static])))
         if tf:
             moving = transform(s, "odom", "base_link", scan.pose)

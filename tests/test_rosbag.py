@@ -409,3 +409,30 @@ def test_zero_header_stamps_use_the_record_time_and_a_bare_storage_dir_reads(
     frames = read_bag(bag).frames
     assert [f.timestamp for f in frames] == pytest.approx([5.0, 5.1, 5.2, 5.3], abs=1e-9)
     assert [f.odom_pose.x for f in frames] == pytest.approx([0.0, 0.1, 0.2, 0.3])
+
+
+def test_an_upside_down_laser_is_mirrored_and_a_tilted_one_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """base_link -> laser rolled by pi (yaw 0.3 too): a beam at laser angle a points at
+    0.3 - a; the hits in the base frame are those of the same scan mounted upright with
+    mirrored angles. A 30 deg tilt is refused."""
+    yaw, ranges = 0.3, [1.0 + 0.01 * k for k in range(181)]
+    # Rz(yaw) * Rx(pi) as a quaternion (x, y, z, w).
+    flipped = (math.cos(yaw / 2), math.sin(yaw / 2), 0.0, 0.0)
+    scans = [BagScan(t=1.0 + 0.1 * k, ranges=ranges) for k in range(3)]
+    bag = write_test_bag(tmp_path / "flip.bag", ros1=True, scans=scans, mount_rotation=flipped)
+    scan = read_bag(bag).frames[0].scan
+    assert scan.laser_pose.theta == pytest.approx(yaw) and scan.laser_pose.x == pytest.approx(0.1)
+    assert np.all(np.diff(scan.angles) > 0)
+    a = -math.pi / 2 + math.pi / 180 * np.arange(181)
+    expected = np.column_stack(
+        [0.1 + np.array(ranges) * np.cos(yaw - a), np.array(ranges) * np.sin(yaw - a)]
+    )
+    got = scan.points()
+    order = np.lexsort(got.T)
+    np.testing.assert_allclose(got[order], expected[np.lexsort(expected.T)], atol=1e-6)
+    tilt = math.radians(30)
+    tilted = (math.sin(tilt / 2), 0.0, 0.0, math.cos(tilt / 2))
+    bad = write_test_bag(tmp_path / "tilt.bag", ros1=True, scans=scans, mount_rotation=tilted)
+    refused(capsys, ["replay", str(bad), "--out", str(tmp_path / "o")], "tilted 30.0 deg")

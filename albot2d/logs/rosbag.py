@@ -14,7 +14,9 @@ is zero, as some drivers leave it):
   and counted (:attr:`BagFrames.scans_without_odometry`).
 - Mount: the laser's pose in the base frame, from the chain of ``/tf_static`` (or, as in
   older ROS 1 bags, constant ``/tf``) transforms between the scan's ``frame_id`` and the
-  base frame; the identity when the bag has none. Only the yaw of 3-D transforms is used.
+  base frame; the identity when the bag has none. The chain is composed in 3-D: a laser
+  mounted upside down has its beams mirrored, one whose scan plane is tilted more than
+  :data:`MAX_MOUNT_TILT_RAD` is refused.
 - Beams: angles ``angle_min + k·angle_increment`` (spread evenly to ``angle_max`` when that
   agrees, which undoes the float32 rounding of the increment); a clockwise scan
   (negative increment) is reversed into albot2d's counter-clockwise order. A beam is valid
@@ -57,6 +59,7 @@ __all__ = [
     "GROUND_TRUTH_TOPIC",
     "LASER_FRAME",
     "MAP_FRAME",
+    "MAX_MOUNT_TILT_RAD",
     "ODOM_FRAME",
     "TF_STATIC_TOPIC",
     "TF_TOPIC",
@@ -75,6 +78,9 @@ MAP_FRAME = "map"
 ODOM_FRAME = "odom"
 BASE_FRAME = "base_link"
 LASER_FRAME = "laser"
+#: Largest tilt of a laser's scan plane from the base's (a mount a few degrees off level
+#: still sees the walls a planar scan would; beyond, beams hit the floor or the ceiling).
+MAX_MOUNT_TILT_RAD = math.radians(10.0)
 #: Base frames looked for under ``odom`` in ``/tf`` when a bag has no odometry topic.
 TF_BASE_FRAMES = (BASE_FRAME, "base_footprint")
 #: Suffixes of bag files: ROS 1, then ROS 2's two storage files.
@@ -283,8 +289,9 @@ def _odometry_from_topic(bag: _Bag, topic: str) -> tuple[FloatArray, FloatArray,
     return np.array(stamps), np.array(poses).reshape(-1, 3), base or BASE_FRAME
 
 
-def _transforms(bag: _Bag, topic: str) -> Iterator[tuple[str, str, float, Pose, str]]:
-    """``(parent, child, stamp, pose, where)`` of each transform on a ``/tf`` topic."""
+def _transforms(bag: _Bag, topic: str) -> Iterator[tuple[str, str, float, Pose, Any]]:
+    """``(parent, child, stamp, planar pose, transform message)`` of each transform on a
+    ``/tf`` topic."""
     if topic not in bag.topics:
         return
     bag.require(topic, _TF_MESSAGE, topic)
@@ -293,7 +300,7 @@ def _transforms(bag: _Bag, topic: str) -> Iterator[tuple[str, str, float, Pose, 
             where = f"{bag.path}: {topic} message {k} transform {j}"
             pose = _pose(t.transform.translation, t.transform.rotation, where)
             stamp = _stamp_s(t.header, where, record_ns)
-            yield _frame_id(t.header.frame_id), _frame_id(t.child_frame_id), stamp, pose, where
+            yield _frame_id(t.header.frame_id), _frame_id(t.child_frame_id), stamp, pose, t
 
 
 def _odometry_from_tf(bag: _Bag, odom_topic: str) -> tuple[FloatArray, FloatArray, str]:
@@ -313,24 +320,60 @@ def _odometry_from_tf(bag: _Bag, odom_topic: str) -> tuple[FloatArray, FloatArra
     return rows[:, 0].copy(), rows[:, 1:].copy(), base
 
 
-def _mount(bag: _Bag, base: str, laser: str) -> Pose:
-    """The laser's pose in ``base`` through the first-seen transform of each child frame."""
+def _rotation(q: Any) -> FloatArray:
+    """The rotation matrix of a quaternion already checked by :func:`_yaw`."""
+    x, y, z, w = (float(v) for v in (q.x, q.y, q.z, q.w))
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = x / n, y / n, z / n, w / n
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])  # fmt: skip
+
+
+@dataclass(frozen=True)
+class _Mount:
+    """The laser in the base frame: planar pose, and whether it is upside down (its scan
+    plane mirrored: a beam at laser angle ``a`` points at ``-a``)."""
+
+    pose: Pose = field(default_factory=Pose)
+    mirrored: bool = False
+
+
+def _mount(bag: _Bag, base: str, laser: str) -> _Mount:
+    """The laser's mount through the first-seen transform of each child frame (3-D, so a
+    laser mounted upside down is recognised; a tilted scan plane is refused)."""
     if laser == base:
-        return Pose()
-    parents: dict[str, tuple[str, Pose]] = {}
+        return _Mount()
+    parents: dict[str, tuple[str, Any]] = {}
     for topic in (TF_STATIC_TOPIC, TF_TOPIC):
-        for parent, child, _, pose, _ in _transforms(bag, topic):
+        for parent, child, _, _, transform in _transforms(bag, topic):
             if parent != ODOM_FRAME and child not in parents:
-                parents[child] = (parent, pose)
-    pose, frame = Pose(), laser
+                parents[child] = (parent, transform.transform)
+    rotation, translation, frame = np.eye(3), np.zeros(3), laser
     for _ in range(_MAX_CHAIN):
         if frame == base:
-            return pose
+            break
         if frame not in parents:
-            return Pose()  # no chain to the base: the laser is taken to sit at the base
+            return _Mount()  # no chain to the base: the laser is taken to sit at the base
         parent, step = parents[frame]
-        pose, frame = step.compose(pose), parent
-    return Pose()
+        r = _rotation(step.rotation)
+        v = step.translation
+        translation = r @ translation + np.array([float(v.x), float(v.y), float(v.z)])
+        rotation, frame = r @ rotation, parent
+    else:
+        return _Mount()
+    up = float(rotation[2, 2])  # the laser's z axis along the base's
+    if abs(up) < math.cos(MAX_MOUNT_TILT_RAD):
+        tilt = math.degrees(math.acos(max(-1.0, min(1.0, abs(up)))))
+        raise InputError(
+            f"{bag.path}: the laser's scan plane ({laser}) is tilted {tilt:.1f} deg from the "
+            f"{base} plane by its tf chain; albot2d reads planar scans (at most "
+            f"{math.degrees(MAX_MOUNT_TILT_RAD):.1f} deg, or upside down)"
+        )
+    yaw = math.atan2(float(rotation[1, 0]), float(rotation[0, 0]))
+    return _Mount(Pose(float(translation[0]), float(translation[1]), yaw), mirrored=up < 0)
 
 
 class _Odometry:
@@ -365,7 +408,7 @@ def _number(value: Any, name: str, where: str, low: float, high: float) -> float
     return v
 
 
-def _scan(msg: Any, where: str, mount: Pose, stamp: float) -> Scan:
+def _scan(msg: Any, where: str, mount: _Mount, stamp: float) -> Scan:
     ranges = np.asarray(msg.ranges, dtype=np.float64)
     n = len(ranges)
     if n == 0:
@@ -388,14 +431,16 @@ def _scan(msg: Any, where: str, mount: Pose, stamp: float) -> Scan:
         angles = a_min + inc * np.arange(n, dtype=np.float64)
     if abs(angles[-1] - angles[0]) > ANGLE_LIMIT_RAD:
         raise InputError(f"{where}: the {n} beams span more than a turn")
-    if inc < 0:  # a clockwise scanner: albot2d's beams go counter-clockwise
+    if mount.mirrored:  # upside down: the beam at a points at -a in the base's plane
+        angles, inc = -angles, -inc
+    if inc < 0:  # a clockwise scan: albot2d's beams go counter-clockwise
         angles, ranges = angles[::-1].copy(), ranges[::-1].copy()
     with np.errstate(invalid="ignore"):
         valid = np.isfinite(ranges) & (ranges > 0) & (ranges >= r_min) & (ranges <= r_max)
     # REP-117: +inf "no return" and -inf "too close" are codes, not anomalies: stored as
     # range_max (invalid beams); NaN stays NaN and is counted like a CARMEN log's.
     ranges = np.where(np.isinf(ranges), r_max, ranges)
-    return Scan(ranges, angles, valid, r_max, stamp, mount)
+    return Scan(ranges, angles, valid, r_max, stamp, mount.pose)
 
 
 def read_bag(
@@ -417,7 +462,7 @@ def read_bag(
             stamps, poses, base = _odometry_from_tf(bag, odom_topic)
             source = f"{TF_TOPIC} {ODOM_FRAME}->{base}"
         odometry = _Odometry(stamps, poses)
-        mounts: dict[str, Pose] = {}
+        mounts: dict[str, _Mount] = {}
         frames: list[Frame] = []
         dropped = 0
         laser = ""
