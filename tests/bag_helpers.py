@@ -31,6 +31,11 @@ class BagScan:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
+def _float32(value: float) -> float:
+    """``value``, or ±inf where float32 (a LaserScan's angles) cannot hold it."""
+    return value if abs(value) <= 3.4e38 or math.isnan(value) else math.copysign(math.inf, value)
+
+
 def _stamp(t: float) -> tuple[int, int]:
     sec = math.floor(t)
     return sec, round((t - sec) * 1e9)
@@ -106,7 +111,7 @@ def bag_messages(
         n = len(scan.ranges)
         fields = {
             "angle_min": scan.angle_min,
-            "angle_max": scan.angle_min + (n - 1) * scan.angle_increment,
+            "angle_max": _float32(scan.angle_min + (n - 1) * scan.angle_increment),
             "angle_increment": scan.angle_increment,
             "time_increment": 0.0,
             "scan_time": 0.0,

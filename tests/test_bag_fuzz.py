@@ -125,6 +125,7 @@ def _field_scans(draw: st.DrawFn) -> list[BagScan]:
          odom=False)  # fmt: skip
 @example(scans=[BagScan(t=1.0, ranges=[1.0] * (MAX_BEAMS + 1))], ros1=True, odom=True)
 @example(scans=[BagScan(t=1.0, ranges=[])], ros1=False, odom=True)
+@example(scans=[BagScan(t=0.0, ranges=[0.0] * 31, angle_increment=3e38)], ros1=False, odom=False)
 @example(scans=[BagScan(t=1.0, ranges=[1.0] * 181, range_max=float("inf"))], ros1=False,
          odom=False)  # fmt: skip
 def test_field_values_raise_only_input_error(
