@@ -12,8 +12,8 @@ import dataclasses
 import numpy as np
 import pytest
 
+from albot2d.errors import InvariantError
 from albot2d.evaluation.checks import deletion as di
-from albot2d.evaluation.checks.violation import InvariantError
 from albot2d.geometry import Pose, transform_segments
 from albot2d.mapping import Albot1, Albot1Params, UpdateReport
 from albot2d.mapping.albot1.deletion import GlobalMapParams

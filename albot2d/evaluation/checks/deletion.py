@@ -22,7 +22,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from albot2d.evaluation.checks.violation import InvariantError, fail
+from albot2d.errors import InvariantError, fail
 from albot2d.geometry import Pose
 from albot2d.mapping.albot1.deletion import GlobalMapParams
 from albot2d.mapping.albot1.global_map import UpdateReport

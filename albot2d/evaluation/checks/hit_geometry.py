@@ -1,4 +1,4 @@
-"""The plain geometry the laser-hit check (``sim_invariants.FrameChecker``) measures with,
+"""The plain geometry the laser-hit check (``checks.simulator.FrameChecker``) measures with,
 independently of the simulator's ray caster: ``SegmentGrid`` (which points lie within a
 distance of any segment) and ``ray_ranges`` (the exact range along rays to the nearest
 segment). Each has a numpy path and, with numba (the ``fast`` extra), a compiled kernel
