@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 import shutil
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -436,3 +437,19 @@ def test_an_upside_down_laser_is_mirrored_and_a_tilted_one_refused(
     tilted = (math.sin(tilt / 2), 0.0, 0.0, math.cos(tilt / 2))
     bad = write_test_bag(tmp_path / "tilt.bag", ros1=True, scans=scans, mount_rotation=tilted)
     refused(capsys, ["replay", str(bad), "--out", str(tmp_path / "o")], "tilted 30.0 deg")
+
+
+def test_without_rosbags_bags_are_one_line_with_the_install_command(
+    simulated: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    for name in [m for m in sys.modules if m == "rosbags" or m.startswith("rosbags.")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "rosbags", None)  # import rosbags raises ImportError
+    hint = "pip install 'albot2d[ros]'"
+    refused(capsys, ["replay", str(simulated / "log.bag"), "--out", str(tmp_path / "o")], hint)
+    out = tmp_path / "sim"
+    refused(capsys, ["simulate", "--out", str(out), "--export", "rosbag1"], hint)
+    assert not out.exists()

@@ -93,6 +93,10 @@ def export_options(args: Any) -> dict[str, Any]:
     storage = getattr(args, "bag_storage", None)
     if storage is not None and "rosbag2" not in names:
         raise InputError(f"--bag-storage {storage} applies to --export rosbag2 only")
+    if any(name.startswith("rosbag") for name in names):
+        from albot2d.logs.rosbag import require_rosbags
+
+        require_rosbags()  # before the run, not after it
     return {"bag_storage": storage}
 
 

@@ -66,6 +66,7 @@ __all__ = [
     "BagFrames",
     "is_bag",
     "read_bag",
+    "require_rosbags",
     "typestore_for",
 ]
 
@@ -98,8 +99,20 @@ _MAX_CHAIN = 32
 FloatArray = NDArray[np.float64]
 
 
+MISSING_ROSBAGS = "ROS bags need the optional extra: pip install 'albot2d[ros]' (rosbags)"
+
+
+def require_rosbags() -> None:
+    """Raise ``InputError`` (one line, with the install command) if rosbags is missing."""
+    try:
+        import rosbags.highlevel  # noqa: F401
+    except ImportError as exc:
+        raise InputError(f"{MISSING_ROSBAGS}: {exc}") from None
+
+
 def typestore_for(ros_version: int) -> Any:
     """rosbags' typestore of ROS 2 Humble or ROS 1 Noetic (with ``tf2_msgs/TFMessage``)."""
+    require_rosbags()
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     if ros_version == 2:
@@ -213,6 +226,7 @@ class _Bag:
 
 @contextlib.contextmanager
 def _open(path: Path) -> Iterator[_Bag]:
+    require_rosbags()
     from rosbags.highlevel import AnyReader
 
     if not path.exists():

@@ -46,6 +46,7 @@ from albot2d.logs.rosbag import (
     ODOM_FRAME,
     TF_STATIC_TOPIC,
     TF_TOPIC,
+    require_rosbags,
     typestore_for,
 )
 
@@ -79,6 +80,7 @@ def write_bag(
         raise InputError(f"ros_version must be 1 or 2, got {ros_version!r}")
     if storage not in BAG_STORAGES:
         raise InputError(f"bag storage must be one of {', '.join(BAG_STORAGES)}, got {storage!r}")
+    require_rosbags()
     target = Path(path)
     staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
     try:
