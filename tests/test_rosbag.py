@@ -152,7 +152,7 @@ def _close(a: Any, b: Any, tol: float, path: str = "") -> list[str]:
     if isinstance(a, dict):
         return [d for k in a for d in _close(a[k], b[k], tol, f"{path}.{k}")]
     if isinstance(a, float) and isinstance(b, float):
-        return [] if abs(a - b) <= tol + 1e-4 * abs(a) else [f"{path}: {a} vs {b}"]
+        return [] if abs(a - b) <= tol + 1e-5 * abs(a) else [f"{path}: {a} vs {b}"]
     return [] if a == b else [f"{path}: {a} vs {b}"]
 
 
