@@ -31,7 +31,7 @@ A change of behaviour made on purpose is recorded by naming what is expected to 
 (``case:section`` globs; ``case`` alone means all its sections) and refuses otherwise,
 writing nothing and naming the sections nobody expected to change.
 
-numba: with the ``fast`` extra the raycaster, line extraction and laser noise run compiled.
+numba (a default dependency) runs the raycaster, line extraction and laser noise compiled.
 The two paths are not bit-identical here (measured: ``run`` and ``replay`` match, but the
 fuzz episodes' own pose/map byte digests and one homing maximum differ without numba), so
 digests.json records which path made it (``numba``) and a failure names both paths.
@@ -71,7 +71,7 @@ MIT_LOG = Path("raw") / "mit-csail.clf.gz"
 # Wall-clock fields and things that name this build or machine rather than the result.
 _DROPPED = frozenset({
     "wall_time_s", "timing_ms", "timings", "episodes_per_min", "workers", "albot2d_version",
-    "figures", "exports",
+    "kernels", "figures", "exports",
 })  # fmt: skip
 _SIGNIFICANT_DIGITS = 12
 # A section whose canonical JSON is longer keeps a table of key numbers, not its value.

@@ -9,9 +9,9 @@ import dataclasses
 import numpy as np
 import pytest
 
+from albot2d.errors import InvariantError
 from albot2d.evaluation.checks import deletion_partition as dp
 from albot2d.evaluation.checks.invariants import UpdateRecorder
-from albot2d.evaluation.checks.violation import InvariantError
 from albot2d.evaluation.fuzz.campaign import CampaignParams
 from albot2d.evaluation.fuzz.episode import EpisodeSpec, run_episode
 from albot2d.frames import Frame

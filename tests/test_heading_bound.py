@@ -10,8 +10,8 @@ import math
 import numpy as np
 import pytest
 
+from albot2d.errors import InvariantError
 from albot2d.evaluation.checks import heading_bound as hb
-from albot2d.evaluation.checks.violation import InvariantError
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
 from albot2d.mapping import Albot1

@@ -27,6 +27,7 @@ from albot2d.errors import InputError
 
 __all__ = [
     "Choices",
+    "add_export_option",
     "add_json_option",
     "add_run_options",
     "add_scoring_options",
@@ -85,7 +86,7 @@ def defaults_of(cls: type) -> dict[str, Any]:
 
 # Fields two reports of the same run may differ in: file lists, the version, and a fuzzing
 # reproducer's own section (wall-clock timings are dropped by ``without_timings``).
-_NOT_COMPARED = ("figures", "exports", "albot2d_version", "reproducer")
+_NOT_COMPARED = ("figures", "exports", "albot2d_version", "kernels", "reproducer")
 
 
 def add_run_options(p: argparse.ArgumentParser) -> None:
@@ -154,6 +155,27 @@ def spec_from_args(args: argparse.Namespace) -> Any:
         given["kind"] = args.kind
     # "kind": None (a world file) is kept; every other option not given is left out
     return RunSpec(**{k: v for k, v in given.items() if v is not None or k == "kind"})
+
+
+def add_export_option(p: argparse.ArgumentParser) -> None:
+    """``--export FORMAT ...`` (the registry of ``albot2d.cli.exporters``) and its options."""
+    from albot2d.cli.exporters import EXPORTERS
+
+    g = p.add_argument_group("export")
+    g.add_argument(
+        "--export",
+        nargs="+",
+        action="extend",
+        choices=list(EXPORTERS),
+        metavar="FORMAT",
+        help="also write the run as: "
+        + "; ".join(f"{e.name} ({e.help})" for e in EXPORTERS.values()),
+    )
+    g.add_argument(
+        "--bag-storage",
+        choices=("mcap", "sqlite3"),
+        help="storage of the ROS 2 bag (default mcap)",
+    )
 
 
 def add_json_option(
@@ -296,10 +318,12 @@ def finish(
     no_figures: bool,
     stage: Callable[[str], None] | None = None,
     animate: bool = False,
+    extra_exports: Callable[[Any], list[str]] | None = None,
 ) -> Any:
     """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
     maps, write everything; on any failure remove the output directory again if this
-    command created it."""
+    command created it. ``extra_exports(result)`` writes the ``--export`` files itself
+    (before report.json) and returns their names."""
     from albot2d.evaluation.run.export import export_files
 
     try:
@@ -309,8 +333,9 @@ def finish(
         figures = _render(result, no_figures, command, animate)
         figures.update(_step_figure(result, no_figures))
         exports = export_files(result)
+        extra = extra_exports(result) if extra_exports is not None else []
         result.report["figures"] = sorted(figures)
-        result.report["exports"] = sorted(exports)
+        result.report["exports"] = sorted([*exports, *extra])
         # steps.csv: one row per view (stage times, counters), for profiling a run.
         files = {
             **figures,

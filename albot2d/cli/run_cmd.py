@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
+    add_export_option,
     add_json_option,
     add_run_options,
     add_scoring_options,
@@ -90,6 +91,7 @@ def register(subparsers: Any) -> None:
         help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
         "over time beside the truth",
     )
+    add_export_option(p)
     p.add_argument(
         "--cprofile",
         metavar="FILE",
@@ -116,6 +118,34 @@ def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]
     return profiled
 
 
+def _keeps_frames(names: list[str]) -> bool:
+    from albot2d.cli.exporters import EXPORTERS
+
+    return any(EXPORTERS[name].needs_frames for name in names)
+
+
+def _exporting(
+    args: argparse.Namespace, frames: list[Any]
+) -> Callable[[Path], Callable[[Any], list[str]]] | None:
+    """``finish``'s hook writing the ``--export`` files of a finished run (its options
+    checked now), given the output directory; None without ``--export``."""
+    from albot2d.cli.exporters import ExportSource, export_options, write_exports
+
+    options = export_options(args)
+    names = list(args.export or [])
+    if not names:
+        return None
+
+    def hook(out: Path) -> Callable[[Any], list[str]]:
+        def write(result: Any) -> list[str]:
+            source = ExportSource(frames, result.world, result, options)
+            return write_exports(out, names, source)
+
+        return write
+
+    return hook
+
+
 def run(args: argparse.Namespace) -> int:
     from albot2d.evaluation import RunSpec, evaluation_params_from_report, run_experiment
     from albot2d.evaluation.run.report import read_report
@@ -139,10 +169,13 @@ def run(args: argparse.Namespace) -> int:
         spec = spec_from_args(args)
         params = scoring_params(args)
     check_spec(spec)
+    kept: list[Any] = []  # the run's frames, for the exports that need them
+    extra = _exporting(args, kept)
     if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():
         raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
     out, created = prepare_out_dir(args.out)
     bar = None
+    keep = _keeps_frames(list(args.export or []))
 
     def start(world: Any, tour: Any) -> None:
         # With --max-frames the run ends after that many views, not at the tour's end.
@@ -153,6 +186,8 @@ def run(args: argparse.Namespace) -> int:
             bar = progress_bar(round(tour.length_m, 1), "m", "run")
 
     def frame(f: Any, travelled: float) -> None:
+        if keep:
+            kept.append(f)
         if bar is None:
             return
         if spec.max_frames is not None:
@@ -173,6 +208,7 @@ def run(args: argparse.Namespace) -> int:
             _profiled(args.cprofile, lambda: run_experiment(
                 spec, params, on_start=start, on_frame=frame, on_stage=stage)),
             args.no_figures, stage, animate=args.animate,
+            extra_exports=extra(out) if extra is not None else None,
         )  # fmt: skip
     finally:
         if bar is not None:

@@ -25,8 +25,8 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from albot2d.errors import fail
 from albot2d.evaluation.checks.deletion import _ahead, _facing, _visible
-from albot2d.evaluation.checks.violation import fail
 from albot2d.geometry import Pose
 from albot2d.mapping.albot1.deletion import GlobalMapParams
 from albot2d.mapping.protocol import MapSnapshot

@@ -38,7 +38,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from albot2d.evaluation.checks.violation import fail
+from albot2d.errors import fail
 from albot2d.frames import Frame
 from albot2d.geometry import between_arrays, segment_angles, wrap_angle
 from albot2d.mapping.albot1.mapper import Albot1
