@@ -25,13 +25,18 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from albot2d.errors import fail
+from albot2d.errors import InvariantError, fail
 from albot2d.evaluation.checks.deletion import _ahead, _facing, _visible
 from albot2d.geometry import Pose
 from albot2d.mapping.albot1.deletion import GlobalMapParams
+from albot2d.mapping.albot1.global_map import UpdateReport
+from albot2d.mapping.albot1.mapper import Albot1
+from albot2d.mapping.albot1.route_map import LocalMap
 from albot2d.mapping.protocol import MapSnapshot
+from albot2d.perception.surfaces import transform_segments_fast
 
 __all__ = [
+    "UpdateRecorder",
     "check_update_partition",
     "deleted_by_update",
     "expand_groups",
@@ -229,3 +234,42 @@ def check_update_partition(
             f"update {update} (map {map_id}): " + "; ".join(parts)
             + f" ({int(gone.sum())} deleted, {int(want.sum())} by the rule)",
         )  # fmt: skip
+
+
+class UpdateRecorder:
+    """An Albot1 ``on_update`` hook checking algorithm #5 after every update, both ways
+    (``check_update_partition``: the surfaces deleted are exactly those the rule deletes,
+    recomputed from its definition).
+
+    With ``raise_at_once`` (tests) a violation propagates out of ``observe``; otherwise
+    (the campaign) the run goes on and the messages collect in ``violations``.
+    """
+
+    def __init__(self, mapper: Albot1 | None = None, *, raise_at_once: bool = True) -> None:
+        self.mapper = mapper
+        self.raise_at_once = raise_at_once
+        self.updates = 0
+        self.violations: list[str] = []
+
+    def attach(self, mapper: Albot1) -> UpdateRecorder:
+        """Hook into ``mapper`` (its ``on_update``); returns self."""
+        self.mapper = mapper
+        mapper.on_update = self
+        return self
+
+    def __call__(self, report: UpdateReport, lm: LocalMap) -> None:
+        if self.mapper is None:
+            raise RuntimeError("UpdateRecorder: attach it to a mapper first")
+        self.updates += 1
+        m = self.mapper
+        try:
+            view = transform_segments_fast(lm.pose, lm.view.segments)
+            check_update_partition(
+                m.global_map(report.update - 1), m.global_map(report.update), report.update,
+                report.map_id, lm.pose, view, m.map.params,
+                {x.map_id for x in m.route if x.map_id <= report.map_id},
+            )  # fmt: skip
+        except InvariantError as exc:
+            if self.raise_at_once:
+                raise
+            self.violations.append(exc.message)

@@ -29,10 +29,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.errors import InvariantError, fail
-from albot2d.evaluation.checks.deletion import (
-    UpdateRecorder,
-    check_update_deleted_facing_overlap,
-)
+from albot2d.evaluation.checks.deletion import check_update_deleted_facing_overlap
+from albot2d.evaluation.checks.deletion_partition import UpdateRecorder
 from albot2d.evaluation.checks.heading_bound import (
     check_heading_error_bound,
     heading_error_bound,
