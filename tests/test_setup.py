@@ -99,6 +99,9 @@ def test_the_help_texts_defaults_are_the_dataclasses_defaults() -> None:
     assert spec.noise == common.DEFAULT_NOISE and spec.laser_noise == common.DEFAULT_LASER_NOISE
     assert spec.tour_kind == common.DEFAULT_TOUR_KIND
     assert spec.tour_length_m == common.DEFAULT_TOUR_LENGTH_M
+    from worldgen.tours import TOUR_LENGTH_TOLERANCE
+
+    assert common.TOUR_LENGTH_TOLERANCE == TOUR_LENGTH_TOLERANCE
     campaign = CampaignParams(episodes=1)
     from albot2d.mapping.registry import _ALBOT1_OPTIONS
     from albot2d.sim.driving import PROFILES

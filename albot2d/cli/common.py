@@ -56,6 +56,7 @@ DEFAULT_NOISE = "typical"
 DEFAULT_LASER_NOISE = "sick_lms200"
 DEFAULT_TOUR_KIND = "loop"
 DEFAULT_TOUR_LENGTH_M = 100.0
+TOUR_LENGTH_TOLERANCE = 0.3  # worldgen.tours.TOUR_LENGTH_TOLERANCE (tests/test_setup.py)
 # The valid names of each option, for --help likewise (tests/test_setup.py checks each
 # against the registry that defines it: worldgen.KINDS, PROFILES, NOISE_PRESETS, ...).
 WORLD_KINDS = ("corridors", "rooms", "open", "office", "fig6", "mixed")
@@ -99,7 +100,14 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     drive.add_argument(
         "--tour-length",
         metavar="METRES",
-        help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})",
+        help=f"tour length: the tour is METRES to {1 + TOUR_LENGTH_TOLERANCE:g}×METRES long "
+        f"(default {DEFAULT_TOUR_LENGTH_M:g})",
+    )
+    drive.add_argument(
+        "--min-tour-length",
+        metavar="METRES",
+        help="plan the tour through far-apart places and repeat it until it is at least "
+        "METRES long (it may be several times longer); instead of --tour-length",
     )
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
 
@@ -120,9 +128,15 @@ def spec_from_args(args: argparse.Namespace) -> Any:
         "laser_noise": args.laser_noise or None,
         "tour_kind": args.tour_kind or None,
         "tour_length_m": positive_number(args.tour_length, "--tour-length"),
+        "tour_length_is_minimum": None,
         "mappers": tuple(getattr(args, "mapper", None) or ()) or None,
         "max_frames": positive_int(args.max_frames, "--max-frames"),
     }
+    minimum = positive_number(getattr(args, "min_tour_length", None), "--min-tour-length")
+    if minimum is not None:
+        if given["tour_length_m"] is not None:
+            raise InputError("give --tour-length or --min-tour-length, not both")
+        given |= {"tour_length_m": minimum, "tour_length_is_minimum": True}
     if args.world is not None:
         given |= {"kind": None, "world_file": args.world}
     elif args.kind:

@@ -132,7 +132,7 @@ def run_one(
         tour = route_tour(world, direction)
         world = dataclasses.replace(world, start=route_start(world, direction))
     else:
-        tour = plan_tour(world, kind=spec.tour_kind, length_m=spec.tour_length_m)
+        tour = plan_tour(world, kind=spec.tour_kind, length_m=spec.tour_length_m, at_least=True)
     if direction == "reverse":
         # A circuit starts and ends at the start: driven backwards it is the other way round.
         tour = dataclasses.replace(tour, waypoints=tour.waypoints[::-1].copy())
