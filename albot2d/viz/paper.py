@@ -40,7 +40,7 @@ _METHOD_COLOURS = {"triangulation": "tab:blue", "path_integration": "tab:red", "
 
 def _panels(
     fig: Figure | None, n: int, ncols: int | None = None, size: float = 4.5
-) -> tuple[Figure, list[Axes]]:
+) -> tuple[Figure, list[Axes]]:  # (the map panels make their own compressed figure)
     """``n`` panels on ``fig`` (a new figure of ``size``-inch panels when None)."""
     ncols = ncols or n
     nrows = int(np.ceil(n / ncols))
@@ -69,13 +69,29 @@ def _segments(ax: Axes, segs: Any, **kw: Any) -> None:
 
 def plot_maps(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
     """Map panels: faint true walls, the map (black), deleted surfaces (red), the true path
-    so far (blue) and the named waypoints."""
+    so far (blue) and the named waypoints; a scale bar and the frame's axes on each, one
+    legend below them all. Each panel's surface count is stored with the figure."""
+    from matplotlib.lines import Line2D
+
+    from albot2d.viz.furniture import (
+        TITLE_PT,
+        draw_map_furniture,
+        legend_below,
+        set_figure_counts,
+    )
+
     panels = data["panels"]
-    fig, axes = _panels(fig, max(1, len(panels)), data.get("ncols"))
+    ncols = data.get("ncols") or max(1, len(panels))
+    nrows = int(np.ceil(max(1, len(panels)) / ncols))
+    if fig is None:
+        fig = new_figure(4.6 * ncols, 3.7 * nrows + 0.5, layout="compressed")
+    fig, axes = _panels(fig, max(1, len(panels)), ncols)
+    deleted_any = False
     for a, p in zip(axes, panels, strict=False):
         _segments(a, p["walls"], colors="0.8", linewidths=0.6)
         if p.get("deleted") is not None:
             _segments(a, p["deleted"], colors="tab:red", linewidths=1.2)
+            deleted_any = deleted_any or bool(np.size(p["deleted"]))
         _segments(a, p["segments"], colors="k", linewidths=0.8)
         path = np.asarray(p["path"], float).reshape(-1, 2)
         if len(path):
@@ -87,12 +103,21 @@ def plot_maps(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
         walls = np.asarray(p["walls"], float).reshape(-1, 2)
         a.set_xlim(walls[:, 0].min() - 1, walls[:, 0].max() + 1)
         a.set_ylim(walls[:, 1].min() - 1, walls[:, 1].max() + 1)
-        a.set_aspect("equal")
-        a.set_title(p["title"], fontsize=9)
-        a.tick_params(labelsize=7)
+        a.set_title(p["title"], fontsize=TITLE_PT - 1)
+        segs = np.asarray(p["segments"], float).reshape(-1, 4)
+        set_figure_counts(fig, p["title"], {"surfaces": len(segs)})
+        walls = np.asarray(p["walls"], float).reshape(-1, 2)
+        draw_map_furniture(a, np.vstack([segs.reshape(-1, 2), path, walls]))
     for a in axes[len(panels) :]:
         a.axis("off")
-    fig.tight_layout()
+    handles = [
+        Line2D([], [], color="0.8", lw=1.0, label="true walls"),
+        Line2D([], [], color="k", lw=1.0, label="map surfaces (anchored at the true start)"),
+        Line2D([], [], color="tab:blue", lw=1.0, marker="o", ms=4, label="true path, robot"),
+    ]
+    if deleted_any:
+        handles.append(Line2D([], [], color="tab:red", lw=1.2, label="deleted surfaces"))
+    legend_below(fig, handles)
     return fig
 
 
@@ -224,11 +249,14 @@ PLOTS: dict[str, Callable[[dict[str, Any]], Axes | Figure]] = {
 }  # fmt: skip
 
 
-def save_figure(spec: dict[str, Any], path: Path) -> None:
+def save_figure(spec: dict[str, Any], path: Path, *, dpi: float = 110) -> None:
     """Draw the figure ``spec`` (``{"plot", "data"}``) to the PNG ``path``."""
     from matplotlib.figure import Figure
 
     drawn = PLOTS[spec["plot"]](spec["data"])
     fig = drawn if isinstance(drawn, Figure) else drawn.get_figure(root=True)
     assert fig is not None  # the axes were made on a new figure above
-    fig.savefig(path, dpi=110)
+    from albot2d.viz.furniture import png_metadata
+
+    fig.savefig(path, dpi=dpi, metadata=png_metadata(fig), bbox_inches="tight",
+                pad_inches=0.08)  # fmt: skip
