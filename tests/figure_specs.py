@@ -13,8 +13,7 @@ RUN_FRAMES = 300
 
 def small_run() -> Any:
     """A short default run (office seed 0, albot1 and naive), scored: deterministic."""
-    from albot2d.evaluation import RunSpec, run_experiment
-    from albot2d.evaluation import EvaluationParams
+    from albot2d.evaluation import EvaluationParams, RunSpec, run_experiment
 
     spec = RunSpec(max_frames=RUN_FRAMES, mappers=("albot1", "naive"))
     return run_experiment(spec, EvaluationParams())
