@@ -88,7 +88,7 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--animate",
         action="store_true",
-        help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
+        help="also write albot1_map.mp4 (albot1_map.gif where ffmpeg is missing): the global map "
         "over time beside the truth",
     )
     p.add_argument(
