@@ -100,32 +100,40 @@ def _split(key: str) -> tuple[str, str]:
 
 def _table(result: Mapping[str, Any], ours_label: str) -> str:
     """The paper's numbers beside ours: a row per measured thing (``dataset1``,
-    ``corridor``, ...), a named column per quantity; each row twice, paper and albot2d."""
+    ``corridor``, ...), a named column per quantity, each row twice (paper, albot2d);
+    rows measuring different quantities go to separate tables, so no table is mostly
+    empty cells."""
     ours = flatten_numbers(result.get("ours", {}))
     paper = flatten_numbers({k: v for k, v in result.get("paper", {}).items() if k != "rows"})
     rows: dict[str, dict[str, dict[str, str]]] = {}
-    columns: list[str] = []
     for who, values in (("paper", paper), ("albot2d", ours)):
         for key, value in values.items():
             row, col = _split(key)
-            if col not in columns:
-                columns.append(col)
             rows.setdefault(row, {}).setdefault(who, {})[col] = value
-    head = "".join(f"<th>{html.escape(human(c))}</th>" for c in columns)
-    body = []
+    groups: dict[tuple[str, ...], list[str]] = {}
     for row, by_who in rows.items():
-        name = " / ".join(human(part) for part in row.split(".")) if row else "—"
-        present = [w for w in ("paper", "albot2d") if w in by_who]
-        for k, who in enumerate(present):
-            label = "paper" if who == "paper" else ours_label
-            first = (f"<td rowspan='{len(present)}'>{html.escape(name)}</td>" if k == 0
-                     else "")  # fmt: skip
-            cells = "".join(
-                f"<td class='num'>{html.escape(by_who[who].get(c, ''))}</td>" for c in columns
-            )
-            body.append(f"<tr>{first}<td class='who'>{html.escape(label)}</td>{cells}</tr>")
-    return (f"<div class='table-wrap'><table class='numbers'><tr><th></th><th></th>{head}"
-            f"</tr>{''.join(body)}</table></div>")  # fmt: skip
+        cols = tuple(dict.fromkeys(c for who in ("paper", "albot2d")
+                                   for c in by_who.get(who, {})))  # fmt: skip
+        groups.setdefault(cols, []).append(row)
+    tables = []
+    for columns, names in groups.items():
+        head = "".join(f"<th>{html.escape(human(c))}</th>" for c in columns)
+        body = []
+        for row in names:
+            by_who = rows[row]
+            name = " / ".join(human(part) for part in row.split(".")) if row else "—"
+            present = [w for w in ("paper", "albot2d") if w in by_who]
+            for k, who in enumerate(present):
+                first = (f"<td rowspan='{len(present)}'>{html.escape(name)}</td>" if k == 0
+                         else "")  # fmt: skip
+                cells = "".join(
+                    f"<td class='num'>{html.escape(by_who[who].get(c, ''))}</td>" for c in columns
+                )
+                body.append(f"<tr>{first}<td class='who'>{who}</td>{cells}</tr>")
+        tables.append(f"<div class='table-wrap'><table class='numbers'><tr><th></th><th></th>"
+                      f"{head}</tr>{''.join(body)}</table></div>")  # fmt: skip
+    note = f"<p class='rule'>albot2d: {html.escape(ours_label.removeprefix('albot2d, '))}.</p>"
+    return note + "".join(tables)
 
 
 def _per_seed(result: Mapping[str, Any], seeds: list[int]) -> str:
