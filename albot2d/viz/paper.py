@@ -214,7 +214,9 @@ def plot_updates(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
            color=[_REGION_COLOURS.get(k, "k") for k in kinds])  # fmt: skip
     h.set_xlabel("moves (move or turn steps) since the previous update", fontsize=LABEL_PT)
     h.set_ylabel("updates", fontsize=LABEL_PT)
-    h.xaxis.get_major_locator().set_params(integer=True)
+    from matplotlib.ticker import MaxNLocator
+
+    h.xaxis.set_major_locator(MaxNLocator(integer=True))
     h.tick_params(labelsize=TICK_PT)
     h.set_title("moves per update, by region", fontsize=TITLE_PT)
     h.grid(True, axis="y", alpha=0.3)
