@@ -40,11 +40,14 @@ def map_panel(
     if snap is None or mapper not in snap["maps"]:
         return None
     where = place or ("at the end" if mark == "end" else f"at {mark}")
-    if not snap.get("reached", True):
-        where = (f"where the cut run stopped: view {int(snap['frame'])}, "
-                 f"{float(snap['true_travelled_m']):.0f} m (not {where})")  # fmt: skip
-        title = title.replace(", {at}", "\n{at}").replace(" {at}", "\n{at}")
-    title = title.replace("{at}", where)
+    if snap.get("reached", True):
+        title = title.replace("{at}", where)
+    else:  # one clause a line, so side-by-side panel titles never run into each other
+        cut = (f"run cut short at view {int(snap['frame'])}, "
+               f"{float(snap['true_travelled_m']):.0f} m (not {where})")  # fmt: skip
+        before, _, after = title.partition("{at}")
+        lines = [before.strip().rstrip(","), cut, after.strip().lstrip(",").strip()]
+        title = "\n".join(line for line in lines if line)
     start = fig["true_poses"][0]
     row = min(int(snap["frame"]), len(fig["true_poses"]) - 1)  # simulated: frame = row
     segs = transform_segments(start, snap["maps"][mapper]["segments"])
