@@ -21,7 +21,7 @@ from albot2d.mapping.albot1.route_map import LocalMap
 from tests.runs import map_frames, simulate
 from worldgen.generate import generate
 
-# The compiled prefilter when numba imports (the fast extra), and the numpy path.
+# The compiled prefilter when numba imports, and the numpy path.
 BACKENDS = ("numpy", "numba") if di._kernels() is not None else ("numpy",)
 PRESETS = {
     "visible": GlobalMapParams(),

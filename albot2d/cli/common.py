@@ -85,7 +85,7 @@ def defaults_of(cls: type) -> dict[str, Any]:
 
 # Fields two reports of the same run may differ in: file lists, the version, and a fuzzing
 # reproducer's own section (wall-clock timings are dropped by ``without_timings``).
-_NOT_COMPARED = ("figures", "exports", "albot2d_version", "reproducer")
+_NOT_COMPARED = ("figures", "exports", "albot2d_version", "kernels", "reproducer")
 
 
 def add_run_options(p: argparse.ArgumentParser) -> None:
