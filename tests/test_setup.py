@@ -100,7 +100,6 @@ def test_the_help_texts_defaults_are_the_dataclasses_defaults() -> None:
     assert spec.tour_kind == common.DEFAULT_TOUR_KIND
     assert spec.tour_length_m == common.DEFAULT_TOUR_LENGTH_M
     campaign = CampaignParams(episodes=1)
-    from albot2d.mapping.registry import _ALBOT1_OPTIONS
     from albot2d.sim.driving import PROFILES
     from albot2d.sim.laser import LASER_NOISE_PRESETS
     from albot2d.sim.odometry import NOISE_PRESETS
@@ -113,6 +112,5 @@ def test_the_help_texts_defaults_are_the_dataclasses_defaults() -> None:
     assert tuple(NOISE_PRESETS) == common.NOISE_NAMES
     assert tuple(LASER_NOISE_PRESETS) == common.LASER_NOISE_NAMES
     assert tuple(TOUR_KINDS) == common.TOUR_KIND_NAMES
-    assert tuple(_ALBOT1_OPTIONS) == common.ALBOT1_OPTION_KEYS
     for name in ("profile", "noise", "laser_noise", "mapper", "tour_kind"):
         assert fuzz_cmd.DEFAULTS[name] == getattr(campaign, name), name

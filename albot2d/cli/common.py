@@ -24,7 +24,6 @@ from albot2d.cli.options import positive_int, positive_number, world_params
 from albot2d.errors import InputError
 
 __all__ = [
-    "ALBOT1_OPTION_KEYS",
     "DEFAULT_KIND",
     "DEFAULT_NOISE",
     "LASER_NOISE_NAMES",
@@ -32,6 +31,7 @@ __all__ = [
     "PROFILE_NAMES",
     "TOUR_KIND_NAMES",
     "WORLD_KINDS",
+    "add_albot1_keys_to_help",
     "add_json_option",
     "add_run_options",
     "add_scoring_options",
@@ -63,7 +63,6 @@ PROFILE_NAMES = ("dataset1", "dataset2", "dataset3", "start_stop", "start_stop_v
 NOISE_NAMES = ("none", "low", "typical", "high", "pioneer3dx")
 LASER_NOISE_NAMES = ("sick_lms200", "zero")
 TOUR_KIND_NAMES = ("loop", "out_and_back", "backtracking", "circuit")
-ALBOT1_OPTION_KEYS = ("preset", "deletion", "min_tracked", "position_endpoint", "match_candidates")
 # Fields two reports of the same run may differ in: file lists, the version, and a fuzzing
 # reproducer's own section (wall-clock timings are dropped by ``without_timings``).
 _NOT_COMPARED = ("figures", "exports", "albot2d_version", "reproducer")
@@ -362,3 +361,17 @@ def report_differences(recorded: Mapping[str, Any], report: Mapping[str, Any]) -
         {k: v for k, v in without_timings(dict(recorded)).items() if k not in _NOT_COMPARED},
         {k: v for k, v in without_timings(dict(report)).items() if k not in _NOT_COMPARED},
     )
+
+
+def add_albot1_keys_to_help(parser: Any) -> None:
+    """``parser --help`` ends with every ``albot1[KEY=VALUE]`` key, generated from the
+    ``Albot1Params`` dataclasses when help is asked for (not at every start-up)."""
+    plain = parser.format_help
+
+    def format_help() -> str:
+        from albot2d.mapping.albot1_options import option_help
+
+        parser.epilog = option_help()
+        return str(plain())
+
+    parser.format_help = format_help

@@ -86,8 +86,12 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--mapper",
         metavar="NAME",
-        help="mapper under test: albot1, naive, truth, … or module:Class (default albot1)",
+        help="mapper under test: albot1, naive, truth, albot1[KEY=VALUE,...] (keys listed "
+        "below) or module:Class (default albot1)",
     )
+    from albot2d.cli.common import add_albot1_keys_to_help
+
+    add_albot1_keys_to_help(p)
     p.add_argument("--workers", metavar="K", help="worker processes (default: every core)")
     p.add_argument("--backend", help="local (process pool) or dask (default local)")
     p.add_argument("--address", metavar="tcp://HOST:PORT", help="dask scheduler to use")

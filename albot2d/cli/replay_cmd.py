@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
-    ALBOT1_OPTION_KEYS,
+    add_albot1_keys_to_help,
     add_json_option,
     add_scoring_options,
     finish,
@@ -83,9 +83,10 @@ def register(subparsers: Any) -> None:
         action="extend",
         metavar="NAME",
         help="mappers: albot1, naive, slam and scan_odometry ([slam] extra), "
-        f"albot1[KEY=VALUE,...] (keys {', '.join(ALBOT1_OPTION_KEYS)}) or module:Class "
+        "albot1[KEY=VALUE,...] (keys listed below) or module:Class "
         "(default: albot1 naive; truth needs a simulated run)",
     )
+    add_albot1_keys_to_help(p)
     p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")
     add_scoring_options(p)
     p.add_argument(

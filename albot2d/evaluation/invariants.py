@@ -174,7 +174,10 @@ class RecountedStep:
 
 
 def recount_tracking(
-    views: Sequence[tuple[int, Surfaces, Pose]], params: TrackingParams, min_tracked: int
+    views: Sequence[tuple[int, Surfaces, Pose]],
+    params: TrackingParams,
+    min_tracked: int,
+    move_using_pi: str = "restated",
 ) -> list[RecountedStep]:
     """Replay algorithm #2's tracking and remembering decisions from the views as given.
 
@@ -183,6 +186,10 @@ def recount_tracking(
     V(c-1) is remembered and V(c) re-tracked from it (line 12, goto 4); when (still) below,
     V(c) is remembered. A remembered view restarts the tracked set (``start_tracking``).
     Only the views, the tracking parameters and the rule go in: nothing of the mapper.
+    With ``move_using_pi="as_written"`` (algorithm #4 as the paper writes it), a view
+    remembered with no tracked surface left starts a stretch in which every view is
+    remembered, its ``tracked`` count being its trackable surfaces, until one has at least
+    ``min_tracked``.
     """
     out: list[RecountedStep] = []
     if not views:
@@ -195,7 +202,15 @@ def recount_tracking(
     out.append(RecountedStep(first, 0, (first,)))
     current = start(view)  # the tracked surfaces' latest observations
     use_vc = True  # V(c-1) (the first view) is the current local map
+    pi_mode = False
     for (prev_frame, prev_view, _), (frame, view, increment) in itertools.pairwise(views):
+        if pi_mode:
+            trackable = int(np.count_nonzero(trackable_mask(view, params)))
+            out.append(RecountedStep(frame, trackable, (frame,)))
+            current = start(view)
+            pi_mode = trackable < min_tracked
+            use_vc = True
+            continue
         counted = recognise(current, view, increment, params).view_index
         current = view.select(counted)
         remembered: tuple[int, ...] = ()
@@ -206,6 +221,7 @@ def recount_tracking(
                 current = view.select(kept)
             if len(current) < min_tracked:
                 remembered += (frame,)
+                pi_mode = move_using_pi == "as_written" and len(current) == 0
                 current = start(view)
         out.append(RecountedStep(frame, len(counted), remembered))
         use_vc = bool(remembered) and remembered[-1] == frame
@@ -224,7 +240,7 @@ def check_local_map_rule(
     map must hold exactly those views, and the mapper's ``StepRecord``s must agree."""
     name = "local_map_rule"
     need = m.params.min_tracked if min_tracked is None else min_tracked
-    steps = recount_tracking(views, m.params.tracking, need)
+    steps = recount_tracking(views, m.params.tracking, need, m.params.move_using_pi)
     if len(steps) != len(m.steps):
         fail(name, f"{len(steps)} views given but {len(m.steps)} steps recorded")
     expected = [f for step in steps for f in step.remembered]

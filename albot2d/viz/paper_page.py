@@ -70,17 +70,34 @@ def flatten_numbers(tree: Any, prefix: str = "") -> dict[str, str]:
     return out
 
 
+def _reading_results(result: Mapping[str, Any]) -> dict[str, Mapping[str, Any]]:
+    """Reading → its ``ours``/``verdict``/``notes`` (one unnamed reading for a result
+    computed under the primary reading only)."""
+    readings = result.get("readings")
+    if readings:
+        return dict(readings)
+    return {"albot2d": result}
+
+
 def _table(result: Mapping[str, Any]) -> str:
-    ours = flatten_numbers(result.get("ours", {}))
     paper = flatten_numbers({k: v for k, v in result.get("paper", {}).items() if k != "rows"})
-    keys = list(dict.fromkeys([*paper, *ours]))
+    readings = _reading_results(result)
+    ours = {r: flatten_numbers(v.get("ours", {})) for r, v in readings.items()}
+    keys = list(dict.fromkeys([*paper, *(k for o in ours.values() for k in o)]))
+    head = "".join(f"<th>{html.escape(r)} (mean ± sd over seeds)</th>" for r in readings)
+    verdicts = "".join(
+        f"<td><span class='verdict {_VERDICT_CLASS.get(v['verdict'], '')}'>"
+        f"{html.escape(v['verdict'])}</span></td>"
+        for v in readings.values()
+    )
     rows = "".join(
         f"<tr><td>{html.escape(k)}</td><td class='num'>{html.escape(paper.get(k, ''))}</td>"
-        f"<td class='num'>{html.escape(ours.get(k, ''))}</td></tr>"
+        + "".join(f"<td class='num'>{html.escape(o.get(k, ''))}</td>" for o in ours.values())
+        + "</tr>"
         for k in keys
     )
     return ("<table class='numbers'><tr><th>quantity</th><th>paper</th>"
-            f"<th>albot2d (mean ± sd over seeds)</th></tr>{rows}</table>")  # fmt: skip
+            f"{head}</tr><tr><td>verdict</td><td></td>{verdicts}</tr>{rows}</table>")  # fmt: skip
 
 
 def _per_seed(result: Mapping[str, Any], seeds: list[int]) -> str:
@@ -136,24 +153,39 @@ def render_page(data: Mapping[str, Any], figures: Mapping[str, list[dict[str, An
         "</code>" + ("; <strong>--quick</strong>: a smoke run, long runs cut short, "
                      "numbers not comparable to the paper's" if data.get("quick") else "")
         + ". Verdicts are computed from the numbers by the rule under each one.</p>",
-        "<table class='summary'><tr><th>experiment</th><th>verdict</th></tr>",
     ]  # fmt: skip
-    for name, verdict in data["verdicts"].items():
-        cls = _VERDICT_CLASS.get(verdict, "")
-        parts.append(
-            f"<tr><td><a href='#{name}'>{name}</a></td>"
-            f"<td><span class='verdict {cls}'>{html.escape(verdict)}</span></td></tr>"
+    by_reading = data.get("verdicts_by_reading") or {
+        n: {"verdict": v} for n, v in data["verdicts"].items()
+    }
+    readings = list(next(iter(by_reading.values()), {}))
+    specs = data.get("readings") or {}
+    parts.append(
+        "<table class='summary'><tr><th>experiment</th>"
+        + "".join(
+            f"<th>verdict: {html.escape(r)}"
+            + (f" <code>{html.escape(specs[r])}</code>" if r in specs else "") + "</th>"
+            for r in readings
         )
+        + "</tr>"
+    )  # fmt: skip
+    for name, verdicts in by_reading.items():
+        cells = "".join(
+            f"<td><span class='verdict {_VERDICT_CLASS.get(v, '')}'>{html.escape(v)}</span></td>"
+            for v in verdicts.values()
+        )
+        parts.append(f"<tr><td><a href='#{name}'>{name}</a></td>{cells}</tr>")
     parts.append("</table>")
     for name, result in data["experiments"].items():
         cls = _VERDICT_CLASS.get(result["verdict"], "")
         parts += [
             f"<section id='{name}'><h2>{html.escape(name)}</h2>",
             f"<p class='claim'><strong>The paper:</strong> {html.escape(result['claim'])}</p>",
-            f"<p>Verdict: <span class='verdict {cls}'>{html.escape(result['verdict'])}</span>"
+            f"<p>Verdict{_reading_label(result, str(result.get('reading', '')))}: "
+            f"<span class='verdict {cls}'>{html.escape(result['verdict'])}</span>"
             f"</p><p class='rule'>Rule: {html.escape(result['rule'])}.</p>",
-            *(f"<p class='note'><strong>Why:</strong> {html.escape(str(n))}</p>"
-              for n in result.get("notes", [])),
+            *(f"<p class='note'><strong>Why{_reading_label(result, r)}:</strong> "
+              f"{html.escape(str(n))}</p>"
+              for r, v in _reading_results(result).items() for n in v.get("notes", [])),
             _paper_rows(result), _table(result), _per_seed(result, seeds),
         ]  # fmt: skip
         for fig in figures.get(name, []):
@@ -165,6 +197,10 @@ def render_page(data: Mapping[str, Any], figures: Mapping[str, list[dict[str, An
         parts.append("</section>")
     parts.append("</body></html>\n")
     return "\n".join(parts)
+
+
+def _reading_label(result: Mapping[str, Any], reading: str) -> str:
+    return f" ({html.escape(reading)})" if result.get("readings") else ""
 
 
 def _seed_text(seeds: list[int]) -> str:
