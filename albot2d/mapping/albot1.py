@@ -232,7 +232,9 @@ class Albot1:
 
     ``on_update`` is called with each global-map ``UpdateReport`` (e.g. to check invariants);
     ``on_view`` with each view as given, before it is processed (frame index, surfaces,
-    odometry increment), so a check can recount tracking from the views themselves.
+    odometry increment), so a check can recount tracking from the views themselves;
+    ``on_localise`` with the tracked surfaces each new local map is localised from (empty
+    for path integration with none), once per local map after the first, in route order.
     """
 
     name = "albot1"
@@ -243,8 +245,10 @@ class Albot1:
         *,
         on_update: Callable[[UpdateReport, LocalMap], None] | None = None,
         on_view: Callable[[int, Surfaces, Pose], None] | None = None,
+        on_localise: Callable[[TrackedSurfaces], None] | None = None,
     ) -> None:
         self.params = params or Albot1Params()
+        self.on_localise = on_localise
         self.route = RouteMap()
         self.map = GlobalMap(self.params.global_map)
         self.timer = StageTimer()
@@ -402,6 +406,8 @@ class Albot1:
         (line 5, no RTSV); the view is remembered by path integration (line 2 of the next
         round, or line 8 when it has more than three trackable surfaces, which ends the
         loop: "return ; to move using view navigation"). Returns |S_t|."""
+        if self.on_localise is not None:
+            self.on_localise(TrackedSurfaces.empty())
         with self.timer.stage("tracking"):
             trackable = int(np.count_nonzero(trackable_mask(view, self.params.tracking)))
         self._update_maps(frame_index, timestamp, view, pi_pose, "path_integration", tracked=0)
@@ -448,6 +454,8 @@ class Albot1:
     ) -> tuple[Pose, Method]:
         """Algorithm #2 line 6 (triangulate from the tracked surfaces) or, when none affords
         a pose, algorithm #4 line 1 (the pose reached by path integration)."""
+        if self.on_localise is not None:
+            self.on_localise(tracked)
         if len(tracked):
             pose = triangulate(
                 tracked.local, tracked.current, pi_pose, self.params.triangulation,

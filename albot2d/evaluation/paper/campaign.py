@@ -77,9 +77,11 @@ def check_readings(readings: Sequence[str]) -> tuple[str, ...]:
     out = tuple(readings)
     if not out:
         raise InputError("--readings: give at least one reading")
-    specs = [reading_spec(r) for r in out]
-    for k, spec in enumerate(specs):
-        if spec in specs[:k]:
+    from albot2d.mapping.registry import mapper_factory
+
+    params = [getattr(mapper_factory(reading_spec(r))(), "params", None) for r in out]
+    for k, p in enumerate(params):
+        if p in params[:k]:
             raise InputError(f"--readings: {out[k]!r} runs the same mapper as an earlier one")
     return out
 
