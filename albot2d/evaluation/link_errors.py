@@ -103,6 +103,16 @@ class RecordingAlbot1(Albot1):
         self.localisations.append(self._describe(tracked, pi_pose, steps, pose, method))
         return pose, method
 
+    def _move_using_pi_step(
+        self, frame_index: int, timestamp: float, view: Any, pi_pose: Pose
+    ) -> int:
+        # algorithm #4 as written (``move_using_pi="as_written"``): no tracking, PI
+        self.localisations.append(
+            _Localisation("pi_no_tracked", 0, 0, 0, 0, 1, pi_pose.as_array(), None, None,
+                          np.zeros((0, 3)))
+        )  # fmt: skip
+        return super()._move_using_pi_step(frame_index, timestamp, view, pi_pose)
+
     def _describe(
         self, tracked: TrackedSurfaces, pi_pose: Pose, steps: int, pose: Pose, method: Method
     ) -> _Localisation:

@@ -93,6 +93,10 @@ RUNS: dict[str, PaperRun] = {
                  stop_every_m=4.0),
         PaperRun("fig15_room", "fig6", "start_stop", route="fig15", steps=True,
                  views=True),
+        # Fig. 16's route (S → E7) with dataset 1 and Albot₁ alone: path-integration counts
+        # of several readings (``paper.readings_counts``); no experiment reads it
+        PaperRun("fig16_dataset1", "fig6", "dataset1", route="fig16", marks=("E7",)),
+        PaperRun("fig16_dataset2", "fig6", "dataset2", route="fig16", marks=("E7",)),
         PaperRun("fig11_open", "open", "dataset3", tour_kind="loop", tour_length_m=130.0,
                  mappers=("x",), marks=("half", "end"),
                  quality={"half": ("albot1",), "end": ("albot1", "x")}, egocentric_end=True),
