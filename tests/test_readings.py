@@ -13,12 +13,12 @@ import pytest
 
 from albot2d.cli import main
 from albot2d.errors import InputError
-from albot2d.evaluation import invariants as inv
+from albot2d.evaluation.checks import invariants as inv
 from albot2d.geometry import Pose
 from albot2d.mapping import Albot1, Albot1Params
-from albot2d.mapping.albot1_options import albot1_params_from_spec, option_table
+from albot2d.mapping.albot1.options import albot1_params_from_spec, option_table
+from albot2d.mapping.albot1.route_map import RouteMap
 from albot2d.mapping.registry import mapper_factory
-from albot2d.mapping.route_map import RouteMap
 from albot2d.perception.surfaces import Surfaces
 from albot2d.sim.laser import LaserNoise
 from tests.runs import simulate

@@ -119,8 +119,8 @@ def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.evaluation import RunSpec, evaluation_params_from_report, run_experiment
-    from albot2d.evaluation.report import read_report
-    from albot2d.evaluation.setup import check_spec
+    from albot2d.evaluation.run.report import read_report
+    from albot2d.evaluation.run.setup import check_spec
 
     recorded = None
     if args.reproduce is not None:
@@ -128,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
         if given:
             flags = ", ".join("--" + n.replace("_", "-") for n in given)
             raise InputError(f"--reproduce takes the run's settings from the report; drop {flags}")
-        from albot2d.cli.fuzz_cmd import reproduce_failure, reproducer_document
+        from albot2d.cli.reproduce import reproduce_failure, reproducer_document
 
         doc = reproducer_document(args.reproduce)
         if doc is not None:  # a fuzzing reproducer: its invariant checks run too

@@ -14,11 +14,17 @@ from collections.abc import Callable
 from albot2d.errors import InputError
 from albot2d.mapping.protocol import Mapper
 
-__all__ = ["BUILTIN_MAPPERS", "mapper_factory", "report_name", "resolve_mappers"]
+__all__ = [
+    "BUILTIN_MAPPERS",
+    "albot1_option_keys",
+    "mapper_factory",
+    "report_name",
+    "resolve_mappers",
+]
 
 
 def _albot1() -> Mapper:
-    from albot2d.mapping.albot1 import Albot1
+    from albot2d.mapping.albot1.mapper import Albot1
 
     return Albot1()
 
@@ -58,12 +64,20 @@ BUILTIN_MAPPERS: dict[str, Callable[[], Mapper]] = {
 _REQUIRED = ("observe", "pose", "global_map", "trajectory", "counts", "timings_ms")
 
 
+def albot1_option_keys() -> tuple[str, ...]:
+    """The keys ``albot1[KEY=VALUE,...]`` accepts: ``preset``, ``deletion`` and every
+    ``Albot1Params`` field (``albot1.options.option_table``)."""
+    from albot2d.mapping.albot1.options import option_table
+
+    return ("preset", "deletion", *(opt.key for opt in option_table()))
+
+
 def _albot1_variant(spec: str) -> Callable[[], Mapper]:
     """``albot1[preset=paper_literal,deletion=v1,min_tracked=3,tracking.match_distance_m=0.3]``:
-    Albot1 with named options (every ``Albot1Params`` field, ``mapping.albot1_options``),
+    Albot1 with named options (every ``Albot1Params`` field, ``mapping.albot1.options``),
     so readings of the paper can be compared side by side in one run."""
-    from albot2d.mapping.albot1 import Albot1
-    from albot2d.mapping.albot1_options import albot1_params_from_spec
+    from albot2d.mapping.albot1.mapper import Albot1
+    from albot2d.mapping.albot1.options import albot1_params_from_spec
 
     params = albot1_params_from_spec(spec, spec[len("albot1[") : -1])
 

@@ -78,20 +78,31 @@ def path_integration_counts(
     return out
 
 
+def _seeds(text: str) -> list[int]:
+    from albot2d.errors import InputError
+
+    seeds: set[int] = set()
+    for part in text.split(","):
+        lo, dash, hi = part.strip().partition("-")
+        if not lo.isdigit() or (dash and not hi.isdigit()):
+            raise InputError(f"--seeds: expected A-B or A,B,C, got {text!r}")
+        seeds.update(range(int(lo), int(hi if dash else lo) + 1))
+    return sorted(seeds)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    from albot2d.cli.experiments_cmd import parse_seeds
     from albot2d.errors import InputError
     from albot2d.evaluation.paper.runs import DEFAULT_READINGS
 
     ap = argparse.ArgumentParser(prog="python -m albot2d.evaluation.paper.readings_counts",
                                  description=__doc__.split("\n\n")[0])  # fmt: skip
-    ap.add_argument("--seeds", default="0-9")
+    ap.add_argument("--seeds", default="0-9", help="A-B (inclusive) or A,B,C")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--readings", nargs="+", default=list(DEFAULT_READINGS))
     ap.add_argument("--json", action="store_true", help="print the numbers as JSON")
     args = ap.parse_args(argv)
     try:
-        counts = path_integration_counts(parse_seeds(args.seeds), args.readings, args.workers)
+        counts = path_integration_counts(_seeds(args.seeds), args.readings, args.workers)
     except InputError as exc:
         print(f"readings_counts: {exc}")
         return 2

@@ -224,9 +224,9 @@ def run_job_readings(
     experiments read only counts, homing, the end-pose error, revisits and a few map
     accuracies, which are computed here and nothing else.
     """
-    from albot2d.evaluation.experiment import RunSpec, run_experiment
-    from albot2d.evaluation.scoring import EvaluationParams
-    from albot2d.evaluation.trace import HomingParams
+    from albot2d.evaluation.run.experiment import RunSpec, run_experiment
+    from albot2d.evaluation.run.scoring import EvaluationParams
+    from albot2d.evaluation.run.trace import HomingParams
 
     run = RUNS[run_name]
     specs = {reading: reading_spec(reading) for reading in readings}
@@ -309,7 +309,7 @@ def _mapper_results(
     trace: Any, made: Mapping[str, Any], names: tuple[str, ...]
 ) -> dict[str, dict[str, Any]]:
     """Counts and end-pose error of each mapper in ``names``."""
-    from albot2d.evaluation.scoring import counts_section, end_pose_error, trajectory_of
+    from albot2d.evaluation.run.scoring import counts_section, end_pose_error, trajectory_of
 
     results: dict[str, dict[str, Any]] = {}
     for name in names:
@@ -346,7 +346,7 @@ def _reading_summary(
     keep_views: bool,
 ) -> dict[str, Any]:
     """The job summary with the Albot₁ mapper ``name`` as ``"albot1"``."""
-    from albot2d.evaluation.scoring import (
+    from albot2d.evaluation.run.scoring import (
         REVISIT_GAP_MAPS,
         egocentric_at,
         homing_section,
@@ -386,7 +386,7 @@ def _reading_summary(
                   for mark, s in snaps.items()},
     }  # fmt: skip
     if run.steps:
-        from albot2d.evaluation.updates import albot1_update_flags, region_labels
+        from albot2d.evaluation.metrics.updates import albot1_update_flags, region_labels
 
         flags = albot1_update_flags(albot1.steps, trace.frame_indices)
         regions = region_labels(world, truth[:, :2])
@@ -449,7 +449,7 @@ def path_integration_causes(albot1: Any, trace: Any, world: Any) -> dict[str, An
     """Every local map Albot₁ placed by path integration: its frame, how many tracked
     surfaces were left (0: none to triangulate from; > 0: the triangulation afforded no
     pose within the gates), whether that view ended a turn, and the region kind there."""
-    from albot2d.evaluation.updates import region_labels
+    from albot2d.evaluation.metrics.updates import region_labels
     from albot2d.geometry import wrap_angle
 
     rows = {int(f): k for k, f in enumerate(np.asarray(trace.frame_indices).tolist())}
@@ -514,7 +514,7 @@ def _quality_at_marks(
 ) -> dict[str, dict[str, Any]]:
     """Anchored map accuracy (p95, m) and surface count of the ``wanted`` mappers at each
     mark (mark → mapper names)."""
-    from albot2d.evaluation.map_quality import map_quality
+    from albot2d.evaluation.metrics.map_quality import map_quality
     from albot2d.geometry import Pose
 
     out: dict[str, dict[str, Any]] = {}
