@@ -96,7 +96,9 @@ def _table(result: Mapping[str, Any]) -> str:
         + "</tr>"
         for k in keys
     )
-    return ("<table class='numbers'><tr><th>quantity</th><th>paper</th>"
+    where = result.get("paper_figure")
+    paper_head = f"paper ({html.escape(where)})" if where else "paper"
+    return (f"<table class='numbers'><tr><th>quantity</th><th>{paper_head}</th>"
             f"{head}</tr><tr><td>verdict</td><td></td>{verdicts}</tr>{rows}</table>")  # fmt: skip
 
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from albot2d.errors import InputError
-from albot2d.evaluation.paper.registry import EXPERIMENTS, runs_needed
+from albot2d.evaluation.paper.registry import EXPERIMENTS, PAPER_FIGURES, runs_needed
 from albot2d.evaluation.paper.runs import (
     ALBOT_X,
     PAPER_NOISE,
@@ -200,6 +200,7 @@ def compute_experiments(
             f | {"file": figure_prefix + f["file"]} for f in exp.figures(figure_runs, result)
         ]
         result["figures"] = [f["file"] for f in figures[name]]
+        result["paper_figure"] = PAPER_FIGURES.get(name)
         result["figure_seed"] = seeds[0]
         experiments[name] = result
     runs_info = {
