@@ -32,6 +32,7 @@ from albot2d.errors import InputError
 
 __all__ = ["parse_seeds", "register", "run"]
 
+SMOKE_RUN = "smoke run"  # the words --quick output is marked with, everywhere it shows
 FULL_SEEDS = "0-19"
 QUICK_SEEDS = "0-1"
 _MAX_SEEDS = 10_000
@@ -128,6 +129,10 @@ def run(args: argparse.Namespace) -> int:
                 "figures need matplotlib: pip install 'albot2d[viz]' (or pass --no-figures)"
             ) from None
     backend = make_backend(args.backend, workers=workers, address=args.address)
+    if args.quick:  # said first, before anything else is printed
+        print(f"albot2d experiments --quick: {SMOKE_RUN} (seeds {', '.join(map(str, seeds))}, "
+              "long runs cut short): its numbers and verdicts are not comparable to the "
+              "paper's", flush=True)  # fmt: skip
     bar = _progress(len(jobs))
     try:
         outcome = run_experiments(names, seeds, quick=args.quick, backend=backend,
@@ -168,7 +173,8 @@ def _write(out: Path, outcome: Any, *, figures: bool) -> None:
         for name, specs in outcome.figures.items():
             for spec in specs:
                 save_figure(spec, out / spec["file"])
-            written[name] = [{"file": s["file"], "caption": s["caption"]} for s in specs]
+            written[name] = [{"file": s["file"], "caption": s["caption"], "plot": s["plot"]}
+                             for s in specs]  # fmt: skip
     else:
         for result in outcome.data["experiments"].values():
             result["figures"] = []
@@ -184,9 +190,10 @@ def _print_summary(data: dict[str, Any], out: Path) -> None:
         n: {"default": v} for n, v in data["verdicts"].items()
     }
     readings = list(next(iter(by_reading.values())))
+    smoke = f"  ({SMOKE_RUN})" if data.get("quick") else ""
     cols = [max(len(r), 14) for r in readings]
     print(f"{'':<{width}}  " + "  ".join(f"{r:<{c}}" for r, c in zip(readings, cols, strict=True)))
     for name, verdicts in by_reading.items():
         cells = "  ".join(f"{verdicts[r]:<{c}}" for r, c in zip(readings, cols, strict=True))
-        print(f"{name:<{width}}  {cells}".rstrip())
+        print(f"{name:<{width}}  {cells}{smoke}".rstrip())
     print(f"{len(data['seeds'])} seeds, {data['wall_time_s']:.0f} s -> {out}/index.html")
