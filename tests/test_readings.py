@@ -191,7 +191,7 @@ def test_compute_readings_puts_each_reading_side_by_side() -> None:
     files = [f["file"] for f in out.figures["table1"]]
     assert files == ["table1.png", "paper_literal-table1.png"]
     page = render_page(out.data, {})
-    assert "verdict: paper_literal" in page and page.count("paper_literal (mean ± sd") == 1
+    assert "verdict: paper_literal" in page and "<td class='who'>paper_literal</td>" in page
 
 
 # -- the zero-noise invariant -------------------------------------------------------------
