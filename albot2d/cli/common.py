@@ -271,10 +271,12 @@ def finish(
     no_figures: bool,
     stage: Callable[[str], None] | None = None,
     animate: bool = False,
+    export: tuple[str, ...] = (),
+    map_resolution_m: float | None = None,
 ) -> Any:
     """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
-    maps, write everything; on any failure remove the output directory again if this
-    command created it."""
+    maps (and the ``export`` formats), write everything; on any failure remove the output
+    directory again if this command created it."""
     from albot2d.evaluation.export import export_files
 
     try:
@@ -284,6 +286,11 @@ def finish(
         figures = _render(result, no_figures, command, animate)
         figures.update(_step_figure(result, no_figures))
         exports = export_files(result)
+        if export:
+            from albot2d.evaluation.map_exports import MAP_EXPORTERS
+
+            for name in export:
+                exports.update(MAP_EXPORTERS[name](result, map_resolution_m=map_resolution_m))
         result.report["figures"] = sorted(figures)
         result.report["exports"] = sorted(exports)
         # steps.csv: one row per view (stage times, counters), for profiling a run.

@@ -34,7 +34,8 @@ from albot2d.cli.common import (
     progress_bar,
     scoring_params,
 )
-from albot2d.cli.options import positive_int
+from albot2d.cli.options import add_export_options, export_options, positive_int
+from albot2d.cli.viewer import add_viewer_options, check_viewer_options, open_viewer
 from albot2d.errors import InputError
 
 __all__ = ["DATA_ENV", "find_log", "register", "run"]
@@ -97,6 +98,8 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="refuse a log with anomalies (bad ranges, timestamps out of order)",
     )
+    add_export_options(p, ("occupancy", "g2o"))
+    add_viewer_options(p)
     add_json_option(p)
     p.set_defaults(handler=run)
 
@@ -113,26 +116,40 @@ def run(args: argparse.Namespace) -> int:
     resolve_mappers(list(mappers))
     max_frames = positive_int(args.max_frames, "--max-frames")
     params = scoring_params(args)
+    export, map_resolution_m = export_options(args, ("occupancy", "g2o"))
+    from albot2d.evaluation.map_exports import check_map_exports
+
+    check_map_exports(export, mappers)
     relations = Path(args.relations) if args.relations is not None else find_relations(log)
     if relations is not None:
         read_relations(relations)  # a bad relations file fails before anything is created
+    check_viewer_options(args)
     out, created = prepare_out_dir(args.out)
+    viewer = open_viewer(args, f"albot2d replay {log.name}")
     bar = progress_bar(max_frames, " views", "replay")
 
     def frame(f: Any, travelled: float) -> None:
+        if viewer is not None:
+            viewer.on_frame(f, travelled)
         bar.set_postfix_str(f"{travelled:.0f} m", refresh=False)
         bar.update(1)
 
+    ok = False
     try:
         result = finish(
             out, created, "replay",
             lambda: replay_log(log, relations_path=relations, mappers=mappers, params=params,
                                max_frames=max_frames, on_frame=frame, on_stage=bar.set_description,
-                               strict=args.strict),
-            args.no_figures, bar.set_description,
+                               strict=args.strict,
+                               on_mappers=None if viewer is None else viewer.on_mappers),
+            args.no_figures, bar.set_description, export=export,
+            map_resolution_m=map_resolution_m,
         )  # fmt: skip
+        ok = True
     finally:
         bar.close()
+        if viewer is not None:
+            viewer.finish(ok)
     anomalies = result.report["log"]["anomalies"]
     if any(anomalies[k] for k in anomalies if not k.startswith("frames_")):
         from albot2d.logs.anomalies import LogAnomalies

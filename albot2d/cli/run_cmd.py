@@ -33,6 +33,8 @@ from albot2d.cli.common import (
     scoring_params,
     spec_from_args,
 )
+from albot2d.cli.options import add_export_options, export_options
+from albot2d.cli.viewer import add_viewer_options, check_viewer_options, open_viewer
 from albot2d.errors import InputError
 
 __all__ = ["register", "run"]
@@ -95,6 +97,8 @@ def register(subparsers: Any) -> None:
         metavar="FILE",
         help="also write a cProfile pstats file of the run (python -m pstats FILE)",
     )
+    add_export_options(p, ("occupancy", "g2o"))
+    add_viewer_options(p)
     add_json_option(p)
     p.set_defaults(handler=run)
 
@@ -139,20 +143,30 @@ def run(args: argparse.Namespace) -> int:
         spec = spec_from_args(args)
         params = scoring_params(args)
     check_spec(spec)
+    export, map_resolution_m = export_options(args, ("occupancy", "g2o"))
+    from albot2d.evaluation.map_exports import check_map_exports
+
+    check_map_exports(export, spec.mappers)
     if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():
         raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
+    check_viewer_options(args)
     out, created = prepare_out_dir(args.out)
+    viewer = open_viewer(args, f"albot2d run {args.out}")
     bar = None
 
     def start(world: Any, tour: Any) -> None:
         # With --max-frames the run ends after that many views, not at the tour's end.
         nonlocal bar
+        if viewer is not None:
+            viewer.on_start(world, tour)
         if spec.max_frames is not None:
             bar = progress_bar(spec.max_frames, " views", "run")
         else:
             bar = progress_bar(round(tour.length_m, 1), "m", "run")
 
     def frame(f: Any, travelled: float) -> None:
+        if viewer is not None:
+            viewer.on_frame(f, travelled)
         if bar is None:
             return
         if spec.max_frames is not None:
@@ -167,16 +181,22 @@ def run(args: argparse.Namespace) -> int:
         if bar is not None:
             bar.set_description(name)
 
+    ok = False
     try:
         result = finish(
             out, created, "run",
             _profiled(args.cprofile, lambda: run_experiment(
-                spec, params, on_start=start, on_frame=frame, on_stage=stage)),
-            args.no_figures, stage, animate=args.animate,
+                spec, params, on_start=start, on_frame=frame, on_stage=stage,
+                on_mappers=None if viewer is None else viewer.on_mappers)),
+            args.no_figures, stage, animate=args.animate, export=export,
+            map_resolution_m=map_resolution_m,
         )  # fmt: skip
+        ok = True
     finally:
         if bar is not None:
             bar.close()
+        if viewer is not None:
+            viewer.finish(ok)
     print_tables(result, out, args.json)
     if recorded is not None:
         diff = report_differences(recorded, result.report)

@@ -4,7 +4,9 @@ Takes the world and driving options of ``albot2d run``, with the same defaults (
 office world, seed 0, profile dataset1, odometry noise typical, a loop tour of at least
 100 m) and the same seeds, so ``albot2d simulate`` logs exactly the frames that
 ``albot2d run`` with the same options maps. Writes ``DIR/log.clf`` (CARMEN), ``truth.txt``,
-``log.relations``, ``run.json`` and ``paths.png`` (world, true path, odometry path). Every
+``log.relations``, ``run.json`` and ``paths.png`` (world, true path, odometry path);
+``--export occupancy`` adds ``world.pgm`` + ``world.yaml``, the true world as a ROS
+``map_server`` map (``--map-resolution``, default 0.05 m). Every
 input is checked before anything is written; a failure leaves no partial output files.
 Prints a one-line summary.
 """
@@ -41,6 +43,9 @@ def register(subparsers: Any) -> None:
         "--out", metavar="DIR", required=True, help="output directory (created if missing)"
     )
     p.add_argument("--no-png", action="store_true", help=f"do not draw {PNG_NAME}")
+    from albot2d.cli.options import add_export_options
+
+    add_export_options(p, ("occupancy",))
     p.set_defaults(handler=run)
 
 
@@ -85,12 +90,14 @@ def _render_png(world: Any, frames: list[Any], title: str) -> bytes | None:
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.cli.common import spec_from_args
+    from albot2d.cli.options import export_options
     from albot2d.evaluation.setup import build_run
     from albot2d.logs import write_run
     from albot2d.logs.run_files import LOG_NAME, MANIFEST_NAME, RELATIONS_NAME, TRUTH_NAME
 
     out = _out_dir(args.out)
     spec = spec_from_args(args)
+    export, map_resolution_m = export_options(args, ("occupancy",))
     setup = build_run(spec)
     world, tour, profile, sim = setup.world, setup.tour, setup.profile, setup.simulator
     frames = _frames(sim.drive(tour, profile), spec.max_frames, sys.stderr.isatty())
@@ -100,6 +107,12 @@ def run(args: argparse.Namespace) -> int:
         f"{tour.length_m:.0f} m  odometry noise {spec.noise}"
     )
     png = None if args.no_png else _render_png(world, frames, title)
+    extra: dict[str, bytes] = {}
+    if "occupancy" in export:  # the true world as a map_server map
+        from albot2d.evaluation.map_exports import WORLD_MAP_NAME, world_grid
+        from albot2d.logs.map_server import map_server_files
+
+        extra = map_server_files(world_grid(world, map_resolution_m), WORLD_MAP_NAME)
     params = {
         "seed": spec.seed,
         "world_source": spec.world_file or f"generate({spec.kind!r}, seed={spec.seed})",
@@ -118,13 +131,17 @@ def run(args: argparse.Namespace) -> int:
     }
     manifest = write_run(out, frames, params=params)
     if png is not None:
-        try:
-            atomic_write_bytes(out / PNG_NAME, png)
-        except OSError:
-            for name in (LOG_NAME, TRUTH_NAME, RELATIONS_NAME, MANIFEST_NAME):
-                with contextlib.suppress(OSError):
-                    (out / name).unlink()
-            raise
+        extra[PNG_NAME] = png
+    written: list[str] = []
+    try:
+        for name, data in extra.items():
+            atomic_write_bytes(out / name, data)
+            written.append(name)
+    except OSError:
+        for name in (LOG_NAME, TRUTH_NAME, RELATIONS_NAME, MANIFEST_NAME, *written):
+            with contextlib.suppress(OSError):
+                (out / name).unlink()
+        raise
     counts = manifest["counts"]
     print(
         f"{profile.name}: {counts['frames']} frames, {tour.kind} tour {tour.length_m:.1f} m, "

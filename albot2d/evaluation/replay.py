@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +33,7 @@ from albot2d.frames import Frame
 from albot2d.logs.anomalies import ordered_frames
 from albot2d.logs.log_frames import read_frames
 from albot2d.logs.relations import Relations, read_relations
+from albot2d.mapping.protocol import Mapper
 from albot2d.mapping.registry import resolve_mappers
 
 __all__ = ["DEFAULT_REPLAY_MAPPERS", "find_relations", "log_stem", "replay_log"]
@@ -99,11 +100,13 @@ def replay_log(
     on_frame: Callable[[Frame, float], None] | None = None,
     on_stage: Callable[[str], None] | None = None,
     strict: bool = False,
+    on_mappers: Callable[[Mapping[str, Mapper]], None] | None = None,
 ) -> ExperimentResult:
     """Map ``log`` with every mapper and score against ``relations_path`` (found if None).
 
     ``on_frame(frame, travelled_m)`` is called after each frame and ``on_stage("scoring")``
-    after the last one (progress display). ``strict`` turns any log anomaly into an
+    after the last one (progress display); ``on_mappers(mappers)`` once the mappers are
+    made, before the first frame (e.g. a viewer). ``strict`` turns any log anomaly into an
     ``InputError`` (see the module docstring).
     """
     params = params or EvaluationParams()
@@ -127,6 +130,8 @@ def replay_log(
     if frames and any(":" not in spec for spec in mappers):  # built-ins extract surfaces
         _check_beam_spacing(log_path, frames[0])
     instances = {name: factory() for name, factory in factories.items()}
+    if on_mappers is not None:
+        on_mappers(instances)
     trace = drive_mappers(
         frames, instances, homing=params.homing, last_k_views=params.map_quality.last_k_views,
         max_frames=max_frames, on_frame=on_frame, source=os.fspath(log_path),
