@@ -133,3 +133,36 @@ def test_g2o_text_writes_the_upper_triangle_row_by_row() -> None:
         g2o_text([[0, 0, 0], [1, 2, 0.5]], [[0, 1]], [[1, 2, 0.5]], [np.triu(info)])
     with pytest.raises(ValueError, match="outside"):
         g2o_text([[0, 0, 0]], [[0, 1]], [[1, 2, 0.5]], [info])
+
+
+def test_run_and_replay_export_the_graph(tmp_path: Path) -> None:
+    """``--export g2o occupancy`` from ``run`` (world frame) and ``replay`` (the mapper's
+    frame): the g2o file loads in GTSAM with a vertex per keyframe the report counts."""
+    require_slam_extra()
+    import json
+
+    import gtsam
+
+    from albot2d.cli import main
+
+    out = tmp_path / "run"
+    assert main(["run", "--out", str(out), "--max-frames", "60", "--no-figures", "--mapper",
+                 "slam", "naive", "--export", "g2o", "occupancy"]) == 0  # fmt: skip
+    report = json.loads((out / "report.json").read_text())
+    keyframes = report["mappers"]["slam"]["counts"]["local_maps"]
+    assert {"graph_slam.g2o", "graph_slam.tum", "map_slam.pgm", "world.yaml"} <= set(
+        report["exports"]
+    )
+    graph, initial = gtsam.readG2o(str(out / "graph_slam.g2o"), is3D=False)
+    assert initial.size() == keyframes and graph.size() >= 2 * (keyframes - 1)
+    first = initial.atPose2(0)  # the first keyframe at the first true pose (world frame)
+    truth = np.loadtxt(out / "groundtruth.tum", comments="#")[0]
+    assert np.allclose([first.x(), first.y()], truth[1:3], atol=1e-9)
+    sim = tmp_path / "sim"
+    assert main(["simulate", "--out", str(sim), "--max-frames", "40", "--no-png"]) == 0
+    assert main(["replay", str(sim / "log.clf"), "--out", str(tmp_path / "rep"), "--no-figures",
+                 "--mapper", "slam", "--export", "g2o"]) == 0  # fmt: skip
+    graph, initial = gtsam.readG2o(str(tmp_path / "rep" / "graph_slam.g2o"), is3D=False)
+    assert initial.atPose2(0).equals(gtsam.Pose2(), 1e-12)  # a log: the first view is the origin
+    assert main(["run", "--out", str(tmp_path / "no"), "--export", "g2o"]) == 2
+    assert not (tmp_path / "no").exists()

@@ -44,7 +44,8 @@ def check_viewer_options(args: argparse.Namespace) -> bool:
         return False
     if save is not None:
         parent = Path(save).parent
-        if not parent.is_dir():
+        out = getattr(args, "out", None)  # the output directory is made before the run
+        if not parent.is_dir() and not (out and parent.resolve() == Path(out).resolve()):
             raise InputError(f"--rerun-save {save}: its directory does not exist")
         if not str(save).endswith(".rrd"):
             raise InputError(f"--rerun-save {save}: give a .rrd file name")

@@ -15,15 +15,17 @@ first true pose, as in the exports), else the frame of the first view:
 - ``scan``: each view's laser hits (at the true pose; on a real log at the estimate of
   the first mapper);
 - per mapper ``NAME``: ``mappers/NAME/pose`` and ``mappers/NAME/path`` (its estimate),
-  ``mappers/NAME/map`` (its global map, every ``maps_every`` views and at the end);
+  ``mappers/NAME/map`` (its global map, every ``maps_every_m`` of travel and at the end);
 - a view-based mapper (Albot1) also ``mappers/NAME/view`` (the current view's surfaces,
   at its estimated pose), ``mappers/NAME/tracked`` (the surfaces it still tracks),
   ``mappers/NAME/route`` and ``mappers/NAME/route/views`` (its route map: the remembered
-  views' poses, joined in order) and ``mappers/NAME/map`` each time its global map is
-  updated (a view remembered).
+  views' poses, joined in order) and ``mappers/NAME/map`` when its global map has been
+  updated (a view remembered), at most every ``view_maps_every_m`` of travel.
 
-Paths are logged every ``paths_every`` views (and at the end), so a long run does not log
-a path per view. rerun is imported when a ``RerunLog`` is made.
+Paths are logged every ``paths_every_m`` of travel (odometer) and at the end, maps as
+above: what is logged grows with the distance driven, not with views × map size (a
+282 m run remembers a view every 9 cm and keeps 60,000 surfaces in its naive map).
+rerun is imported when a ``RerunLog`` is made.
 """
 
 from __future__ import annotations
@@ -84,8 +86,9 @@ class RerunLog:
         live: bool = False,
         url: str | None = None,
         spawn: bool = True,
-        paths_every: int = 10,
-        maps_every: int = 25,
+        paths_every_m: float = 1.0,
+        maps_every_m: float = 10.0,
+        view_maps_every_m: float = 0.5,
     ) -> None:
         try:
             import rerun as rr
@@ -101,6 +104,9 @@ class RerunLog:
             self.save = Path(save)
             fd, tmp = tempfile.mkstemp(prefix=f".{self.save.name}.", suffix=".tmp",
                                        dir=self.save.parent)  # fmt: skip
+            mask = os.umask(0o022)
+            os.umask(mask)
+            os.fchmod(fd, 0o666 & ~mask)  # as open() would make it, not mkstemp's 0600
             os.close(fd)
             self.partial = Path(tmp)
             sinks.append(rr.FileSink(str(self.partial)))
@@ -111,12 +117,17 @@ class RerunLog:
             sinks.append(rr.GrpcSink(target))
         if sinks:
             self.rec.set_sinks(*sinks)
-        self.paths_every = paths_every
-        self.maps_every = maps_every
+        self.paths_every_m = paths_every_m
+        self.maps_every_m = maps_every_m
+        self.view_maps_every_m = view_maps_every_m
+        self.next_path_m = 0.0
+        self.next_map_m = 0.0
+        self.next_view_map_m: dict[str, float] = {}
         self.start: FloatArray | None = None
         self.mappers: dict[str, Any] = {}
         self.colors: dict[str, tuple[int, int, int]] = {}
         self.route_lengths: dict[str, int] = {}
+        self.view_based: set[str] = set()
         self.views: dict[str, Any] = {}
         self.true_path: list[tuple[float, float]] = []
         self.first_time: float | None = None
@@ -140,8 +151,10 @@ class RerunLog:
         for k, (name, mapper) in enumerate(self.mappers.items()):
             self.colors[name] = MAPPER_COLORS[k % len(MAPPER_COLORS)]
             self.route_lengths[name] = 0
-            if isinstance(mapper, ViewBasedMapper) and hasattr(mapper, "on_view"):
-                self._watch_views(name, mapper)
+            if isinstance(mapper, ViewBasedMapper):
+                self.view_based.add(name)
+                if hasattr(mapper, "on_view"):
+                    self._watch_views(name, mapper)
 
     def _watch_views(self, name: str, mapper: Any) -> None:
         """Keep the latest view given to a view-based mapper (chaining any hook it has)."""
@@ -162,12 +175,17 @@ class RerunLog:
                 self.start = frame.true_pose.as_array()
         rec.set_time("view", sequence=int(frame.index))
         rec.set_time("time", duration=float(frame.timestamp) - self.first_time)
-        last = self.rows % self.paths_every == 0
+        paths_due = travelled_m >= self.next_path_m
+        if paths_due:
+            self.next_path_m = travelled_m + self.paths_every_m
+        maps_due = travelled_m >= self.next_map_m
+        if maps_due:
+            self.next_map_m = travelled_m + self.maps_every_m
         if frame.true_pose is not None:
             true = frame.true_pose.as_array()
             self.true_path.append((float(true[0]), float(true[1])))
             rec.log("world/robot", self._arrow(true, TRUE_COLOR))
-            if last:
+            if paths_due:
                 rec.log("world/true_path", rr.LineStrips2D([np.array(self.true_path)],
                                                       colors=TRUE_COLOR, radii=0.02))  # fmt: skip
             hits = frame.world_hits()
@@ -178,7 +196,7 @@ class RerunLog:
         rec.log("scan", rr.Points2D(hits, colors=SCAN_COLOR, radii=0.03))
         self.scans += 1
         for name, mapper in self.mappers.items():
-            self._log_mapper(name, mapper, last)
+            self._log_mapper(name, mapper, travelled_m, paths_due, maps_due)
         self.rows += 1
 
     def finish(self, ok: bool = True) -> None:
@@ -194,6 +212,8 @@ class RerunLog:
         for name, mapper in self.mappers.items():
             self._log_path(name, mapper)
             self._log_map(name, mapper)
+            if name in self.view_based:
+                self._log_route(name, mapper)
         self.close()
 
     def close(self, keep: bool = True) -> None:
@@ -234,7 +254,9 @@ class RerunLog:
         self.rec.log(f"mappers/{name}/map", self.rr.LineStrips2D(_strips(segments),
                      colors=self.colors[name], radii=0.03))  # fmt: skip
 
-    def _log_mapper(self, name: str, mapper: Any, paths_due: bool) -> None:
+    def _log_mapper(
+        self, name: str, mapper: Any, travelled_m: float, paths_due: bool, maps_due: bool
+    ) -> None:
         rr, rec, color = self.rr, self.rec, self.colors[name]
         pose = self._anchored_pose(mapper)
         rec.log(f"mappers/{name}/pose", self._arrow(pose, color))
@@ -242,7 +264,7 @@ class RerunLog:
             self._log_path(name, mapper)
         view = self.views.pop(name, None)
         if view is None:  # not a view-based mapper: its map now and then
-            if self.rows % self.maps_every == 0:
+            if maps_due:
                 self._log_map(name, mapper)
             return
         rec.log(f"mappers/{name}/view", rr.LineStrips2D(_strips(transform_segments(pose,
@@ -253,13 +275,22 @@ class RerunLog:
             rec.log(f"mappers/{name}/tracked", rr.LineStrips2D(_strips(transform_segments(pose,
                     tracked.current.segments)), colors=(220, 20, 120), radii=0.05))  # fmt: skip
         route = mapper.route_map()
-        if len(route) != self.route_lengths[name]:  # a view remembered: the map changed
-            self.route_lengths[name] = len(route)
-            poses = self._anchor_poses(np.array([m.pose.as_array() for m in route]))
-            rec.log(
-                f"mappers/{name}/route", rr.LineStrips2D([poses[:, :2]], colors=color, radii=0.015)
-            )
-            rec.log(
-                f"mappers/{name}/route/views", rr.Points2D(poses[:, :2], colors=color, radii=0.06)
-            )
+        due = travelled_m >= self.next_view_map_m.get(name, 0.0)
+        if len(route) != self.route_lengths[name] and due:  # views remembered: map changed
+            self.next_view_map_m[name] = travelled_m + self.view_maps_every_m
+            self._log_route(name, mapper)
             self._log_map(name, mapper)
+
+    def _log_route(self, name: str, mapper: Any) -> None:
+        rr, color = self.rr, self.colors[name]
+        route = mapper.route_map()
+        self.route_lengths[name] = len(route)
+        if not len(route):
+            return
+        poses = self._anchor_poses(np.array([m.pose.as_array() for m in route]))
+        self.rec.log(
+            f"mappers/{name}/route", rr.LineStrips2D([poses[:, :2]], colors=color, radii=0.015)
+        )
+        self.rec.log(
+            f"mappers/{name}/route/views", rr.Points2D(poses[:, :2], colors=color, radii=0.06)
+        )
