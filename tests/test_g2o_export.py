@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from albot2d.evaluation.alignment import in_world_frame
-from albot2d.evaluation.map_exports import pose_graph_files
+from albot2d.evaluation.metrics.alignment import in_world_frame
+from albot2d.evaluation.run.map_exports import pose_graph_files
 from albot2d.logs.g2o import g2o_text
 from tests.runs import map_frames, office_loop, require_slam_extra
 
@@ -22,7 +22,7 @@ def frames() -> list:
 
 def slam_mapper(frames: list, optimizer: str, optimise_every: int) -> object:
     from albot2d.mapping.slam import LoopClosingSLAM, SlamParams
-    from albot2d.mapping.slam_graph import PoseGraphParams
+    from albot2d.mapping.slam.pose_graph import PoseGraphParams
 
     graph = PoseGraphParams(optimizer=optimizer, optimise_every=optimise_every)
     return map_frames(LoopClosingSLAM(SlamParams(graph=graph)), frames)
@@ -98,7 +98,7 @@ def test_g2o_folds_robust_kernel_weights_in(frames: list, tmp_path: Path) -> Non
 
 
 def test_g2o_file_holds_every_factor_of_the_default_mapper(frames: list) -> None:
-    from albot2d.mapping.slam_export import pose_graph_edges
+    from albot2d.mapping.slam.graph_export import pose_graph_edges
 
     mapper = slam_mapper(frames, "gnc", optimise_every=10)
     edges = pose_graph_edges(mapper.graph)  # type: ignore[attr-defined]

@@ -25,9 +25,9 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
-    ALBOT1_OPTION_KEYS,
     add_json_option,
     add_scoring_options,
+    choices,
     finish,
     prepare_out_dir,
     print_tables,
@@ -84,7 +84,7 @@ def register(subparsers: Any) -> None:
         action="extend",
         metavar="NAME",
         help="mappers: albot1, naive, slam and scan_odometry ([slam] extra), "
-        f"albot1[KEY=VALUE,...] (keys {', '.join(ALBOT1_OPTION_KEYS)}) or module:Class "
+        f"albot1[KEY=VALUE,...] (keys {', '.join(choices().albot1_options)}) or module:Class "
         "(default: albot1 naive; truth needs a simulated run)",
     )
     p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")
@@ -106,7 +106,7 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.evaluation import DEFAULT_REPLAY_MAPPERS, find_relations, replay_log
-    from albot2d.evaluation.replay import check_replay_mappers
+    from albot2d.evaluation.run.replay import check_replay_mappers
     from albot2d.logs.relations import read_relations
     from albot2d.mapping.registry import resolve_mappers
 
@@ -117,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
     max_frames = positive_int(args.max_frames, "--max-frames")
     params = scoring_params(args)
     export, map_resolution_m = export_options(args, ("occupancy", "g2o"))
-    from albot2d.evaluation.map_exports import check_map_exports
+    from albot2d.evaluation.run.map_exports import check_map_exports
 
     check_map_exports(export, mappers)
     relations = Path(args.relations) if args.relations is not None else find_relations(log)

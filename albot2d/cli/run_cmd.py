@@ -21,10 +21,10 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
-    ALBOT1_OPTION_KEYS,
     add_json_option,
     add_run_options,
     add_scoring_options,
+    choices,
     finish,
     prepare_out_dir,
     print_tables,
@@ -73,7 +73,7 @@ def register(subparsers: Any) -> None:
         action="extend",
         metavar="NAME",
         help="mappers: albot1, naive, truth, slam and scan_odometry ([slam] extra), "
-        f"albot1[KEY=VALUE,...] (keys {', '.join(ALBOT1_OPTION_KEYS)}) or "
+        f"albot1[KEY=VALUE,...] (keys {', '.join(choices().albot1_options)}) or "
         "module:Class (default: albot1 naive truth)",
     )
     add_scoring_options(p)
@@ -122,8 +122,8 @@ def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.evaluation import RunSpec, evaluation_params_from_report, run_experiment
-    from albot2d.evaluation.report import read_report
-    from albot2d.evaluation.setup import check_spec
+    from albot2d.evaluation.run.report import read_report
+    from albot2d.evaluation.run.setup import check_spec
 
     recorded = None
     if args.reproduce is not None:
@@ -131,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
         if given:
             flags = ", ".join("--" + n.replace("_", "-") for n in given)
             raise InputError(f"--reproduce takes the run's settings from the report; drop {flags}")
-        from albot2d.cli.fuzz_cmd import reproduce_failure, reproducer_document
+        from albot2d.cli.reproduce import reproduce_failure, reproducer_document
 
         doc = reproducer_document(args.reproduce)
         if doc is not None:  # a fuzzing reproducer: its invariant checks run too
@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
         params = scoring_params(args)
     check_spec(spec)
     export, map_resolution_m = export_options(args, ("occupancy", "g2o"))
-    from albot2d.evaluation.map_exports import check_map_exports
+    from albot2d.evaluation.run.map_exports import check_map_exports
 
     check_map_exports(export, spec.mappers)
     if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():

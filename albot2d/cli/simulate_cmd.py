@@ -91,7 +91,7 @@ def _render_png(world: Any, frames: list[Any], title: str) -> bytes | None:
 def run(args: argparse.Namespace) -> int:
     from albot2d.cli.common import spec_from_args
     from albot2d.cli.options import export_options
-    from albot2d.evaluation.setup import build_run
+    from albot2d.evaluation.run.setup import build_run
     from albot2d.logs import write_run
     from albot2d.logs.run_files import LOG_NAME, MANIFEST_NAME, RELATIONS_NAME, TRUTH_NAME
 
@@ -109,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     png = None if args.no_png else _render_png(world, frames, title)
     extra: dict[str, bytes] = {}
     if "occupancy" in export:  # the true world as a map_server map
-        from albot2d.evaluation.map_exports import WORLD_MAP_NAME, world_grid
+        from albot2d.evaluation.run.map_exports import WORLD_MAP_NAME, world_grid
         from albot2d.logs.map_server import map_server_files
 
         extra = map_server_files(world_grid(world, map_resolution_m), WORLD_MAP_NAME)
