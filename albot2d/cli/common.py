@@ -17,7 +17,7 @@ import functools
 import os
 import sys
 import tempfile
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -27,6 +27,7 @@ from albot2d.errors import InputError
 
 __all__ = [
     "Choices",
+    "add_export_option",
     "add_json_option",
     "add_run_options",
     "add_scoring_options",
@@ -154,6 +155,34 @@ def spec_from_args(args: argparse.Namespace) -> Any:
         given["kind"] = args.kind
     # "kind": None (a world file) is kept; every other option not given is left out
     return RunSpec(**{k: v for k, v in given.items() if v is not None or k == "kind"})
+
+
+def add_export_option(p: argparse.ArgumentParser, names: Sequence[str] | None = None) -> None:
+    """``--export FORMAT ...`` (the registry of ``albot2d.cli.exporters``, or the formats
+    ``names`` of it) and its options."""
+    from albot2d.cli.exporters import DEFAULT_MAP_RESOLUTION_M, EXPORTERS
+
+    chosen = [EXPORTERS[name] for name in (names or EXPORTERS)]
+    g = p.add_argument_group("export")
+    g.add_argument(
+        "--export",
+        nargs="+",
+        action="extend",
+        choices=[e.name for e in chosen],
+        metavar="FORMAT",
+        help="also write the run as: " + "; ".join(f"{e.name} ({e.help})" for e in chosen),
+    )
+    if any(e.name == "rosbag2" for e in chosen):
+        g.add_argument(
+            "--bag-storage",
+            choices=("mcap", "sqlite3"),
+            help="storage of the ROS 2 bag (default mcap)",
+        )
+    g.add_argument(
+        "--map-resolution",
+        metavar="METRES",
+        help=f"cell size of --export occupancy maps (default {DEFAULT_MAP_RESOLUTION_M:g})",
+    )
 
 
 def add_json_option(
@@ -296,12 +325,12 @@ def finish(
     no_figures: bool,
     stage: Callable[[str], None] | None = None,
     animate: bool = False,
-    export: tuple[str, ...] = (),
-    map_resolution_m: float | None = None,
+    extra_exports: Callable[[Any], list[str]] | None = None,
 ) -> Any:
     """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
-    maps (and the ``export`` formats), write everything; on any failure remove the output
-    directory again if this command created it."""
+    maps, write everything; on any failure remove the output directory again if this
+    command created it. ``extra_exports(result)`` writes the ``--export`` files itself
+    (before report.json) and returns their names."""
     from albot2d.evaluation.run.export import export_files
 
     try:
@@ -311,13 +340,9 @@ def finish(
         figures = _render(result, no_figures, command, animate)
         figures.update(_step_figure(result, no_figures))
         exports = export_files(result)
-        if export:
-            from albot2d.evaluation.run.map_exports import MAP_EXPORTERS
-
-            for name in export:
-                exports.update(MAP_EXPORTERS[name](result, map_resolution_m=map_resolution_m))
+        extra = extra_exports(result) if extra_exports is not None else []
         result.report["figures"] = sorted(figures)
-        result.report["exports"] = sorted(exports)
+        result.report["exports"] = sorted([*exports, *extra])
         # steps.csv: one row per view (stage times, counters), for profiling a run.
         files = {
             **figures,

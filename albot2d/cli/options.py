@@ -11,25 +11,7 @@ from typing import Any
 
 from albot2d.errors import InputError
 
-__all__ = [
-    "DEFAULT_MAP_RESOLUTION_M",
-    "EXPORT_FORMATS",
-    "add_export_options",
-    "export_options",
-    "parse_param",
-    "positive_int",
-    "positive_number",
-    "seed_value",
-    "world_params",
-]
-
-# --export's values and what each writes (the exporters: albot2d.evaluation.map_exports);
-# named here so --help needs no import of the evaluation layer.
-EXPORT_FORMATS: dict[str, str] = {
-    "occupancy": "every map and the true world as ROS map_server maps (NAME.pgm + NAME.yaml)",
-    "g2o": "the slam mapper's pose graph (graph_NAME.g2o, keyframe times graph_NAME.tum)",
-}
-DEFAULT_MAP_RESOLUTION_M = 0.05
+__all__ = ["parse_param", "positive_int", "positive_number", "seed_value", "world_params"]
 
 
 def positive_number(text: str | None, option: str, *, allow_zero: bool = False) -> float | None:
@@ -112,35 +94,3 @@ def world_params(args: argparse.Namespace) -> dict[str, Any]:
                 raise InputError(f"give {option} or --param {name}, not both")
             params[name] = value
     return params
-
-
-def add_export_options(p: argparse.ArgumentParser, formats: tuple[str, ...]) -> None:
-    """``--export FORMAT ...`` (of ``formats``) and ``--map-resolution``."""
-    p.add_argument(
-        "--export",
-        nargs="+",
-        action="extend",
-        metavar="FORMAT",
-        help="also write: " + "; ".join(f"{f}: {EXPORT_FORMATS[f]}" for f in formats),
-    )
-    p.add_argument(
-        "--map-resolution",
-        metavar="METRES",
-        help=f"cell size of --export occupancy maps (default {DEFAULT_MAP_RESOLUTION_M:g})",
-    )
-
-
-def export_options(
-    args: argparse.Namespace, formats: tuple[str, ...]
-) -> tuple[tuple[str, ...], float]:
-    """The checked ``--export`` formats (each once, in the order given) and map resolution."""
-    chosen: list[str] = []
-    for name in getattr(args, "export", None) or []:
-        if name not in formats:
-            raise InputError(f"--export {name!r}: choose from {', '.join(formats)}")
-        if name not in chosen:
-            chosen.append(name)
-    resolution = positive_number(getattr(args, "map_resolution", None), "--map-resolution")
-    if resolution is not None and "occupancy" not in chosen:
-        raise InputError("--map-resolution sets the cell size of --export occupancy; give both")
-    return tuple(chosen), resolution or DEFAULT_MAP_RESOLUTION_M

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
+    add_export_option,
     add_json_option,
     add_run_options,
     add_scoring_options,
@@ -33,7 +34,6 @@ from albot2d.cli.common import (
     scoring_params,
     spec_from_args,
 )
-from albot2d.cli.options import add_export_options, export_options
 from albot2d.cli.viewer import add_viewer_options, check_viewer_options, open_viewer
 from albot2d.errors import InputError
 
@@ -92,13 +92,13 @@ def register(subparsers: Any) -> None:
         help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
         "over time beside the truth",
     )
+    add_export_option(p)
+    add_viewer_options(p)
     p.add_argument(
         "--cprofile",
         metavar="FILE",
         help="also write a cProfile pstats file of the run (python -m pstats FILE)",
     )
-    add_export_options(p, ("occupancy", "g2o"))
-    add_viewer_options(p)
     add_json_option(p)
     p.set_defaults(handler=run)
 
@@ -118,6 +118,34 @@ def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]
             profiler.dump_stats(path)
 
     return profiled
+
+
+def _keeps_frames(names: list[str]) -> bool:
+    from albot2d.cli.exporters import EXPORTERS
+
+    return any(EXPORTERS[name].needs_frames for name in names)
+
+
+def _exporting(
+    args: argparse.Namespace, frames: list[Any]
+) -> Callable[[Path], Callable[[Any], list[str]]] | None:
+    """``finish``'s hook writing the ``--export`` files of a finished run (its options
+    checked now), given the output directory; None without ``--export``."""
+    from albot2d.cli.exporters import ExportSource, export_options, write_exports
+
+    options = export_options(args)
+    names = list(args.export or [])
+    if not names:
+        return None
+
+    def hook(out: Path) -> Callable[[Any], list[str]]:
+        def write(result: Any) -> list[str]:
+            source = ExportSource(frames, result.world, result, options)
+            return write_exports(out, names, source)
+
+        return write
+
+    return hook
 
 
 def run(args: argparse.Namespace) -> int:
@@ -143,16 +171,15 @@ def run(args: argparse.Namespace) -> int:
         spec = spec_from_args(args)
         params = scoring_params(args)
     check_spec(spec)
-    export, map_resolution_m = export_options(args, ("occupancy", "g2o"))
-    from albot2d.evaluation.run.map_exports import check_map_exports
-
-    check_map_exports(export, spec.mappers)
+    kept: list[Any] = []  # the run's frames, for the exports that need them
+    extra = _exporting(args, kept)
     if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():
         raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
     check_viewer_options(args)
     out, created = prepare_out_dir(args.out)
     viewer = open_viewer(args, f"albot2d run {args.out}")
     bar = None
+    keep = _keeps_frames(list(args.export or []))
 
     def start(world: Any, tour: Any) -> None:
         # With --max-frames the run ends after that many views, not at the tour's end.
@@ -165,6 +192,8 @@ def run(args: argparse.Namespace) -> int:
             bar = progress_bar(round(tour.length_m, 1), "m", "run")
 
     def frame(f: Any, travelled: float) -> None:
+        if keep:
+            kept.append(f)
         if viewer is not None:
             viewer.on_frame(f, travelled)
         if bar is None:
@@ -188,8 +217,8 @@ def run(args: argparse.Namespace) -> int:
             _profiled(args.cprofile, lambda: run_experiment(
                 spec, params, on_start=start, on_frame=frame, on_stage=stage,
                 on_mappers=None if viewer is None else viewer.on_mappers)),
-            args.no_figures, stage, animate=args.animate, export=export,
-            map_resolution_m=map_resolution_m,
+            args.no_figures, stage, animate=args.animate,
+            extra_exports=extra(out) if extra is not None else None,
         )  # fmt: skip
         ok = True
     finally:

@@ -1,6 +1,7 @@
 """Run-folder exports of maps for ROS and pose-graph tools: occupancy grids and g2o.
 
-``albot2d run/replay --export occupancy`` (``occupancy_files``): per mapper ``NAME``,
+``albot2d run/replay --export occupancy`` (``occupancy_files``; the CLI's registry of
+formats is ``albot2d.cli.exporters``): per mapper ``NAME``,
 ``map_NAME.pgm`` + ``map_NAME.yaml``, its final global map as a ROS ``map_server`` map
 (``albot2d.logs.map_server``) and, in simulation, ``world.pgm`` + ``world.yaml``, the true
 world (``world_grid``). ``--export g2o`` (``g2o_files``): per ``slam`` mapper ``NAME``,
@@ -19,7 +20,6 @@ what the map does not hold).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -33,9 +33,7 @@ from albot2d.logs.map_server import map_server_files
 
 __all__ = [
     "DEFAULT_MAP_RESOLUTION_M",
-    "MAP_EXPORTERS",
     "WORLD_MAP_NAME",
-    "check_map_exports",
     "g2o_files",
     "occupancy_files",
     "pose_graph_files",
@@ -123,28 +121,3 @@ def g2o_files(result: Any) -> dict[str, bytes]:
         raise InputError("--export g2o: no mapper of this run keeps a pose graph (give "
                          "--mapper slam)")  # fmt: skip
     return files
-
-
-def _occupancy_exporter(result: Any, *, map_resolution_m: float | None = None,
-                        **_: Any) -> dict[str, bytes]:  # fmt: skip
-    return occupancy_files(result, map_resolution_m or DEFAULT_MAP_RESOLUTION_M)
-
-
-def _g2o_exporter(result: Any, **_: Any) -> dict[str, bytes]:
-    return g2o_files(result)
-
-
-# This module's exporters by --export name: each takes the result and keyword options
-# (``map_resolution_m``), ignoring those it does not use.
-MAP_EXPORTERS: Mapping[str, Callable[..., dict[str, bytes]]] = {
-    "occupancy": _occupancy_exporter,
-    "g2o": _g2o_exporter,
-}
-
-
-def check_map_exports(formats: Any, mappers: Any) -> None:
-    """Refuse, before a run, ``--export g2o`` when no mapper named keeps a pose graph."""
-    if "g2o" in formats and not any(
-        str(m).split("[")[0] == "slam" or ":" in str(m) for m in mappers
-    ):
-        raise InputError("--export g2o writes the slam mapper's pose graph: add --mapper slam")
