@@ -92,6 +92,7 @@ _NOT_COMPARED = ("figures", "exports", "albot2d_version", "kernels", "reproducer
 def add_run_options(p: argparse.ArgumentParser) -> None:
     """World and driving options, shared by ``run`` and ``simulate`` (same defaults)."""
     from albot2d.evaluation.run.setup import RunSpec
+    from worldgen.tours import TOUR_LENGTH_TOLERANCE
 
     names, default = choices(), defaults_of(RunSpec)
     world = p.add_argument_group(f"world (default: --kind {default['kind']} --seed 0)")
@@ -125,7 +126,14 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     drive.add_argument(
         "--tour-length",
         metavar="METRES",
-        help=f"minimum tour length (default {default['tour_length_m']:g})",
+        help=f"tour length: the tour is METRES to {1 + TOUR_LENGTH_TOLERANCE:g}×METRES long "
+        f"(default {default['tour_length_m']:g})",
+    )
+    drive.add_argument(
+        "--min-tour-length",
+        metavar="METRES",
+        help="plan the tour through far-apart places and repeat it until it is at least "
+        "METRES long (it may be several times longer); instead of --tour-length",
     )
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
 
@@ -146,9 +154,15 @@ def spec_from_args(args: argparse.Namespace) -> Any:
         "laser_noise": args.laser_noise or None,
         "tour_kind": args.tour_kind or None,
         "tour_length_m": positive_number(args.tour_length, "--tour-length"),
+        "tour_length_is_minimum": None,
         "mappers": tuple(getattr(args, "mapper", None) or ()) or None,
         "max_frames": positive_int(args.max_frames, "--max-frames"),
     }
+    minimum = positive_number(getattr(args, "min_tour_length", None), "--min-tour-length")
+    if minimum is not None:
+        if given["tour_length_m"] is not None:
+            raise InputError("give --tour-length or --min-tour-length, not both")
+        given |= {"tour_length_m": minimum, "tour_length_is_minimum": True}
     if args.world is not None:
         given |= {"kind": None, "world_file": args.world}
     elif args.kind:

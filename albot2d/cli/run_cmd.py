@@ -8,7 +8,7 @@ mapper's map, Albot1's map history and route map, and homing. ``--reproduce repo
 re-runs a recorded run and says whether the new report matches it.
 
 Defaults (``albot2d run --out DIR``): office world seed 0, profile dataset1, odometry noise
-``typical``, a loop tour of at least 100 m, mappers albot1 naive truth. Every input is
+``typical``, a loop tour of 100-130 m, mappers albot1 naive truth. Every input is
 checked before the run; the figures are drawn in memory and report.json is written last,
 so a failure leaves no report and no figures.
 """
@@ -53,6 +53,7 @@ _RUN_OPTIONS = (
     "laser_noise",
     "tour_kind",
     "tour_length",
+    "min_tour_length",
     "max_frames",
     "stop_every",
     "min_start_distance",
@@ -89,7 +90,7 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--animate",
         action="store_true",
-        help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
+        help="also write albot1_map.mp4 (albot1_map.gif where ffmpeg is missing): the global map "
         "over time beside the truth",
     )
     add_export_option(p)

@@ -115,7 +115,8 @@ def run(args: argparse.Namespace) -> int:
         "laser_noise_preset": spec.laser_noise,
         "tour": {
             "kind": tour.kind,
-            "min_length_m": spec.tour_length_m,
+            "requested_length_m": spec.tour_length_m,
+            "requested_as": "minimum" if spec.tour_length_is_minimum else "length",
             "length_m": tour.length_m,
             "waypoints": len(tour.waypoints),
         },
