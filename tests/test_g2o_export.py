@@ -20,11 +20,14 @@ def frames() -> list:
     return office_loop()[1][:260]
 
 
-def slam_mapper(frames: list, optimizer: str, optimise_every: int) -> object:
+def slam_mapper(
+    frames: list, optimizer: str, optimise_every: int, tolerance: float = 1e-6
+) -> object:
     from albot2d.mapping.slam import LoopClosingSLAM, SlamParams
     from albot2d.mapping.slam.pose_graph import PoseGraphParams
 
-    graph = PoseGraphParams(optimizer=optimizer, optimise_every=optimise_every)
+    graph = PoseGraphParams(optimizer=optimizer, optimise_every=optimise_every,
+                            relative_error_tol=tolerance)  # fmt: skip
     return map_frames(LoopClosingSLAM(SlamParams(graph=graph)), frames)
 
 
@@ -52,9 +55,29 @@ def reoptimise(path: Path, perturb_m: float = 0.0) -> np.ndarray:
                      for k in range(initial.size())])  # fmt: skip
 
 
+def robust_optimum(mapper: object) -> np.ndarray:
+    """The mapper's own (robust) factor graph optimised to convergence from its estimate:
+    its solver stops earlier (relative decrease 1e-6 and GTSAM's default absolute 1e-5)."""
+    import gtsam
+
+    graph = mapper.graph  # type: ignore[attr-defined]
+    values = gtsam.Values()
+    for k, pose in enumerate(graph.estimate):
+        values.insert(k, gtsam.Pose2(*pose))
+    params = gtsam.LevenbergMarquardtParams()
+    params.setRelativeErrorTol(1e-14)
+    params.setAbsoluteErrorTol(0.0)
+    params.setMaxIterations(100)
+    # the mapper's GTSAM graph itself (PoseGraph keeps it private)
+    result = gtsam.LevenbergMarquardtOptimizer(graph._graph, values, params).optimize()
+    return np.array([[result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()]
+                     for k in range(len(graph.estimate))])  # fmt: skip
+
+
 def check_reoptimises_to_the_mappers_trajectory(
-    mapper: object, frames: list, tmp_path: Path
+    mapper: object, frames: list, tmp_path: Path, tol: float = 1e-6
 ) -> dict[str, float]:
+    """Re-optimising the file ends at the mapper's own keyframe poses, to ``tol``."""
     start = frames[0].true_pose.as_array()
     files = pose_graph_files("slam", mapper, [f.timestamp for f in frames], start)
     path = tmp_path / "graph_slam.g2o"
@@ -68,7 +91,7 @@ def check_reoptimises_to_the_mappers_trajectory(
         d[:, 2] = np.arctan2(np.sin(d[:, 2]), np.cos(d[:, 2]))
         errors[f"xy_m_from_{perturb:g}"] = float(np.abs(d[:, :2]).max())
         errors[f"theta_rad_from_{perturb:g}"] = float(np.abs(d[:, 2]).max())
-        assert np.abs(d).max() < 1e-6, (perturb, np.abs(d).max())
+        assert np.abs(d).max() < tol, (perturb, np.abs(d).max())
     # the keyframes' times and poses beside it, in the same order
     tum = np.loadtxt(files["graph_slam.tum"].decode().splitlines(), comments="#")
     rows = np.asarray(mapper.keyframe_rows)  # type: ignore[attr-defined]
@@ -91,10 +114,22 @@ def test_g2o_reoptimises_to_the_slam_mappers_trajectory(frames: list, tmp_path: 
 @pytest.mark.slow
 def test_g2o_folds_robust_kernel_weights_in(frames: list, tmp_path: Path) -> None:
     """Levenberg–Marquardt with robust kernels: each factor's information is weighted by
-    its kernel at the estimate, so the plain Gaussian file has the same optimum."""
+    its kernel at the estimate (iteratively reweighted least squares), so at an optimum of
+    the robust graph the plain Gaussian file has that same optimum. The mapper's solver
+    stops short of it (GTSAM's default absolute tolerance, 1e-5 of cost), so the file is
+    written once as the mapper left it (its re-optimisation within 1e-4 of the mapper's
+    estimate) and once with the estimate polished to the robust graph's optimum (1e-6)."""
     mapper = slam_mapper(frames, "lm", optimise_every=1)
-    errors = check_reoptimises_to_the_mappers_trajectory(mapper, frames, tmp_path)
-    print(f"lm: re-optimisation errors {errors}")
+    graph = mapper.graph  # type: ignore[attr-defined]
+    as_left = check_reoptimises_to_the_mappers_trajectory(mapper, frames, tmp_path, tol=1e-4)
+    optimum = robust_optimum(mapper)
+    gap = float(np.abs(optimum[:, :2] - np.asarray(graph.estimate)[:, :2]).max())
+    graph._estimate = optimum  # polished: the robust graph's own optimum (private field)
+    polished = check_reoptimises_to_the_mappers_trajectory(mapper, frames, tmp_path)
+    print(
+        f"lm: as left {as_left}; the estimate {gap:.2g} m from its graph's optimum; "
+        f"polished {polished}"
+    )
 
 
 def test_g2o_file_holds_every_factor_of_the_default_mapper(frames: list) -> None:
