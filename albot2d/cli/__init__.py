@@ -1,7 +1,8 @@
 """The ``albot2d`` command line: one module per subcommand, each with ``register(subparsers)``.
 
-User errors (``InputError``, missing or unwritable files) print one line and exit 2,
-with no traceback and no partial output file. ``albot2d`` alone prints the help;
+User errors (``InputError``, missing or unwritable files, a bad environment variable)
+print one line and exit 2, with no traceback and no partial output file. SIGTERM is
+handled like Ctrl-C (exit 130, everything cleaned up). ``albot2d`` alone prints the help;
 ``albot2d --version`` the version. Help texts are the modules' docstrings without their
 reStructuredText markup.
 """
@@ -9,7 +10,6 @@ reStructuredText markup.
 from __future__ import annotations
 
 import argparse
-import os
 import re
 import sys
 from collections.abc import Sequence
@@ -60,13 +60,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _import_from_cwd() -> None:
-    """Plugin mappers (``module:Class``) import from the current folder, as with ``python -m``."""
-    cwd = os.getcwd()
-    if cwd not in sys.path and "" not in sys.path:
-        sys.path.append(cwd)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
@@ -76,9 +69,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
-    _import_from_cwd()
+    from albot2d.cli.environment import check_environment, sigterm_as_interrupt
+
     try:
-        return int(args.handler(args) or 0)
+        check_environment(args.command)
+        with sigterm_as_interrupt():
+            return int(args.handler(args) or 0)
     except InputError as exc:
         print(f"albot2d {args.command}: error: {exc}", file=sys.stderr)
         return 2
