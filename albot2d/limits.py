@@ -69,14 +69,14 @@ MAX_LINE_BYTES = 2 * MiB
 #: Most readings (or remissions) one laser line may hold (a 0.01° sweep of 360° is 36,000).
 MAX_BEAMS = 65_536
 #: Laser scans one log may hold (the longest public CARMEN logs have ~20,000).
-MAX_LOG_SCANS = 200_000
+MAX_LOG_SCANS = 100_000
 #: Laser readings one log may hold in all (8 bytes each as float64: 320 MB).
 MAX_LOG_READINGS = 40_000_000
 #: Rows of a relations or truth file.
 MAX_TABLE_ROWS = 2_000_000
 
 # -- worlds and plans --------------------------------------------------------------------
-#: Walls of a world, counted after dropping exact duplicates.
+#: Walls of a world (a wall that repeats another exactly is refused, whatever the count).
 MAX_WALLS = 500_000
 #: Length of all walls of a world together, in metres (raycasting work grows with it).
 MAX_TOTAL_WALL_LENGTH_M = 500_000.0
@@ -138,7 +138,7 @@ LIMITS: tuple[Limit, ...] = (
     Limit("MAX_LOG_SCANS", MAX_LOG_SCANS, "scans", "laser scans of one log"),
     Limit("MAX_LOG_READINGS", MAX_LOG_READINGS, "readings", "laser readings of one log in all"),
     Limit("MAX_TABLE_ROWS", MAX_TABLE_ROWS, "rows", "a relations or truth file"),
-    Limit("MAX_WALLS", MAX_WALLS, "walls", "a world's walls after dropping exact duplicates"),
+    Limit("MAX_WALLS", MAX_WALLS, "walls", "a world's walls (exact repeats of a wall are refused)"),
     Limit(
         "MAX_TOTAL_WALL_LENGTH_M",
         MAX_TOTAL_WALL_LENGTH_M,

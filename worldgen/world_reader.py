@@ -1,6 +1,6 @@
 """Checks a parsed world-file document field by field and builds the ``World`` (for ``io.load``).
 
-Exact repeats of a wall are dropped (a world of many copies of one wall is the same world,
+A wall that repeats another exactly is refused (many copies of one wall are the same world
 with far more work); arrays in ``params``/``features`` have at most ``MAX_ARRAY_DIMENSIONS``
 dimensions of ``MAX_ARRAY_ITEMS``. Every error is an ``InputError`` naming the source
 file, the field path (``walls[17]``,
@@ -85,23 +85,25 @@ def _short(value: Any, limit: int = 60) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-def _without_duplicates(walls: np.ndarray) -> np.ndarray:
-    """``walls`` without exact repeats (either direction), first occurrences in order.
+def _repeated_walls(walls: np.ndarray) -> tuple[int, int, int] | None:
+    """``(k, j, n)``: wall ``k`` is the first that repeats an earlier wall ``j`` exactly
+    (either direction), and ``n`` walls repeat one; ``None`` when no wall does.
 
-    A repeated wall adds nothing to the world but work: hundreds of thousands of copies
-    of one wall would fill the raycast grid. Walls are counted against ``MAX_WALLS``
-    after this. A world without repeats comes back unchanged (the same array).
+    A repeated wall adds nothing to a world but work (hundreds of thousands of copies of
+    one wall fill the raycast grid); no generated world has one.
     """
     if len(walls) < 2:
-        return walls
-    flip = (walls[:, 0] > walls[:, 2]) | (
-        (walls[:, 0] == walls[:, 2]) & (walls[:, 1] > walls[:, 3])
-    )
+        return None
+    x_flip = walls[:, 0] > walls[:, 2]
+    flip = x_flip | ((walls[:, 0] == walls[:, 2]) & (walls[:, 1] > walls[:, 3]))
     canonical = np.where(flip[:, None], walls[:, [2, 3, 0, 1]], walls) + 0.0  # -0.0 → 0.0
-    _, first = np.unique(canonical, axis=0, return_index=True)
+    _, first, inverse = np.unique(canonical, axis=0, return_index=True, return_inverse=True)
     if len(first) == len(walls):
-        return walls
-    return walls[np.sort(first)]
+        return None
+    owner = first[inverse.reshape(-1)]
+    repeats = np.flatnonzero(owner != np.arange(len(walls)))
+    k = int(repeats[0])
+    return k, int(owner[k]), len(repeats)
 
 
 class WorldReader:
@@ -226,8 +228,13 @@ class WorldReader:
             raise self.fail(f"bounds {bounds} need xmin < xmax and ymin < ymax")
         start = Pose(*self.numbers(doc["start"], "start", 3, "[x, y, theta]"))
         walls = self.rows(doc["walls"], "walls", 4, "[x1, y1, x2, y2]")
-        if self.validate:
-            walls = _without_duplicates(walls)
+        repeat = _repeated_walls(walls) if self.validate else None
+        if repeat is not None:
+            k, j, n = repeat
+            raise self.fail(
+                f"walls[{k}] repeats walls[{j}] exactly ({n} walls repeat another); "
+                "remove the repeats"
+            )
         if not isinstance(doc["clutter"], list):
             raise self.fail(f"clutter must be a list of polygons, got {_type_name(doc['clutter'])}")
         clutter = [self.polygon(p, f"clutter[{i}]") for i, p in enumerate(doc["clutter"])]
