@@ -145,7 +145,7 @@ def check_episode_record(record: Any, where: str) -> dict[str, Any]:
     if status == "ok" and violations:
         raise InputError(f"{where}: status 'ok' with violations: the record contradicts itself")
     if status != "crash":
-        missing = [name for name in OK_METRICS if name not in metrics]
+        missing = [name for name in OK_METRICS if metrics.get(name) is None]
         if missing:
             raise InputError(f"{where}: status {status!r} but no metrics {', '.join(missing)}")
     return record
