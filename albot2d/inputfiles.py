@@ -22,13 +22,20 @@ import gzip
 import os
 import zlib
 from collections.abc import Callable, Iterator
-from typing import Any, BinaryIO
+from typing import Any, Protocol
 
 from albot2d.errors import InputError
 from albot2d.limits import MAX_JSON_FILE_BYTES, MAX_LINE_BYTES, MAX_TEXT_BYTES
 from albot2d.validation import parse_json
 
-__all__ = ["CORRUPT_DATA_ERRORS", "binary_lines", "format_bytes", "read_json_file", "read_limited"]
+__all__ = [
+    "CORRUPT_DATA_ERRORS",
+    "ReadsLines",
+    "binary_lines",
+    "format_bytes",
+    "read_json_file",
+    "read_limited",
+]
 
 #: What a decompressor raises on corrupt or truncated data.
 CORRUPT_DATA_ERRORS: tuple[type[BaseException], ...] = (
@@ -36,6 +43,12 @@ CORRUPT_DATA_ERRORS: tuple[type[BaseException], ...] = (
     EOFError,
     gzip.BadGzipFile,
 )
+
+
+class ReadsLines(Protocol):
+    """A binary stream with ``readline(size)``: a file opened ``rb``, a ``gzip.GzipFile``."""
+
+    def readline(self, size: int = -1, /) -> bytes: ...
 
 
 def format_bytes(n: int) -> str:
@@ -75,7 +88,7 @@ def read_json_file(
 
 
 def binary_lines(
-    stream: BinaryIO,
+    stream: ReadsLines,
     source: str,
     *,
     max_line_bytes: int = MAX_LINE_BYTES,

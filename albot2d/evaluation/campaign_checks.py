@@ -61,7 +61,7 @@ def check_campaign_values(values: Any, where: str) -> dict[str, Any]:
             continue  # CampaignParams names unknown parameters itself
         if isinstance(value, bool) or not isinstance(value, types):
             raise InputError(f"{where}: params.{name} has the wrong type: {_short(value)}")
-        if name == "kinds" and not all(isinstance(k, str) for k in value):
+        if isinstance(value, list) and not all(isinstance(k, str) for k in value):
             raise InputError(f"{where}: params.kinds must be a list of names, got {_short(value)}")
     return values
 

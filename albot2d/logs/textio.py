@@ -18,13 +18,13 @@ import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
-from typing import BinaryIO, TextIO
+from typing import TextIO
 
 import numpy as np
 
 from albot2d.atomic import atomic_path
 from albot2d.errors import InputError
-from albot2d.inputfiles import binary_lines
+from albot2d.inputfiles import ReadsLines, binary_lines
 from albot2d.limits import MAX_TABLE_ROWS
 
 __all__ = ["GZIP_MAGIC", "atomic_text_output", "is_gzip", "open_text", "read_number_table"]
@@ -52,7 +52,7 @@ def open_text(path: str | os.PathLike[str]) -> Iterator[Iterator[str]]:
     compressed = is_gzip(path)
     raw = open(path, "rb")  # noqa: SIM115 (closed below)
     try:
-        binary: BinaryIO = gzip.GzipFile(fileobj=raw, mode="rb") if compressed else raw
+        binary: ReadsLines = gzip.GzipFile(fileobj=raw, mode="rb") if compressed else raw
         lines = binary_lines(binary, source)
         yield (line.decode("utf-8", errors="replace") for line in lines)
     finally:
