@@ -15,8 +15,8 @@ from typing import Any
 
 import pytest
 
-from albot2d.evaluation.campaign import CAMPAIGN_NAME, EPISODES_NAME, CampaignParams
-from albot2d.evaluation.campaign_lock import _read_pid
+from albot2d.evaluation.fuzz.campaign import CAMPAIGN_NAME, EPISODES_NAME, CampaignParams
+from albot2d.evaluation.fuzz.lock import _read_pid
 from tests import bad_inputs as bi
 from tests.hostile import MIB, assert_refused, run_cli
 

@@ -15,20 +15,20 @@ import pytest
 
 from albot2d.cli import main
 from albot2d.errors import InputError
-from albot2d.evaluation.backends import DaskBackend, LocalBackend
-from albot2d.evaluation.campaign import (
+from albot2d.evaluation.fuzz.backends import DaskBackend, LocalBackend
+from albot2d.evaluation.fuzz.campaign import (
     EPISODES_NAME,
     CampaignParams,
     read_episodes,
     reproducer_path,
     run_campaign,
 )
-from albot2d.evaluation.campaign_summary import COMPARED_METRICS, format_summary, summarise
-from albot2d.evaluation.episode import EpisodeSpec, episode_seed, run_episode
-from albot2d.evaluation.reproducer import replay_reproducer
+from albot2d.evaluation.fuzz.episode import EpisodeSpec, episode_seed, run_episode
+from albot2d.evaluation.fuzz.reproducer import replay_reproducer
+from albot2d.evaluation.fuzz.summary import COMPARED_METRICS, format_summary, summarise
 from tests.campaign_helpers import SMALL
 from worldgen.generate import generate
-from worldgen.params import PARAMS_BY_KIND
+from worldgen.kinds import get_kind
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -40,7 +40,7 @@ import numpy as np
 from albot2d.geometry import Pose
 from albot2d.mapping import MapperCounts, MapSnapshot
 from albot2d.mapping.baselines import NaiveIntegration
-from albot2d.mapping.route_map import RouteMap
+from albot2d.mapping.albot1.route_map import RouteMap
 
 
 class Tiny:
@@ -157,7 +157,7 @@ def test_an_episode_depends_on_the_seed_and_its_index_only() -> None:
     assert len({s.run_seed for s in specs}) == len(specs)
     assert {s.kind for s in specs} == set(many.kinds)
     for s in specs:
-        low = max(PARAMS_BY_KIND[s.kind].min_size_m, many.world_size_min_m)
+        low = max(get_kind(s.kind).params.min_size_m, many.world_size_min_m)
         for size in s.world_params.values():
             assert low <= size <= max(low, many.world_size_max_m)
         assert many.tour_length_min_m <= s.tour_length_m <= many.tour_length_max_m
@@ -423,7 +423,7 @@ def test_an_episode_runs_with_the_heap_frozen_and_hands_it_back() -> None:
     ``_heap_frozen``), and the heap is as it was afterwards, frozen or not."""
     import gc
 
-    from albot2d.evaluation.campaign import _heap_frozen
+    from albot2d.evaluation.fuzz.campaign import _heap_frozen
 
     assert gc.get_freeze_count() == 0
     with _heap_frozen():

@@ -27,7 +27,7 @@ def test_docs_limits_md_is_generated_from_the_module() -> None:
 def test_every_limit_is_in_the_table_and_used_where_it_is_enforced() -> None:
     from albot2d import validation
     from albot2d.cli import experiments_cmd
-    from albot2d.evaluation import backends, campaign
+    from albot2d.evaluation.fuzz import backends, campaign
     from albot2d.logs import carmen
     from worldgen import io, params, world_checks
 

@@ -289,8 +289,8 @@ def _mutated_records(draw: st.DrawFn) -> bytes:
 def test_episode_record_mutations_raise_only_input_error(tmp_path_factory, data: bytes) -> None:
     """Any damage to episodes.jsonl is an ``InputError`` naming a line, or the records read
     are whole: the summary is computed from them without error and agrees with itself."""
-    from albot2d.evaluation.campaign import read_episodes
-    from albot2d.evaluation.campaign_summary import summarise
+    from albot2d.evaluation.fuzz.campaign import read_episodes
+    from albot2d.evaluation.fuzz.summary import summarise
 
     path = tmp_path_factory.mktemp("c") / "episodes.jsonl"
     path.write_bytes(data)
@@ -306,7 +306,7 @@ def test_episode_record_mutations_raise_only_input_error(tmp_path_factory, data:
 
 @given(st.data())
 def test_campaign_file_mutations_raise_only_input_error(tmp_path_factory, data) -> None:
-    from albot2d.evaluation.campaign import CampaignParams, read_campaign
+    from albot2d.evaluation.fuzz.campaign import CampaignParams, read_campaign
 
     doc = {
         "format": "albot2d-campaign",

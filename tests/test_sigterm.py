@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from albot2d.evaluation.campaign import EPISODES_NAME
-from albot2d.evaluation.campaign_lock import LOCK_NAME
+from albot2d.evaluation.fuzz.campaign import EPISODES_NAME
+from albot2d.evaluation.fuzz.lock import LOCK_NAME
 from tests.test_campaign_processes import (  # noqa: F401  (the fixture is used by name)
     _no_campaign_left_running,
     assert_whole_lines,

@@ -12,29 +12,27 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
+import functools
 import os
 import sys
 import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from albot2d.atomic import atomic_paths
 from albot2d.cli.options import positive_int, positive_number, world_params
 from albot2d.errors import InputError
 
 __all__ = [
-    "ALBOT1_OPTION_KEYS",
-    "DEFAULT_KIND",
-    "DEFAULT_NOISE",
-    "LASER_NOISE_NAMES",
-    "NOISE_NAMES",
-    "PROFILE_NAMES",
-    "TOUR_KIND_NAMES",
-    "WORLD_KINDS",
+    "Choices",
+    "add_export_option",
     "add_json_option",
     "add_run_options",
     "add_scoring_options",
+    "choices",
+    "defaults_of",
     "differences",
     "finish",
     "prepare_out_dir",
@@ -47,33 +45,59 @@ __all__ = [
     "write_outputs",
 ]
 
-# RunSpec's defaults, named here only for --help (importing the evaluation layer to read
-# them would slow every command's start by over a second); tests/test_setup.py checks that
-# they match. An option not given is left to RunSpec.
-DEFAULT_KIND = "office"
-DEFAULT_PROFILE = "dataset1"
-DEFAULT_NOISE = "typical"
-DEFAULT_LASER_NOISE = "sick_lms200"
-DEFAULT_TOUR_KIND = "loop"
-DEFAULT_TOUR_LENGTH_M = 100.0
-# The valid names of each option, for --help likewise (tests/test_setup.py checks each
-# against the registry that defines it: worldgen.KINDS, PROFILES, NOISE_PRESETS, ...).
-WORLD_KINDS = ("corridors", "rooms", "open", "office", "fig6", "mixed")
-PROFILE_NAMES = ("dataset1", "dataset2", "dataset3", "start_stop", "start_stop_v1")
-NOISE_NAMES = ("none", "low", "typical", "high", "pioneer3dx")
-LASER_NOISE_NAMES = ("sick_lms200", "zero")
-TOUR_KIND_NAMES = ("loop", "out_and_back", "backtracking", "circuit")
-ALBOT1_OPTION_KEYS = ("preset", "deletion", "min_tracked", "position_endpoint", "match_candidates")
+
+class Choices(NamedTuple):
+    """The names each run option accepts, read from the registry that defines them."""
+
+    world_kinds: tuple[str, ...]
+    profiles: tuple[str, ...]
+    noises: tuple[str, ...]
+    laser_noises: tuple[str, ...]
+    tour_kinds: tuple[str, ...]
+    albot1_options: tuple[str, ...]
+
+
+@functools.cache
+def choices() -> Choices:
+    """Every registry's names, for --help and validation (read once per process)."""
+    from albot2d.mapping.registry import albot1_option_keys
+    from albot2d.sim.driving import PROFILES
+    from albot2d.sim.laser import LASER_NOISE_PRESETS
+    from albot2d.sim.odometry import NOISE_PRESETS
+    from worldgen.kinds import world_kinds
+    from worldgen.tours import TOUR_KINDS
+
+    return Choices(
+        world_kinds=tuple(world_kinds()),
+        profiles=tuple(PROFILES),
+        noises=tuple(NOISE_PRESETS),
+        laser_noises=tuple(LASER_NOISE_PRESETS),
+        tour_kinds=tuple(TOUR_KINDS),
+        albot1_options=albot1_option_keys(),
+    )
+
+
+def defaults_of(cls: type) -> dict[str, Any]:
+    """A dataclass's field defaults by name (what --help says an option not given means)."""
+    return {
+        f.name: f.default for f in dataclasses.fields(cls) if f.default is not dataclasses.MISSING
+    }
+
+
 # Fields two reports of the same run may differ in: file lists, the version, and a fuzzing
 # reproducer's own section (wall-clock timings are dropped by ``without_timings``).
-_NOT_COMPARED = ("figures", "exports", "albot2d_version", "reproducer")
+_NOT_COMPARED = ("figures", "exports", "albot2d_version", "kernels", "reproducer")
 
 
 def add_run_options(p: argparse.ArgumentParser) -> None:
     """World and driving options, shared by ``run`` and ``simulate`` (same defaults)."""
-    world = p.add_argument_group("world (default: --kind office --seed 0)")
+    from albot2d.evaluation.run.setup import RunSpec
+    from worldgen.tours import TOUR_LENGTH_TOLERANCE
+
+    names, default = choices(), defaults_of(RunSpec)
+    world = p.add_argument_group(f"world (default: --kind {default['kind']} --seed 0)")
     world.add_argument("--world", metavar="world.json", help="a world file (albot2d world)")
-    world.add_argument("--kind", help=f"generate a world: {', '.join(WORLD_KINDS)}")
+    world.add_argument("--kind", help=f"generate a world: {', '.join(names.world_kinds)}")
     world.add_argument("--seed", metavar="N", help="world and run seed (default 0)")
     world.add_argument("--width", metavar="W", help="generated world's width in metres")
     world.add_argument("--height", metavar="H", help="generated world's height in metres")
@@ -84,22 +108,32 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
         help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)",
     )
     drive = p.add_argument_group("driving")
-    drive.add_argument("--profile", help=f"{', '.join(PROFILE_NAMES)} (default {DEFAULT_PROFILE})")
     drive.add_argument(
-        "--noise",
-        help=f"odometry noise preset: {', '.join(NOISE_NAMES)} (default {DEFAULT_NOISE})",
+        "--profile", help=f"{', '.join(names.profiles)} (default {default['profile']})"
     )
     drive.add_argument(
-        "--laser-noise", help=f"{' or '.join(LASER_NOISE_NAMES)} (default {DEFAULT_LASER_NOISE})"
+        "--noise",
+        help=f"odometry noise preset: {', '.join(names.noises)} (default {default['noise']})",
+    )
+    drive.add_argument(
+        "--laser-noise",
+        help=f"{' or '.join(names.laser_noises)} (default {default['laser_noise']})",
     )
     drive.add_argument(
         "--tour-kind",
-        help=f"{', '.join(TOUR_KIND_NAMES)} (default {DEFAULT_TOUR_KIND})",
+        help=f"{', '.join(names.tour_kinds)} (default {default['tour_kind']})",
     )
     drive.add_argument(
         "--tour-length",
         metavar="METRES",
-        help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})",
+        help=f"tour length: the tour is METRES to {1 + TOUR_LENGTH_TOLERANCE:g}×METRES long "
+        f"(default {default['tour_length_m']:g})",
+    )
+    drive.add_argument(
+        "--min-tour-length",
+        metavar="METRES",
+        help="plan the tour through far-apart places and repeat it until it is at least "
+        "METRES long (it may be several times longer); instead of --tour-length",
     )
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
 
@@ -107,7 +141,7 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
 def spec_from_args(args: argparse.Namespace) -> Any:
     """The RunSpec of ``run``'s (and ``simulate``'s) options; options not given take
     RunSpec's defaults."""
-    from albot2d.evaluation.setup import RunSpec
+    from albot2d.evaluation.run.setup import RunSpec
 
     params = world_params(args)
     if args.world is not None and (args.kind is not None or params):
@@ -120,15 +154,42 @@ def spec_from_args(args: argparse.Namespace) -> Any:
         "laser_noise": args.laser_noise or None,
         "tour_kind": args.tour_kind or None,
         "tour_length_m": positive_number(args.tour_length, "--tour-length"),
+        "tour_length_is_minimum": None,
         "mappers": tuple(getattr(args, "mapper", None) or ()) or None,
         "max_frames": positive_int(args.max_frames, "--max-frames"),
     }
+    minimum = positive_number(getattr(args, "min_tour_length", None), "--min-tour-length")
+    if minimum is not None:
+        if given["tour_length_m"] is not None:
+            raise InputError("give --tour-length or --min-tour-length, not both")
+        given |= {"tour_length_m": minimum, "tour_length_is_minimum": True}
     if args.world is not None:
         given |= {"kind": None, "world_file": args.world}
     elif args.kind:
         given["kind"] = args.kind
     # "kind": None (a world file) is kept; every other option not given is left out
     return RunSpec(**{k: v for k, v in given.items() if v is not None or k == "kind"})
+
+
+def add_export_option(p: argparse.ArgumentParser) -> None:
+    """``--export FORMAT ...`` (the registry of ``albot2d.cli.exporters``) and its options."""
+    from albot2d.cli.exporters import EXPORTERS
+
+    g = p.add_argument_group("export")
+    g.add_argument(
+        "--export",
+        nargs="+",
+        action="extend",
+        choices=list(EXPORTERS),
+        metavar="FORMAT",
+        help="also write the run as: "
+        + "; ".join(f"{e.name} ({e.help})" for e in EXPORTERS.values()),
+    )
+    g.add_argument(
+        "--bag-storage",
+        choices=("mcap", "sqlite3"),
+        help="storage of the ROS 2 bag (default mcap)",
+    )
 
 
 def add_json_option(
@@ -253,7 +314,7 @@ def _step_figure(result: Any, no_figures: bool) -> dict[str, bytes]:
 def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, bytes]) -> None:
     """Write the files (figures, exports) and report.json atomically; report.json is
     renamed into place last."""
-    from albot2d.evaluation.report import REPORT_NAME, report_json
+    from albot2d.evaluation.run.report import REPORT_NAME, report_json
 
     text = report_json(report).encode("utf-8")
     # the report (given first) is renamed into place last
@@ -271,11 +332,13 @@ def finish(
     no_figures: bool,
     stage: Callable[[str], None] | None = None,
     animate: bool = False,
+    extra_exports: Callable[[Any], list[str]] | None = None,
 ) -> Any:
     """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
     maps, write everything; on any failure remove the output directory again if this
-    command created it."""
-    from albot2d.evaluation.export import export_files
+    command created it. ``extra_exports(result)`` writes the ``--export`` files itself
+    (before report.json) and returns their names."""
+    from albot2d.evaluation.run.export import export_files
 
     try:
         result = compute()
@@ -284,8 +347,9 @@ def finish(
         figures = _render(result, no_figures, command, animate)
         figures.update(_step_figure(result, no_figures))
         exports = export_files(result)
+        extra = extra_exports(result) if extra_exports is not None else []
         result.report["figures"] = sorted(figures)
-        result.report["exports"] = sorted(exports)
+        result.report["exports"] = sorted([*exports, *extra])
         # steps.csv: one row per view (stage times, counters), for profiling a run.
         files = {
             **figures,
@@ -315,7 +379,7 @@ def progress_bar(total: float | None, unit: str, desc: str) -> Any:
 
 def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
     """The result tables on stdout, or (``--json``) the report itself."""
-    from albot2d.evaluation.report import (
+    from albot2d.evaluation.run.report import (
         REPORT_NAME,
         format_homing_table,
         format_summary_table,
@@ -356,7 +420,7 @@ def differences(a: Any, b: Any, path: str = "") -> list[str]:
 def report_differences(recorded: Mapping[str, Any], report: Mapping[str, Any]) -> list[str]:
     """Where ``report`` differs from the ``recorded`` one (a report.json or a fuzzing
     reproducer), apart from wall-clock timings, file lists and the version."""
-    from albot2d.evaluation.report import without_timings
+    from albot2d.evaluation.run.report import without_timings
 
     return differences(
         {k: v for k, v in without_timings(dict(recorded)).items() if k not in _NOT_COMPARED},

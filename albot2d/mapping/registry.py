@@ -19,11 +19,17 @@ from albot2d.errors import InputError
 from albot2d.mapping.protocol import Mapper
 from albot2d.plugins import PluginFactory, import_plugin
 
-__all__ = ["BUILTIN_MAPPERS", "mapper_factory", "report_name", "resolve_mappers"]
+__all__ = [
+    "BUILTIN_MAPPERS",
+    "albot1_option_keys",
+    "mapper_factory",
+    "report_name",
+    "resolve_mappers",
+]
 
 
 def _albot1() -> Mapper:
-    from albot2d.mapping.albot1 import Albot1
+    from albot2d.mapping.albot1.mapper import Albot1
 
     return Albot1()
 
@@ -72,6 +78,11 @@ _ALBOT1_OPTIONS = (
 )
 
 
+def albot1_option_keys() -> tuple[str, ...]:
+    """The keys ``albot1[KEY=VALUE,...]`` accepts."""
+    return _ALBOT1_OPTIONS
+
+
 def _albot1_variant(spec: str) -> Callable[[], Mapper]:
     """``albot1[preset=original,deletion=v1,min_tracked=3,position_endpoint=current_real]``:
     Albot1 with named options, so readings of the paper can be compared side by side in
@@ -85,8 +96,8 @@ def _albot1_variant(spec: str) -> Callable[[], Mapper]:
                 f"mapper {spec!r}: options are key=value with keys {', '.join(_ALBOT1_OPTIONS)}"
             )
         options[key.strip()] = value.strip()
-    from albot2d.mapping.albot1 import Albot1, Albot1Params
-    from albot2d.mapping.deletion import GlobalMapParams
+    from albot2d.mapping.albot1.deletion import GlobalMapParams
+    from albot2d.mapping.albot1.mapper import Albot1, Albot1Params
 
     overrides: dict[str, object] = {}
     if "deletion" in options:

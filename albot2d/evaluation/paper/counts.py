@@ -154,7 +154,7 @@ def _pi_reason(causes: dict[str, Any], ours: dict[str, Any]) -> str | None:
     t1, t2 = m["dataset1"], m["dataset2"]
     share = ours.get("path_integrations_more_with_dataset2_share")
     same = ours.get("same_true_path_datasets_1_and_2_share")
-    from albot2d.mapping.albot1 import Albot1Params
+    from albot2d.mapping.albot1.mapper import Albot1Params
     from albot2d.sim.driving import get_profile
 
     gate = Albot1Params().tracking
@@ -212,7 +212,8 @@ def figures(fig: dict[str, Any], result: dict[str, Any]) -> list[dict[str, Any]]
         {
             "file": "counts.png",
             "plot": "bars",
-            "caption": "Local maps remembered per view, per dataset (ours: mean ± sd over seeds; "
+            "caption": "Local maps remembered per view, per dataset (ours: bar the mean "
+            "over the seeds, whisker ± sd; "
             "paper: hatched).",
             "data": {"bars": bars, "ylabel": "local maps per view"},
         }
