@@ -23,6 +23,7 @@ __all__ = [
     "LIMITS",
     "MAX_ARRAY_DIMENSIONS",
     "MAX_ARRAY_ITEMS",
+    "MAX_BAG_MESSAGES",
     "MAX_BEAMS",
     "MAX_CAMPAIGN_EPISODES",
     "MAX_CLUTTER_ITEMS",
@@ -72,6 +73,8 @@ MAX_BEAMS = 65_536
 MAX_LOG_SCANS = 100_000
 #: Laser readings one log may hold in all (8 bytes each as float64: 320 MB).
 MAX_LOG_READINGS = 40_000_000
+#: Messages read from one topic of a ROS bag (odometry and /tf arrive at up to ~100 Hz).
+MAX_BAG_MESSAGES = 2_000_000
 #: Rows of a relations or truth file.
 MAX_TABLE_ROWS = 2_000_000
 
@@ -135,8 +138,9 @@ LIMITS: tuple[Limit, ...] = (
     ),
     Limit("MAX_LINE_BYTES", MAX_LINE_BYTES, "bytes", "one line of a log, relations or truth file"),
     Limit("MAX_BEAMS", MAX_BEAMS, "readings", "one laser line (readings, and remissions)"),
-    Limit("MAX_LOG_SCANS", MAX_LOG_SCANS, "scans", "laser scans of one log"),
+    Limit("MAX_LOG_SCANS", MAX_LOG_SCANS, "scans", "laser scans of one log or bag"),
     Limit("MAX_LOG_READINGS", MAX_LOG_READINGS, "readings", "laser readings of one log in all"),
+    Limit("MAX_BAG_MESSAGES", MAX_BAG_MESSAGES, "messages", "one topic of a ROS bag"),
     Limit("MAX_TABLE_ROWS", MAX_TABLE_ROWS, "rows", "a relations or truth file"),
     Limit("MAX_WALLS", MAX_WALLS, "walls", "a world's walls (exact repeats of a wall are refused)"),
     Limit(
