@@ -84,18 +84,21 @@ def _load_from(top: str, folder: str) -> ModuleType | None:
     return module
 
 
+def _loaded_where_recorded(top: str) -> bool:
+    recorded = plugin_locations().get(top)
+    return recorded is not None and _load_from(top, recorded) is not None
+
+
 def _import(name: str) -> ModuleType:
     top = name.partition(".")[0]
-    if top not in sys.modules:
-        recorded = plugin_locations().get(top)
-        if recorded is not None:
-            if _load_from(top, recorded) is None:
-                raise ImportError(f"no module named {top!r} in {recorded} (from {PLUGINS_ENV})")
-        elif importlib.util.find_spec(top) is None:
-            cwd = os.getcwd()
-            if _load_from(top, cwd) is None:
-                raise ImportError(f"no module named {top!r} on sys.path or in {cwd}")
-            _record(top, cwd)
+    # Where the starting process found it; else on sys.path; else in the current folder.
+    if top in sys.modules or _loaded_where_recorded(top):
+        return importlib.import_module(name)
+    if importlib.util.find_spec(top) is None:
+        cwd = os.getcwd()
+        if _load_from(top, cwd) is None:
+            raise ImportError(f"no module named {top!r} on sys.path or in {cwd}")
+        _record(top, cwd)
     return importlib.import_module(name)
 
 
