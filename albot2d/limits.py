@@ -36,6 +36,8 @@ __all__ = [
     "MAX_LOCAL_WORKERS",
     "MAX_LOG_READINGS",
     "MAX_LOG_SCANS",
+    "MAX_MAP_PIXELS",
+    "MAX_MAP_YAML_BYTES",
     "MAX_PATH_POINTS",
     "MAX_ROADMAP_NODES",
     "MAX_SEEDS",
@@ -77,6 +79,11 @@ MAX_LOG_READINGS = 40_000_000
 MAX_BAG_MESSAGES = 2_000_000
 #: Rows of a relations or truth file.
 MAX_TABLE_ROWS = 2_000_000
+
+#: A ROS map_server map's YAML file.
+MAX_MAP_YAML_BYTES = 1 * MiB
+#: Pixels of a map_server map's image (5000 x 5000; decoded as 32 bytes a pixel).
+MAX_MAP_PIXELS = 25_000_000
 
 # -- worlds and plans --------------------------------------------------------------------
 #: Walls of a world (a wall that repeats another exactly is refused, whatever the count).
@@ -141,6 +148,8 @@ LIMITS: tuple[Limit, ...] = (
     Limit("MAX_LOG_SCANS", MAX_LOG_SCANS, "scans", "laser scans of one log or bag"),
     Limit("MAX_LOG_READINGS", MAX_LOG_READINGS, "readings", "laser readings of one log in all"),
     Limit("MAX_BAG_MESSAGES", MAX_BAG_MESSAGES, "messages", "one topic of a ROS bag"),
+    Limit("MAX_MAP_YAML_BYTES", MAX_MAP_YAML_BYTES, "bytes", "a map_server map's YAML file"),
+    Limit("MAX_MAP_PIXELS", MAX_MAP_PIXELS, "pixels", "a map_server map's image"),
     Limit("MAX_TABLE_ROWS", MAX_TABLE_ROWS, "rows", "a relations or truth file"),
     Limit("MAX_WALLS", MAX_WALLS, "walls", "a world's walls (exact repeats of a wall are refused)"),
     Limit(

@@ -118,3 +118,25 @@ def test_a_plugin_failing_at_import_is_one_error(
         assert "\n" not in str(info.value) and "mapper 'bad_plugin_xyz:Mapper'" in str(info.value)
     finally:
         sys.modules.pop("bad_plugin_xyz", None)
+
+
+def test_map_server_maps_are_read_within_limits(tmp_path: Path) -> None:
+    """A map YAML of /dev/zero, one with an alias bomb, and an image of too many pixels
+    (refused from its header, before it is decoded) are each one ``InputError``."""
+    pytest.importorskip("yaml")
+    image_module = pytest.importorskip("PIL.Image")
+    from albot2d.logs.map_server import read_map_server
+
+    with pytest.raises(InputError, match="MAX_MAP_YAML_BYTES"):
+        read_map_server("/dev/zero")
+    bomb = tmp_path / "bomb.yaml"
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
+    lines += [f"a{k}: &a{k} [{', '.join([f'*a{k - 1}'] * 10)}]" for k in range(1, 12)]
+    bomb.write_text("\n".join([*lines, "image: m.png", "resolution: 0.05", "origin: *a11"]))
+    with pytest.raises(InputError, match="aliases"):
+        read_map_server(bomb)
+    image_module.new("L", (6000, 5000), 254).save(tmp_path / "big.png")
+    big = tmp_path / "big.yaml"
+    big.write_text("image: big.png\nresolution: 0.05\norigin: [0, 0, 0]\n")
+    with pytest.raises(InputError, match=r"6000 x 5000 pixels.*MAX_MAP_PIXELS"):
+        read_map_server(big)
