@@ -27,6 +27,7 @@ from albot2d.errors import InputError
 
 __all__ = [
     "Choices",
+    "add_albot1_keys_to_help",
     "add_export_option",
     "add_json_option",
     "add_run_options",
@@ -433,3 +434,17 @@ def report_differences(recorded: Mapping[str, Any], report: Mapping[str, Any]) -
         {k: v for k, v in without_timings(dict(recorded)).items() if k not in _NOT_COMPARED},
         {k: v for k, v in without_timings(dict(report)).items() if k not in _NOT_COMPARED},
     )
+
+
+def add_albot1_keys_to_help(parser: Any) -> None:
+    """``parser --help`` ends with every ``albot1[KEY=VALUE]`` key, generated from the
+    ``Albot1Params`` dataclasses when help is asked for (not at every start-up)."""
+    plain = parser.format_help
+
+    def format_help() -> str:
+        from albot2d.mapping.albot1.options import option_help
+
+        parser.epilog = option_help()
+        return str(plain())
+
+    parser.format_help = format_help

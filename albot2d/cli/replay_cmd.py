@@ -28,10 +28,10 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
+    add_albot1_keys_to_help,
     add_export_option,
     add_json_option,
     add_scoring_options,
-    choices,
     finish,
     prepare_out_dir,
     print_tables,
@@ -100,9 +100,10 @@ def register(subparsers: Any) -> None:
         action="extend",
         metavar="NAME",
         help="mappers: albot1, naive, slam and scan_odometry ([slam] extra), "
-        f"albot1[KEY=VALUE,...] (keys {', '.join(choices().albot1_options)}) or module:Class "
+        "albot1[KEY=VALUE,...] (keys listed below) or module:Class "
         "(default: albot1 naive; truth needs a simulated run)",
     )
+    add_albot1_keys_to_help(p)
     p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")
     add_scoring_options(p)
     p.add_argument(

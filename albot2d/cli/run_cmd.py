@@ -21,11 +21,11 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
+    add_albot1_keys_to_help,
     add_export_option,
     add_json_option,
     add_run_options,
     add_scoring_options,
-    choices,
     finish,
     prepare_out_dir,
     print_tables,
@@ -74,9 +74,10 @@ def register(subparsers: Any) -> None:
         action="extend",
         metavar="NAME",
         help="mappers: albot1, naive, truth, slam and scan_odometry ([slam] extra), "
-        f"albot1[KEY=VALUE,...] (keys {', '.join(choices().albot1_options)}) or "
+        "albot1[KEY=VALUE,...] (keys listed below) or "
         "module:Class (default: albot1 naive truth)",
     )
+    add_albot1_keys_to_help(p)
     add_scoring_options(p)
     p.add_argument(
         "--reproduce",

@@ -112,7 +112,7 @@ def run_one(
     from albot2d.evaluation.run.scoring import homing_section
     from albot2d.evaluation.run.setup import RunSpec, build_world, make_simulator
     from albot2d.evaluation.run.trace import HomingParams, drive_mappers
-    from albot2d.mapping.registry import resolve_mappers
+    from albot2d.mapping.registry import mapper_factory, report_name, resolve_mappers
     from albot2d.sim.driving import get_profile
     from worldgen import plan_tour
 
@@ -125,6 +125,9 @@ def run_one(
         tour_length_is_minimum=True, mappers=setup.mappers,
     )  # fmt: skip
     factories = resolve_mappers(list(spec.mappers))
+    # Runs are recorded by the mapper spec given (what the summary looks up), not by the
+    # report name (a plugin's ``name`` attribute may differ from its module:Class).
+    spec_of = {report_name(s, mapper_factory(s)): s for s in spec.mappers}
     world = build_world(spec)
     if setup.routes:
         from worldgen.routes import route_start, route_tour
@@ -158,7 +161,7 @@ def run_one(
             labels = np.full(len(xy), "", dtype="<U8")  # only update rows are read
             labels[flags] = region_labels(world, xy[flags])
             instructions, moves = update_counts(xy, flags, labels)
-        out[name] = {"stops": stops, "instructions": instructions, "moves": moves}
+        out[spec_of[name]] = {"stops": stops, "instructions": instructions, "moves": moves}
     return {
         "seed": seed,
         "preset": preset,

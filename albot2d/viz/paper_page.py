@@ -81,6 +81,15 @@ def flatten_numbers(tree: Any, prefix: str = "") -> dict[str, str]:
     return out
 
 
+def _reading_results(result: Mapping[str, Any]) -> dict[str, Mapping[str, Any]]:
+    """Reading → its ``ours``/``verdict``/``notes`` (one unnamed reading for a result
+    computed under the primary reading only)."""
+    readings = result.get("readings")
+    if readings:
+        return dict(readings)
+    return {"albot2d": result}
+
+
 _UNITS = (("_m", " (m)"), ("_deg", " (°)"), ("_s", " (s)"), ("_mps", " (m/s)"))
 
 
@@ -103,17 +112,19 @@ def _table(result: Mapping[str, Any], ours_label: str) -> str:
     ``corridor``, ...), a named column per quantity, each row twice (paper, albot2d);
     rows measuring different quantities go to separate tables, so no table is mostly
     empty cells."""
-    ours = flatten_numbers(result.get("ours", {}))
     paper = flatten_numbers({k: v for k, v in result.get("paper", {}).items() if k != "rows"})
+    sources = [("paper", paper)] + [
+        (who, flatten_numbers(v.get("ours", {}))) for who, v in _reading_results(result).items()
+    ]
+    whos = [who for who, _ in sources]
     rows: dict[str, dict[str, dict[str, str]]] = {}
-    for who, values in (("paper", paper), ("albot2d", ours)):
+    for who, values in sources:
         for key, value in values.items():
             row, col = _split(key)
             rows.setdefault(row, {}).setdefault(who, {})[col] = value
     groups: dict[tuple[str, ...], list[str]] = {}
     for row, by_who in rows.items():
-        cols = tuple(dict.fromkeys(c for who in ("paper", "albot2d")
-                                   for c in by_who.get(who, {})))  # fmt: skip
+        cols = tuple(dict.fromkeys(c for who in whos for c in by_who.get(who, {})))
         groups.setdefault(cols, []).append(row)
     tables = []
     for columns, names in groups.items():
@@ -122,7 +133,7 @@ def _table(result: Mapping[str, Any], ours_label: str) -> str:
         for row in names:
             by_who = rows[row]
             name = " / ".join(human(part) for part in row.split(".")) if row else "—"
-            present = [w for w in ("paper", "albot2d") if w in by_who]
+            present = [w for w in whos if w in by_who]
             for k, who in enumerate(present):
                 first = (f"<td rowspan='{len(present)}'>{html.escape(name)}</td>" if k == 0
                          else "")  # fmt: skip
@@ -132,7 +143,10 @@ def _table(result: Mapping[str, Any], ours_label: str) -> str:
                 body.append(f"<tr>{first}<td class='who'>{who}</td>{cells}</tr>")
         tables.append(f"<div class='table-wrap'><table class='numbers'><tr><th></th><th></th>"
                       f"{head}</tr>{''.join(body)}</table></div>")  # fmt: skip
-    note = f"<p class='rule'>albot2d: {html.escape(ours_label.removeprefix('albot2d, '))}.</p>"
+    where = result.get("paper_figure")
+    note = (f"<p class='rule'>albot2d: {html.escape(ours_label.removeprefix('albot2d, '))}"
+            + (f"; the paper: {html.escape(where)}" if where else "")
+            + "; a row per reading of the paper where several were run.</p>")  # fmt: skip
     return note + "".join(tables)
 
 
@@ -202,24 +216,40 @@ def render_page(data: Mapping[str, Any], figures: Mapping[str, list[dict[str, An
         "</code>" + ("; <strong>--quick</strong>: a smoke run, long runs cut short, "
                      "numbers not comparable to the paper's" if data.get("quick") else "")
         + ". Verdicts are computed from the numbers by the rule under each one.</p>",
-        "<table class='summary'><tr><th>experiment</th><th>verdict</th></tr>",
     ]  # fmt: skip
-    for name, verdict in data["verdicts"].items():
-        cls = _VERDICT_CLASS.get(verdict, "")
-        parts.append(
-            f"<tr><td><a href='#{name}'>{name}</a></td>"
-            f"<td><span class='verdict {cls}'>{html.escape(verdict)}</span>{smoke_tag}</td></tr>"
+    by_reading = data.get("verdicts_by_reading") or {
+        n: {"verdict": v} for n, v in data["verdicts"].items()
+    }
+    readings = list(next(iter(by_reading.values()), {}))
+    specs = data.get("readings") or {}
+    parts.append(
+        "<table class='summary'><tr><th>experiment</th>"
+        + "".join(
+            f"<th>verdict: {html.escape(r)}"
+            + (f" <code>{html.escape(specs[r])}</code>" if r in specs else "") + "</th>"
+            for r in readings
         )
+        + "</tr>"
+    )  # fmt: skip
+    for name, verdicts in by_reading.items():
+        cells = "".join(
+            f"<td><span class='verdict {_VERDICT_CLASS.get(v, '')}'>{html.escape(v)}</span>"
+            f"{smoke_tag}</td>"
+            for v in verdicts.values()
+        )
+        parts.append(f"<tr><td><a href='#{name}'>{name}</a></td>{cells}</tr>")
     parts.append("</table>")
     for name, result in data["experiments"].items():
         cls = _VERDICT_CLASS.get(result["verdict"], "")
         parts += [
             f"<section id='{name}'><h2>{html.escape(name)}</h2>",
             f"<p class='claim'><strong>The paper:</strong> {html.escape(result['claim'])}</p>",
-            f"<p>Verdict: <span class='verdict {cls}'>{html.escape(result['verdict'])}</span>"
+            f"<p>Verdict{_reading_label(result, str(result.get('reading', '')))}: "
+            f"<span class='verdict {cls}'>{html.escape(result['verdict'])}</span>"
             f"{smoke_tag}</p><p class='rule'>Rule: {html.escape(result['rule'])}.</p>",
-            *(f"<p class='note'><strong>Why:</strong> {html.escape(str(n))}</p>"
-              for n in result.get("notes", [])),
+            *(f"<p class='note'><strong>Why{_reading_label(result, r)}:</strong> "
+              f"{html.escape(str(n))}</p>"
+              for r, v in _reading_results(result).items() for n in v.get("notes", [])),
             _paper_rows(result), _table(result, ours_label), _per_seed(result, seeds),
         ]  # fmt: skip
         for fig in figures.get(name, []):
@@ -236,6 +266,10 @@ def render_page(data: Mapping[str, Any], figures: Mapping[str, list[dict[str, An
         parts.append("</section>")
     parts.append("</body></html>\n")
     return "\n".join(parts)
+
+
+def _reading_label(result: Mapping[str, Any], reading: str) -> str:
+    return f" ({html.escape(reading)})" if result.get("readings") else ""
 
 
 def _seed_text(seeds: list[int]) -> str:
