@@ -219,7 +219,7 @@ wheels' contact lines) on a hard office floor, uncalibrated, derived as follows:
 
 No published table gives these exact numbers for one P3-DX; they were fixed from the
 sources above before any Albot1 run and are not tuned to its results. The homing
-sensitivity over ``low``/``typical``/``high`` (``albot2d.evaluation.sensitivity``) is the
+sensitivity over ``low``/``typical``/``high`` (``albot2d.studies.sensitivity``) is the
 honest answer to how much they matter.
 """
 
