@@ -28,7 +28,7 @@ import pytest
 import shapely
 
 from albot2d.geometry import Pose, polygon_ring_segments
-from albot2d.sim import Simulator, VelocityCommand
+from albot2d.sim import Simulator, VelocityCommand, noise_preset
 from albot2d.sim.laser import LaserParams
 from worldgen.generate import generate
 from worldgen.world import Roadmap, World
@@ -79,11 +79,18 @@ def _per_step(benchmark, step: Callable[[], object], steps: int) -> None:
     benchmark.extra_info["steps_per_s_median"] = round(1.0 / benchmark.stats.stats.median)
 
 
+@pytest.mark.parametrize("odometry", ["none", "pioneer3dx"])
 @pytest.mark.parametrize("scene", list(SCENES))
-def test_albot2d_step_with_scan(benchmark, scene: str) -> None:
+def test_albot2d_step_with_scan(benchmark, scene: str, odometry: str) -> None:
+    """The default laser noise (SICK LMS200-like); perfect or ``pioneer3dx`` odometry."""
     benchmark.group = f"step + 181-beam scan, {scene}"
     world = SCENES[scene]()
-    sim = Simulator(world, seed=0, laser=LaserParams(n_beams=181, max_range_m=30.0))
+    sim = Simulator(
+        world,
+        seed=0,
+        laser=LaserParams(n_beams=181, max_range_m=30.0),
+        odometry=noise_preset(odometry),
+    )
     command = VelocityCommand(*COMMAND)
     sim.reset()
     scans = 0
