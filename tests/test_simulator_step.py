@@ -173,3 +173,28 @@ def test_the_driving_yourself_snippet_is_a_short_loop_that_runs(
     assert isinstance(obs, Observation) and obs.time_s == pytest.approx(60.0)
     assert obs.true_pose.distance_to(namespace["sim"].world.start) > 1.0  # type: ignore[attr-defined]
     assert "60 s: true Pose(" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("command", "fine", "coarse"),
+    [
+        (VelocityCommand(0.3, 0.0), (300, 1.0 / 30.0), (1, 10.0)),  # 3 m in 1 cm or one step
+        (VelocityCommand(0.0, math.radians(30.0)), (90, 1.0 / 30.0), (1, 3.0)),  # 90° in 1°
+    ],
+)
+def test_odometry_does_not_depend_on_the_step_length(
+    command: VelocityCommand, fine: tuple[int, float], coarse: tuple[int, float]
+) -> None:
+    """The same motion stepped finely or in one step: the same true pose and, with the
+    same seed, the same odometry pose (its error arises along the path, not per step)."""
+    ends = []
+    for n, dt in (fine, coarse):
+        sim = Simulator(room_world(), seed=9, odometry=NOISE_PRESETS["high"])
+        sim.reset(start=Pose(2.0, 4.0, 0.0))
+        for _ in range(n):
+            obs = sim.step(command, dt)
+        ends.append(obs)
+    assert ends[0].true_pose.distance_to(ends[1].true_pose) < 1e-9
+    assert ends[0].odom_pose.distance_to(ends[1].odom_pose) < 1e-9
+    assert abs(ends[0].odom_pose.theta - ends[1].odom_pose.theta) < 1e-9
+    assert ends[0].odom_pose.distance_to(ends[0].true_pose) > 1e-3  # there is an error
