@@ -116,7 +116,7 @@ def test_presets_select_consistent_sets_and_refuse_unknown_names() -> None:
     assert Albot1Params.preset("start_stop") == Albot1Params(heading_fallback_surfaces=1)
     made = mapper_factory("albot1[preset=start_stop]")()
     assert made.params.heading_fallback_surfaces == 1  # type: ignore[attr-defined]
-    with pytest.raises(InputError, match="valid: paper, original, start_stop"):
+    with pytest.raises(InputError, match="valid: default, paper_literal, original, start_stop"):
         Albot1Params.preset("orignal")
 
 

@@ -52,6 +52,19 @@ def test_experiments_json_has_the_issue_fields(quick_out):
         for fig in result["figures"]:
             assert (quick_out / fig).stat().st_size > 1000
     assert data["quick"] is True and data["seeds"] == [0]
+    # both default readings, side by side, path-integration counts included
+    assert data["readings"] == {
+        "default": "albot1",
+        "paper_literal": "albot1[preset=paper_literal]",
+    }
+    for name, result in exps.items():
+        assert list(result["readings"]) == ["default", "paper_literal"], name
+        assert data["verdicts_by_reading"][name]["default"] == result["verdict"]
+        assert result["paper_figure"]
+    for reading in exps["fig16"]["readings"].values():
+        assert set(reading["ours"]["map_accuracy_p95_m"]) >= {"albot1", "naive"}  # fig16
+    pi = exps["counts"]["readings"]["paper_literal"]["ours"]["dataset1"]["path_integrations"]
+    assert set(pi) == {"mean", "sd", "n", "per_seed"}
 
 
 def test_same_results_on_two_workers(quick_out, tmp_path):
@@ -114,7 +127,9 @@ def test_page_in_headless_chromium(quick_out):
     assert found, proc.stderr[-2000:]
     result = json.loads(html.unescape(found.group(1)))
     data = json.loads((quick_out / "experiments.json").read_text())
-    n_figures = sum(len(r["figures"]) for r in data["experiments"].values())
+    # every reading's figures (default: default and paper_literal) are on the page
+    n_figures = sum(len(v["figures"]) for r in data["experiments"].values()
+                    for v in r["readings"].values())  # fmt: skip
     assert result["bad"] == [] and result["images"] == n_figures >= 8
     assert result["tables"] >= 1 + len(data["experiments"])
     console = [line for line in proc.stderr.splitlines() if ":CONSOLE" in line]

@@ -100,3 +100,23 @@ def test_paper_fig8_setting_drives_both_journeys_with_stops_every_4_m():
     assert "fig8_clockwise/fig8_anticlockwise" in format_table(result)
     with pytest.raises(InputError, match="stop_every_m"):
         SensitivitySetup(stop_every_m=0.0)
+
+
+def test_a_plugin_mapper_named_unlike_its_spec(monkeypatch):
+    """A ``module:Class`` mapper whose ``name`` differs from the spec (the template's
+    ``LastViewOnly`` is called ``last_views``) is summarised under the spec it was given."""
+    from pathlib import Path
+
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "docs"))
+    setup = SensitivitySetup(
+        kind="office",
+        world_params={"width_m": 30.0, "height_m": 24.0},
+        tour_length_m=30.0,
+        mappers=("albot1", "mapper_template:LastViewOnly"),
+        directions=("forward",),
+    )
+    result = homing_sensitivity([1], ("none",), setup)
+    by_mapper = result["presets"]["none"]
+    assert list(by_mapper) == ["albot1", "mapper_template:LastViewOnly"]
+    assert by_mapper["mapper_template:LastViewOnly"]["all"]["stops"] > 0
+    assert "mapper_template:LastViewOnly" in format_table(result)

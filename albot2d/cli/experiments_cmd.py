@@ -9,6 +9,14 @@ over seeds and per seed, a verdict per experiment), the figures as PNG files and
 numbers are not comparable to the paper's. Bad input: one line, exit 2, nothing written.
 
 Experiments: counts, table1, fig7, fig10, fig11_12, fig13, fig14, fig15, fig16.
+
+Readings (``--readings``, default ``default paper_literal``): every experiment is computed
+under each reading of the paper, each an Albot₁ driven on the same frames beside the
+others: ``default`` (albot2d's reading), ``paper_literal`` (the paper's text wherever it
+speaks: no gate against path integration, the occluding endpoint in the current view,
+algorithm #4 as written), ``original`` (the authors' C++ code), ``start_stop``, or any
+``albot1[KEY=VALUE,...]`` spec. The first is the primary reading: its results are each
+experiment's top-level ``ours`` and ``verdict``; ``readings`` holds every reading's.
 """
 
 from __future__ import annotations
@@ -24,6 +32,7 @@ from albot2d.errors import InputError
 
 __all__ = ["parse_seeds", "register", "run"]
 
+SMOKE_RUN = "smoke run"  # the words --quick output is marked with, everywhere it shows
 FULL_SEEDS = "0-19"
 QUICK_SEEDS = "0-1"
 _MAX_SEEDS = 10_000
@@ -51,6 +60,13 @@ def register(subparsers: Any) -> None:
     p.add_argument("--address", metavar="tcp://HOST:PORT", help="dask scheduler (dask only)")
     p.add_argument(
         "--quick", action="store_true", help="smoke run for CI: few seeds, the long runs cut short"
+    )
+    p.add_argument(
+        "--readings",
+        nargs="+",
+        metavar="READING",
+        help="readings of the paper to run side by side: default, paper_literal, original, "
+        "start_stop or albot1[KEY=VALUE,...] (default: default paper_literal)",
     )
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--out", metavar="DIR", help="output directory (required)")
@@ -94,11 +110,14 @@ def _check_out(text: str | None) -> Path:
 def run(args: argparse.Namespace) -> int:
     from albot2d.evaluation.fuzz.backends import make_backend
     from albot2d.evaluation.paper import EXPERIMENTS, plan_jobs, run_experiments
+    from albot2d.evaluation.paper.campaign import check_readings
+    from albot2d.evaluation.paper.runs import DEFAULT_READINGS
 
     out = _check_out(args.out)
     names = list(dict.fromkeys(args.only or EXPERIMENTS))
     seeds = parse_seeds(args.seeds or (QUICK_SEEDS if args.quick else FULL_SEEDS))
     jobs = plan_jobs(names, seeds)  # checks the names before anything runs
+    readings = check_readings(args.readings or DEFAULT_READINGS)
     workers = min(_workers(args.workers), len(jobs))
     if args.address is not None and args.backend != "dask":
         raise InputError("--address is for --backend dask")
@@ -110,10 +129,15 @@ def run(args: argparse.Namespace) -> int:
                 "figures need matplotlib: pip install 'albot2d[viz]' (or pass --no-figures)"
             ) from None
     backend = make_backend(args.backend, workers=workers, address=args.address)
+    if args.quick:  # said first, before anything else is printed
+        print(f"albot2d experiments --quick: {SMOKE_RUN} (seeds {', '.join(map(str, seeds))}, "
+              "long runs cut short): its numbers and verdicts are not comparable to the "
+              "paper's", flush=True)  # fmt: skip
     bar = _progress(len(jobs))
     try:
         outcome = run_experiments(names, seeds, quick=args.quick, backend=backend,
-                                  on_job=lambda r, s: _tick(bar, r, s))  # fmt: skip
+                                  on_job=lambda r, s: _tick(bar, r, s),
+                                  readings=readings)  # fmt: skip
     finally:
         backend.close()
         if bar is not None:
@@ -149,7 +173,8 @@ def _write(out: Path, outcome: Any, *, figures: bool) -> None:
         for name, specs in outcome.figures.items():
             for spec in specs:
                 save_figure(spec, out / spec["file"])
-            written[name] = [{"file": s["file"], "caption": s["caption"]} for s in specs]
+            written[name] = [{"file": s["file"], "caption": s["caption"], "plot": s["plot"]}
+                             for s in specs]  # fmt: skip
     else:
         for result in outcome.data["experiments"].values():
             result["figures"] = []
@@ -161,6 +186,14 @@ def _write(out: Path, outcome: Any, *, figures: bool) -> None:
 
 def _print_summary(data: dict[str, Any], out: Path) -> None:
     width = max(len(n) for n in data["verdicts"])
-    for name, verdict in data["verdicts"].items():
-        print(f"{name:<{width}}  {verdict}")
+    by_reading = data.get("verdicts_by_reading") or {
+        n: {"default": v} for n, v in data["verdicts"].items()
+    }
+    readings = list(next(iter(by_reading.values())))
+    smoke = f"  ({SMOKE_RUN})" if data.get("quick") else ""
+    cols = [max(len(r), 14) for r in readings]
+    print(f"{'':<{width}}  " + "  ".join(f"{r:<{c}}" for r, c in zip(readings, cols, strict=True)))
+    for name, verdicts in by_reading.items():
+        cells = "  ".join(f"{verdicts[r]:<{c}}" for r, c in zip(readings, cols, strict=True))
+        print(f"{name:<{width}}  {cells}{smoke}".rstrip())
     print(f"{len(data['seeds'])} seeds, {data['wall_time_s']:.0f} s -> {out}/index.html")

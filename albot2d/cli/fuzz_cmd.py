@@ -88,9 +88,12 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--mapper",
         metavar="NAME",
-        help=f"mapper under test: albot1, naive, truth, … or module:Class "
-        f"(default {default['mapper']})",
+        help="mapper under test: albot1, naive, truth, albot1[KEY=VALUE,...] (keys listed "
+        f"below) or module:Class (default {default['mapper']})",
     )
+    from albot2d.cli.common import add_albot1_keys_to_help
+
+    add_albot1_keys_to_help(p)
     p.add_argument("--workers", metavar="K", help="worker processes (default: every core)")
     p.add_argument(
         "--backend",

@@ -64,54 +64,22 @@ BUILTIN_MAPPERS: dict[str, Callable[[], Mapper]] = {
 _REQUIRED = ("observe", "pose", "global_map", "trajectory", "counts", "timings_ms")
 
 
-_ALBOT1_OPTIONS = (
-    "preset",
-    "deletion",
-    "min_tracked",
-    "position_endpoint",
-    "match_candidates",
-)
-
-
 def albot1_option_keys() -> tuple[str, ...]:
-    """The keys ``albot1[KEY=VALUE,...]`` accepts."""
-    return _ALBOT1_OPTIONS
+    """The keys ``albot1[KEY=VALUE,...]`` accepts: ``preset``, ``deletion`` and every
+    ``Albot1Params`` field (``albot1.options.option_table``)."""
+    from albot2d.mapping.albot1.options import option_table
+
+    return ("preset", "deletion", *(opt.key for opt in option_table()))
 
 
 def _albot1_variant(spec: str) -> Callable[[], Mapper]:
-    """``albot1[preset=original,deletion=v1,min_tracked=3,position_endpoint=current_real]``:
-    Albot1 with named options, so readings of the paper can be compared side by side in
-    one run."""
-    body = spec[len("albot1[") : -1]
-    options: dict[str, str] = {}
-    for item in filter(None, (part.strip() for part in body.split(","))):
-        key, eq, value = item.partition("=")
-        if not eq or key.strip() not in _ALBOT1_OPTIONS:
-            raise InputError(
-                f"mapper {spec!r}: options are key=value with keys {', '.join(_ALBOT1_OPTIONS)}"
-            )
-        options[key.strip()] = value.strip()
-    from albot2d.mapping.albot1.deletion import GlobalMapParams
-    from albot2d.mapping.albot1.mapper import Albot1, Albot1Params
+    """``albot1[preset=paper_literal,deletion=v1,min_tracked=3,tracking.match_distance_m=0.3]``:
+    Albot1 with named options (every ``Albot1Params`` field, ``mapping.albot1.options``),
+    so readings of the paper can be compared side by side in one run."""
+    from albot2d.mapping.albot1.mapper import Albot1
+    from albot2d.mapping.albot1.options import albot1_params_from_spec
 
-    overrides: dict[str, object] = {}
-    if "deletion" in options:
-        overrides["global_map"] = GlobalMapParams.preset(options["deletion"])
-    if "min_tracked" in options:
-        try:
-            overrides["min_tracked"] = int(options["min_tracked"])
-        except ValueError:
-            raise InputError(
-                f"mapper {spec!r}: min_tracked must be an integer, got {options['min_tracked']!r}"
-            ) from None
-    params = Albot1Params.preset(options.get("preset", "paper"), **overrides)
-    # options of a nested parameter group: (option, group field of Albot1Params)
-    for option, group in (("position_endpoint", "triangulation"), ("match_candidates", "tracking")):
-        if option in options:
-            import dataclasses
-
-            inner = dataclasses.replace(getattr(params, group), **{option: options[option]})
-            params = dataclasses.replace(params, **{group: inner})
+    params = albot1_params_from_spec(spec, spec[len("albot1[") : -1])
 
     def make() -> Mapper:
         mapper = Albot1(params)

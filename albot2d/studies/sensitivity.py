@@ -112,7 +112,7 @@ def run_one(
     from albot2d.evaluation.run.scoring import homing_section
     from albot2d.evaluation.run.setup import RunSpec, build_world, make_simulator
     from albot2d.evaluation.run.trace import HomingParams, drive_mappers
-    from albot2d.mapping.registry import resolve_mappers
+    from albot2d.mapping.registry import mapper_factory, report_name, resolve_mappers
     from albot2d.sim.driving import get_profile
     from worldgen import plan_tour
 
@@ -122,9 +122,12 @@ def run_one(
     spec = RunSpec(
         seed=seed, kind=setup.kind, world_params=setup.world_params, profile=setup.profile,
         noise=preset, tour_kind=setup.tour_kind, tour_length_m=setup.tour_length_m,
-        mappers=setup.mappers,
+        tour_length_is_minimum=True, mappers=setup.mappers,
     )  # fmt: skip
     factories = resolve_mappers(list(spec.mappers))
+    # Runs are recorded by the mapper spec given (what the summary looks up), not by the
+    # report name (a plugin's ``name`` attribute may differ from its module:Class).
+    spec_of = {report_name(s, mapper_factory(s)): s for s in spec.mappers}
     world = build_world(spec)
     if setup.routes:
         from worldgen.routes import route_start, route_tour
@@ -132,7 +135,8 @@ def run_one(
         tour = route_tour(world, direction)
         world = dataclasses.replace(world, start=route_start(world, direction))
     else:
-        tour = plan_tour(world, kind=spec.tour_kind, length_m=spec.tour_length_m)
+        tour = plan_tour(world, kind=spec.tour_kind, length_m=spec.tour_length_m,
+                          at_least=spec.tour_length_is_minimum)  # fmt: skip
     if direction == "reverse":
         # A circuit starts and ends at the start: driven backwards it is the other way round.
         tour = dataclasses.replace(tour, waypoints=tour.waypoints[::-1].copy())
@@ -157,7 +161,7 @@ def run_one(
             labels = np.full(len(xy), "", dtype="<U8")  # only update rows are read
             labels[flags] = region_labels(world, xy[flags])
             instructions, moves = update_counts(xy, flags, labels)
-        out[name] = {"stops": stops, "instructions": instructions, "moves": moves}
+        out[spec_of[name]] = {"stops": stops, "instructions": instructions, "moves": moves}
     return {
         "seed": seed,
         "preset": preset,

@@ -32,11 +32,15 @@ from albot2d.evaluation.checks.deletion import (
     UpdateRecorder,
     check_update_deleted_facing_overlap,
 )
-from albot2d.geometry import Pose, between_arrays, wrap_angle
-from albot2d.mapping.albot1.mapper import Albot1
+from albot2d.geometry import Pose, between_arrays, segment_angles, wrap_angle
+from albot2d.mapping.albot1.mapper import Albot1, Localisation
 from albot2d.mapping.albot1.route_map import RouteMap
 from albot2d.perception.surfaces import Surfaces
-from albot2d.perception.tracking import TrackingParams, recognise, trackable_mask
+from albot2d.perception.tracking import (
+    TrackingParams,
+    recognise,
+    trackable_mask,
+)
 from albot2d.sim.driving import DrivingProfile
 from albot2d.sim.odometry import OdometryNoise, heading_variance_rad2
 from albot2d.validation import check_non_negative, check_positive
@@ -45,20 +49,25 @@ __all__ = [
     "INVARIANTS",
     "InvariantError",
     "InvariantParams",
+    "LocalisationRecorder",
     "RecountedStep",
     "UpdateRecorder",
     "ViewRecorder",
+    "ZeroNoiseBound",
     "check_heading_error_bound",
     "check_local_map_rule",
     "check_route_connected",
     "check_update_deleted_facing_overlap",
     "check_zero_noise_localisation",
+    "end_position_bounds",
     "fail",
+    "fit_direction_bounds",
     "heading_error_bound",
     "heading_errors",
     "local_map_errors",
     "local_maps_per_row",
     "recount_tracking",
+    "zero_noise_link_bounds",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -174,7 +183,10 @@ class RecountedStep:
 
 
 def recount_tracking(
-    views: Sequence[tuple[int, Surfaces, Pose]], params: TrackingParams, min_tracked: int
+    views: Sequence[tuple[int, Surfaces, Pose]],
+    params: TrackingParams,
+    min_tracked: int,
+    move_using_pi: str = "restated",
 ) -> list[RecountedStep]:
     """Replay algorithm #2's tracking and remembering decisions from the views as given.
 
@@ -183,6 +195,10 @@ def recount_tracking(
     V(c-1) is remembered and V(c) re-tracked from it (line 12, goto 4); when (still) below,
     V(c) is remembered. A remembered view restarts the tracked set (``start_tracking``).
     Only the views, the tracking parameters and the rule go in: nothing of the mapper.
+    With ``move_using_pi="as_written"`` (algorithm #4 as the paper writes it), a view
+    remembered with no tracked surface left starts a stretch in which every view is
+    remembered, its ``tracked`` count being its trackable surfaces, until one has at least
+    ``min_tracked``.
     """
     out: list[RecountedStep] = []
     if not views:
@@ -195,7 +211,15 @@ def recount_tracking(
     out.append(RecountedStep(first, 0, (first,)))
     current = start(view)  # the tracked surfaces' latest observations
     use_vc = True  # V(c-1) (the first view) is the current local map
+    pi_mode = False
     for (prev_frame, prev_view, _), (frame, view, increment) in itertools.pairwise(views):
+        if pi_mode:
+            trackable = int(np.count_nonzero(trackable_mask(view, params)))
+            out.append(RecountedStep(frame, trackable, (frame,)))
+            current = start(view)
+            pi_mode = trackable < min_tracked
+            use_vc = True
+            continue
         counted = recognise(current, view, increment, params).view_index
         current = view.select(counted)
         remembered: tuple[int, ...] = ()
@@ -206,6 +230,7 @@ def recount_tracking(
                 current = view.select(kept)
             if len(current) < min_tracked:
                 remembered += (frame,)
+                pi_mode = move_using_pi == "as_written" and len(current) == 0
                 current = start(view)
         out.append(RecountedStep(frame, len(counted), remembered))
         use_vc = bool(remembered) and remembered[-1] == frame
@@ -224,7 +249,7 @@ def check_local_map_rule(
     map must hold exactly those views, and the mapper's ``StepRecord``s must agree."""
     name = "local_map_rule"
     need = m.params.min_tracked if min_tracked is None else min_tracked
-    steps = recount_tracking(views, m.params.tracking, need)
+    steps = recount_tracking(views, m.params.tracking, need, m.params.move_using_pi)
     if len(steps) != len(m.steps):
         fail(name, f"{len(steps)} views given but {len(m.steps)} steps recorded")
     expected = [f for step in steps for f in step.remembered]
@@ -276,14 +301,188 @@ def local_map_errors(
     return np.hypot(err[:, 0], err[:, 1]), np.abs(np.asarray(wrap_angle(err[:, 2])))
 
 
+class LocalisationRecorder:
+    """An Albot1 ``on_localise`` hook keeping, per local map after the first, the tracked
+    surface pairs (local map, current view) it was localised from; ``resolution_rad`` is
+    the laser's angle between beams (set it from a scan, e.g. the first frame's)."""
+
+    def __init__(self, resolution_rad: float | None = None) -> None:
+        self.pairs: list[tuple[Surfaces, Surfaces]] = []
+        self.resolution_rad = resolution_rad
+
+    def attach(self, mapper: Albot1) -> LocalisationRecorder:
+        """Hook into ``mapper`` (its ``on_localise``); returns self."""
+        mapper.on_localise = self
+        return self
+
+    def __call__(self, localisation: Localisation) -> None:
+        tracked = localisation.tracked
+        self.pairs.append((tracked.local, tracked.current))
+
+
+# Beams within ``split_distance_m`` of a surface's line may belong to the next face round
+# a corner; at most this many at one end tilt a fit (see ``fit_direction_bounds``).
+_STRAY_BEAMS = 2
+# Leverage of an end beam in a fit of beams spread unevenly along a surface (a surface seen
+# obliquely has its beams denser at the near end), against evenly spread beams.
+_UNEVEN_SPREAD = 2.0
+# Float rounding of a composed relative pose (exact odometry, exact ranges).
+_ZERO_NOISE_ATOL = 1e-6
+
+
+def fit_direction_bounds(surfaces: Surfaces, split_distance_m: float) -> FloatArray:
+    """The most each surface's fitted direction (rad) can be off its wall with exact ranges.
+
+    Extraction keeps a surface's beams within ``split_distance_m`` (e) of its fitted line,
+    so a beam of the next face round a corner can join it. Over ``n`` beams spread evenly
+    along length ``L``, one such beam at offset e at an end tilts the total-least-squares
+    line by about ``6 e / (n L)``; ``_STRAY_BEAMS`` of them and an uneven spread of beams
+    (``_UNEVEN_SPREAD``: n and L come from the laser's angular resolution and the surface's
+    range and incidence) give ``24 e / (n L)``. Surfaces not from a scan: no bound (inf).
+    """
+    b = surfaces.beams
+    n = np.where(b[:, 0] >= 0, b[:, 1] - b[:, 0] + 1, 0).astype(np.float64)
+    length = surfaces.lengths_m
+    with np.errstate(divide="ignore"):
+        bound = 6.0 * _STRAY_BEAMS * _UNEVEN_SPREAD * split_distance_m / (n * length)
+    return np.where((n >= 2) & (length > 0), bound, np.inf)
+
+
+def end_position_bounds(
+    surfaces: Surfaces, resolution_rad: float, split_distance_m: float
+) -> FloatArray:
+    """``(N, 2)``: how far each end may lie from the wall's real end with exact ranges (m).
+
+    The laser samples a surface only at its beams, so its real end lies between the last
+    hit and where the next beam meets its line: the beam spacing on the surface there,
+    ``r Δφ / sin β`` (range r, resolution Δφ, β the angle between the beam and the
+    surface); the end is the last hit projected onto the fitted line, which moves it by at
+    most ``split_distance_m``."""
+    segs = surfaces.segments
+    ends = segs.reshape(-1, 2, 2)
+    d = segs[:, 2:] - segs[:, :2]
+    u = d / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-12)[:, None]
+    r = np.hypot(ends[..., 0], ends[..., 1])
+    bearing = ends / np.maximum(r, 1e-12)[..., None]
+    sin_beta = np.abs(u[:, None, 0] * bearing[..., 1] - u[:, None, 1] * bearing[..., 0])
+    return r * resolution_rad / np.maximum(sin_beta, 1e-3) + split_distance_m
+
+
+@dataclass(frozen=True, slots=True)
+class ZeroNoiseBound:
+    """One link's zero-noise bound and error: heading (rad) and position (m). ``hull``: the
+    largest heading error of the tracked surfaces' own heading affordances (a triangulated
+    heading is a weighted mean of them); ``fit``: the largest of their fit bounds
+    (``fit_direction_bounds`` of both observations)."""
+
+    heading_err_rad: float
+    heading_bound_rad: float
+    position_err_m: float
+    position_bound_m: float
+    hull_rad: float
+    fit_rad: float
+
+
+def zero_noise_link_bounds(
+    route: RouteMap,
+    frame_indices: NDArray[np.int64],
+    true_poses: FloatArray,
+    pairs: Sequence[tuple[Surfaces, Surfaces]],
+    resolution_rad: float,
+    split_distance_m: float,
+) -> list[ZeroNoiseBound]:
+    """Each link's (local map after the first) error and bound with exact odometry and
+    ranges, from the tracked surface pairs it was localised from (``LocalisationRecorder``).
+
+    Heading: a triangulated heading is a weighted mean of the tracked surfaces' heading
+    affordances (or one of them), so its error is at most the largest of theirs (the hull),
+    each of which is at most the sum of its two fits' bounds (``fit_direction_bounds``):
+    the bound is the smaller of the two. Position: the chosen end pair's own errors
+    (``end_position_bounds``, both observations) plus the heading error's lever on the end
+    seen from the view, the largest over the tracked ends. Path integration is exact.
+    """
+    if len(pairs) != max(len(route) - 1, 0):
+        raise ValueError(f"{len(pairs)} localisations recorded for {len(route)} local maps")
+    if len(route) < 2:
+        return []
+    rows = _rows_of(np.asarray(frame_indices), np.array([lm.frame_index for lm in route]))
+    truth = true_poses[rows]
+    rel_true = between_arrays(truth[:-1], truth[1:])
+    rel_est = route.relative_poses()[1:]
+    err = between_arrays(rel_true, rel_est)
+    out = []
+    for k, (local, current) in enumerate(pairs):
+        h_err = abs(float(wrap_angle(err[k, 2])))
+        p_err = float(np.hypot(err[k, 0], err[k, 1]))
+        if len(local) == 0:
+            out.append(ZeroNoiseBound(h_err, _ZERO_NOISE_ATOL, p_err, _ZERO_NOISE_ATOL, 0.0, 0.0))
+            continue
+        diff = np.asarray(
+            wrap_angle(segment_angles(local.segments) - segment_angles(current.segments)
+                       - rel_true[k, 2])
+        )  # fmt: skip
+        flipped = np.abs(diff) > np.pi / 2
+        eps = np.abs(np.where(flipped, wrap_angle(diff + np.pi), diff))
+        fit = fit_direction_bounds(local, split_distance_m) + fit_direction_bounds(
+            current, split_distance_m
+        )
+        hull, fit_max = float(eps.max()), float(fit.max())
+        h_bound = min(hull, fit_max) + _ZERO_NOISE_ATOL
+        g_l = end_position_bounds(local, resolution_rad, split_distance_m)
+        g_c = end_position_bounds(current, resolution_rad, split_distance_m)
+        ends_c = current.segments.reshape(-1, 2, 2)
+        rng_c = np.hypot(ends_c[..., 0], ends_c[..., 1])
+        # a flipped match pairs end 0 of one observation with end 1 of the other
+        g_c = np.where(flipped[:, None], g_c[:, ::-1], g_c)
+        rng_c = np.where(flipped[:, None], rng_c[:, ::-1], rng_c)
+        p_bound = float((g_l + g_c + h_err * (rng_c + g_c)).max()) + _ZERO_NOISE_ATOL
+        out.append(ZeroNoiseBound(h_err, h_bound, p_err, p_bound, hull, fit_max))
+    return out
+
+
 def check_zero_noise_localisation(
     route: RouteMap,
     frame_indices: NDArray[np.int64],
     true_poses: FloatArray,
     params: InvariantParams | None = None,
+    *,
+    localisations: LocalisationRecorder | None = None,
+    split_distance_m: float | None = None,
 ) -> None:
-    """With no noise, every local map is placed in its predecessor within the bounds."""
+    """With no noise, every local map is placed in its predecessor within its bound.
+
+    Given the ``localisations`` (a ``LocalisationRecorder`` with the laser's resolution)
+    each link has its own bound (``zero_noise_link_bounds``, with the extraction's
+    ``split_distance_m``, default ``ExtractionParams``'s); without them, the fixed
+    ``zero_noise_position_m`` / ``zero_noise_heading_deg`` of ``params``."""
     p = params or InvariantParams()
+    if localisations is not None and localisations.resolution_rad is not None:
+        if split_distance_m is None:
+            from albot2d.perception import ExtractionParams
+
+            split_distance_m = ExtractionParams().split_distance_m
+        bounds = zero_noise_link_bounds(
+            route, frame_indices, true_poses, localisations.pairs,
+            localisations.resolution_rad, split_distance_m,
+        )  # fmt: skip
+        ratio = np.array(
+            [max(b.heading_err_rad / b.heading_bound_rad, b.position_err_m / b.position_bound_m)
+             for b in bounds]
+        )  # fmt: skip
+        if len(ratio) and ratio.max() > 1.0:
+            k = int(np.argmax(ratio))
+            b, lm = bounds[k], route[k + 1]
+            fail(
+                "zero_noise_localisation",
+                f"{int((ratio > 1.0).sum())} of {len(ratio)} local maps beyond their bound; "
+                f"worst map {lm.map_id} (frame {lm.frame_index}, {lm.method}, {lm.tracked} "
+                f"tracked): {b.position_err_m:.3f} m (bound {b.position_bound_m:.3f}), "
+                f"{math.degrees(b.heading_err_rad):.3f}° (bound "
+                f"{math.degrees(b.heading_bound_rad):.3f}°: its surfaces' headings within "
+                f"{math.degrees(b.hull_rad):.3f}°, their fits' bound "
+                f"{math.degrees(b.fit_rad):.3f}°)",
+            )
+        return
     pos, head = local_map_errors(route, frame_indices, true_poses)
     bad = (pos > p.zero_noise_position_m) | (head > math.radians(p.zero_noise_heading_deg))
     if bad.any():

@@ -21,6 +21,7 @@ other; ``albot2d.evaluation.fuzz.reproducer`` re-runs one with its checks.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -140,6 +141,7 @@ class EpisodeSpec:
             seed=self.run_seed, kind=self.kind, world_params=dict(self.world_params),
             profile=self.profile, noise=self.noise, laser_noise=self.laser_noise,
             tour_kind=self.tour_kind, tour_length_m=self.tour_length_m, mappers=(self.mapper,),
+            tour_length_is_minimum=True,
         )  # fmt: skip
 
     def describe(self) -> dict[str, Any]:
@@ -179,6 +181,7 @@ class _Checks:
         self.clearance: sim_inv.ClearanceChecker | None = None
         self.updates: inv.UpdateRecorder | None = None
         self.views: inv.ViewRecorder | None = None
+        self.localisations: inv.LocalisationRecorder | None = None
         self.world: Any = None
         self.checked: list[str] = []
         self.violations: dict[str, list[str]] = {}
@@ -194,6 +197,9 @@ class _Checks:
             )
 
     def on_frame(self, frame: Any, travelled_m: float) -> None:
+        if self.localisations is not None and self.localisations.resolution_rad is None:
+            angles = np.asarray(frame.scan.angles)
+            self.localisations.resolution_rad = float(np.abs(np.diff(angles)).max())
         if self.clearance is not None:  # walls, clutter and moving obstacles at every frame
             self.clearance(frame)
         if self.frames is not None:
@@ -215,6 +221,7 @@ class _Checks:
             if isinstance(mapper, Albot1):
                 self.updates = inv.UpdateRecorder(raise_at_once=False).attach(mapper)
                 self.views = inv.ViewRecorder().attach(mapper)
+                self.localisations = inv.LocalisationRecorder().attach(mapper)
 
     def add(self, name: str, messages: list[str]) -> None:
         if messages:
@@ -257,9 +264,19 @@ class _Checks:
             )
             noise = noise_preset(self.spec.noise)
             if noise.is_zero and self.laser.is_zero:
+                # Albot1's links get their own bounds from the surfaces they were
+                # localised from; other view-based mappers the fixed ones.
+                recorder, split = None, None
+                if isinstance(mapper, Albot1):
+                    recorder = self.localisations
+                    split = mapper.params.extraction.split_distance_m
                 self.run(
                     "zero_noise_localisation",
-                    inv.check_zero_noise_localisation,
+                    functools.partial(
+                        inv.check_zero_noise_localisation,
+                        localisations=recorder,
+                        split_distance_m=split,
+                    ),
                     route,
                     trace.frame_indices,
                     truth,

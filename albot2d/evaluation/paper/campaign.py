@@ -15,10 +15,24 @@ from dataclasses import dataclass
 from typing import Any
 
 from albot2d.errors import InputError
-from albot2d.evaluation.paper.registry import EXPERIMENTS, runs_needed
-from albot2d.evaluation.paper.runs import ALBOT_X, PAPER_NOISE, RUNS, albot_x_available, run_job
+from albot2d.evaluation.paper.registry import EXPERIMENTS, PAPER_FIGURES, runs_needed
+from albot2d.evaluation.paper.runs import (
+    ALBOT_X,
+    PAPER_NOISE,
+    RUNS,
+    albot_x_available,
+    reading_spec,
+    run_job_readings,
+)
 
-__all__ = ["ExperimentsOutcome", "compute_experiments", "plan_jobs", "run_experiments"]
+__all__ = [
+    "ExperimentsOutcome",
+    "check_readings",
+    "compute_experiments",
+    "compute_readings",
+    "plan_jobs",
+    "run_experiments",
+]
 
 FORMAT_VERSION = 1
 
@@ -44,10 +58,32 @@ def plan_jobs(names: Sequence[str], seeds: Sequence[int]) -> list[tuple[str, int
 
 
 def _job(
-    jobs: tuple[tuple[str, int], ...], quick: bool, albot_x: bool, figure_seed: int, index: int
-) -> dict[str, Any]:
+    jobs: tuple[tuple[str, int], ...],
+    quick: bool,
+    albot_x: bool,
+    figure_seed: int,
+    readings: tuple[str, ...],
+    index: int,
+) -> dict[str, dict[str, Any]]:
     run, seed = jobs[index]
-    return run_job(run, seed, quick=quick, albot_x=albot_x, keep_figures=seed == figure_seed)
+    return run_job_readings(
+        run, seed, quick=quick, albot_x=albot_x, keep_figures=seed == figure_seed,
+        readings=readings,
+    )  # fmt: skip
+
+
+def check_readings(readings: Sequence[str]) -> tuple[str, ...]:
+    """The readings, each checked (``runs.reading_spec``), duplicates refused."""
+    out = tuple(readings)
+    if not out:
+        raise InputError("--readings: give at least one reading")
+    from albot2d.mapping.registry import mapper_factory
+
+    params = [getattr(mapper_factory(reading_spec(r))(), "params", None) for r in out]
+    for k, p in enumerate(params):
+        if p in params[:k]:
+            raise InputError(f"--readings: {out[k]!r} runs the same mapper as an earlier one")
+    return out
 
 
 def run_experiments(
@@ -57,20 +93,25 @@ def run_experiments(
     quick: bool = False,
     backend: Any = None,
     on_job: Callable[[str, int], None] | None = None,
+    readings: Sequence[str] = ("default",),
 ) -> ExperimentsOutcome:
-    """Compute the experiments ``names`` over ``seeds``; ``backend`` defaults to this
-    process; ``on_job(run, seed)`` is called as each job finishes (progress)."""
+    """Compute the experiments ``names`` over ``seeds`` under each of ``readings`` (the
+    first is the primary one, whose results are also each experiment's top-level
+    ``ours``/``verdict``); every reading's Albot₁ drives the same frames of one run per
+    (run, seed). ``backend`` defaults to this process; ``on_job(run, seed)`` is called as
+    each job finishes (progress)."""
     from albot2d.evaluation.fuzz.backends import LocalBackend
 
     t0 = time.perf_counter()
     names = list(names)
     seeds = [int(s) for s in seeds]
     jobs = tuple(plan_jobs(names, seeds))
+    readings = check_readings(readings)
     albot_x = albot_x_available()
     backend = backend or LocalBackend(1)
-    results: dict[tuple[str, int], dict[str, Any]] = {}
+    results: dict[tuple[str, int], dict[str, dict[str, Any]]] = {}
     for index, result in backend.map_unordered(
-        _job, range(len(jobs)), jobs, quick, albot_x, seeds[0]
+        _job, range(len(jobs)), jobs, quick, albot_x, seeds[0], readings
     ):
         if isinstance(result, BaseException):
             run, seed = jobs[index]
@@ -78,8 +119,61 @@ def run_experiments(
         results[jobs[index]] = result
         if on_job is not None:
             on_job(*jobs[index])
-    by_run = {run: [results[(run, s)] for s in seeds] for run in dict.fromkeys(r for r, _ in jobs)}
-    return compute_experiments(names, seeds, by_run, quick=quick, albot_x=albot_x, started=t0)
+    runs = list(dict.fromkeys(r for r, _ in jobs))
+    by_reading = {
+        reading: {run: [results[(run, s)][reading] for s in seeds] for run in runs}
+        for reading in readings
+    }
+    return compute_readings(names, seeds, by_reading, quick=quick, albot_x=albot_x, started=t0)
+
+
+def compute_readings(
+    names: Sequence[str],
+    seeds: Sequence[int],
+    by_reading: dict[str, dict[str, list[dict[str, Any]]]],
+    *,
+    quick: bool,
+    albot_x: bool,
+    started: float | None = None,
+) -> ExperimentsOutcome:
+    """Every experiment under every reading (``by_reading``: reading → run → summaries in
+    seed order; the first reading is the primary one). Each experiment's result is the
+    primary reading's, with ``readings`` holding every reading's ``ours``, ``verdict`` and
+    notes side by side; a non-primary reading's figures are prefixed with its name."""
+    t0 = time.perf_counter() if started is None else started
+    readings = list(by_reading)
+    outcomes = {
+        reading: compute_experiments(names, seeds, by_run, quick=quick, albot_x=albot_x,
+                                     started=t0, figure_prefix="" if k == 0 else f"{reading}-")
+        for k, (reading, by_run) in enumerate(by_reading.items())
+    }  # fmt: skip
+    primary = outcomes[readings[0]]
+    data = primary.data
+    figures: dict[str, list[dict[str, Any]]] = {}
+    for name in names:
+        result = data["experiments"][name]
+        result["reading"] = readings[0]
+        result["readings"] = {
+            reading: {
+                "mapper": reading_spec(reading),
+                "ours": out.data["experiments"][name]["ours"],
+                "verdict": out.data["experiments"][name]["verdict"],
+                "notes": out.data["experiments"][name].get("notes", []),
+                "figures": out.data["experiments"][name]["figures"],
+            }
+            for reading, out in outcomes.items()
+        }
+        figures[name] = [
+            f | ({"caption": f"{reading}: {f['caption']}"} if len(readings) > 1 else {})
+            for reading, out in outcomes.items()
+            for f in out.figures[name]
+        ]
+    data["readings"] = {reading: reading_spec(reading) for reading in readings}
+    data["verdicts_by_reading"] = {
+        name: {r: out.data["verdicts"][name] for r, out in outcomes.items()} for name in names
+    }
+    data["wall_time_s"] = time.perf_counter() - t0
+    return ExperimentsOutcome(data, figures, primary.runs)
 
 
 def compute_experiments(
@@ -90,9 +184,10 @@ def compute_experiments(
     quick: bool,
     albot_x: bool,
     started: float | None = None,
+    figure_prefix: str = "",
 ) -> ExperimentsOutcome:
     """Every experiment of ``names`` from the job summaries ``by_run`` (run → one summary
-    per seed, in seed order)."""
+    per seed, in seed order); figure files are named with ``figure_prefix`` first."""
     names, seeds = list(names), list(seeds)
     t0 = time.perf_counter() if started is None else started
     figure_runs = {run: rows[0]["figures"] for run, rows in by_run.items()}
@@ -101,8 +196,11 @@ def compute_experiments(
     for name in names:
         exp = EXPERIMENTS[name]
         result = exp.compute(by_run, seeds)
-        figures[name] = exp.figures(figure_runs, result)
+        figures[name] = [
+            f | {"file": figure_prefix + f["file"]} for f in exp.figures(figure_runs, result)
+        ]
         result["figures"] = [f["file"] for f in figures[name]]
+        result["paper_figure"] = PAPER_FIGURES.get(name)
         result["figure_seed"] = seeds[0]
         experiments[name] = result
     runs_info = {

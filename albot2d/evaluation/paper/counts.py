@@ -103,7 +103,8 @@ def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str
             == b["marks"].get(_PI_MARK, {}).get("true_path_sha256")
             for a, b in zip(jobs["fig6_dataset1"], jobs["fig6_dataset2"], strict=True)]  # fmt: skip
     ours["same_true_path_datasets_1_and_2_share"] = sum(same) / len(same) if same else None
-    reason = _pi_reason(causes, ours)
+    spec = next((j.get("reading_mapper") for j in jobs["fig6_dataset1"]), None) or "albot1"
+    reason = _pi_reason(causes, ours, spec)
     return {
         "claim": CLAIM, "paper": paper, "ours": ours, "verdict": verdict_of(checks),
         "notes": [reason] if reason else [],
@@ -145,7 +146,33 @@ def _pi_causes(rows: list[dict[str, Any]], mark: str, seeds: list[int]) -> dict[
     return {k: over_seeds(v, seeds) for k, v in per.items()}
 
 
-def _pi_reason(causes: dict[str, Any], ours: dict[str, Any]) -> str | None:
+def _gate_text(spec: str) -> tuple[str, str]:
+    """How the reading ``spec`` treats affordances far from path integration, and what
+    follows a view with no tracked surface (built from its parameters)."""
+    import math
+
+    from albot2d.mapping.registry import mapper_factory
+
+    params = mapper_factory(spec)().params  # type: ignore[attr-defined]
+    t, tri = params.tracking, params.triangulation
+    gate_m = t.match_distance_m if tri.max_pi_deviation_m is None else tri.max_pi_deviation_m
+    gate_deg = t.match_angle_deg if tri.max_pi_deviation_deg is None else tri.max_pi_deviation_deg
+    if math.isinf(gate_m) and math.isinf(gate_deg):
+        gate = "no gate against path integration"
+    else:
+        gate = (f"affordances farther than {gate_m:g} m / {gate_deg:g}° per step from the "
+                "path-integration pose are dropped")  # fmt: skip
+    gate += f"; positions from position_endpoint={tri.position_endpoint}"
+    if params.move_using_pi == "as_written":
+        after = ("algorithm #4 as written: after a view with no tracked surface, every view is "
+                 "remembered by path integration until one has more than three trackable "
+                 "surfaces")  # fmt: skip
+    else:
+        after = "after a view with no tracked surface, tracking resumes from it"
+    return gate, after
+
+
+def _pi_reason(causes: dict[str, Any], ours: dict[str, Any], spec: str = "albot1") -> str | None:
     """One sentence with the numbers, built from them (not written by hand)."""
     c1, c2 = causes["dataset1"], causes["dataset2"]
     m = {d: {k: v["mean"] for k, v in c.items()} for d, c in causes.items()}
@@ -158,6 +185,7 @@ def _pi_reason(causes: dict[str, Any], ours: dict[str, Any]) -> str | None:
     from albot2d.sim.driving import get_profile
 
     gate = Albot1Params().tracking
+    gate_text, after_text = _gate_text(spec)
     d2 = get_profile("dataset2")
 
     def pct(a: float | None, b: float | None) -> str:
@@ -174,9 +202,8 @@ def _pi_reason(causes: dict[str, Any], ours: dict[str, Any]) -> str | None:
         f"{t2['updates']:.0f} updates). With dataset 1, "
         f"{pct(t1['total'], t1['no_tracked_surface'])} had no tracked surface left (the "
         f"paper's case) and {pct(t1['total'], t1['tracked_but_no_pose'])} had some but the "
-        f"triangulation afforded no pose within its gates (affordances farther than "
-        f"{gate.match_distance_m:g} m / {gate.match_angle_deg:g}° per step from the "
-        f"path-integration pose are dropped); {pct(t1['total'], t1['after_a_turn'])} came "
+        f"triangulation afforded no pose ({spec}: {gate_text}; {after_text}); "
+        f"{pct(t1['total'], t1['after_a_turn'])} came "
         f"at the end of a turn step and {pct(t1['total'], t1['in_corridor'])} in corridors. "
         f"Counting only those with no tracked surface left gives "
         f"{t1['no_tracked_surface']:.1f} / {t2['no_tracked_surface']:.1f} (the paper: 5 / 7),"
@@ -212,7 +239,8 @@ def figures(fig: dict[str, Any], result: dict[str, Any]) -> list[dict[str, Any]]
         {
             "file": "counts.png",
             "plot": "bars",
-            "caption": "Local maps remembered per view, per dataset (ours: mean ± sd over seeds; "
+            "caption": "Local maps remembered per view, per dataset (ours: bar the mean "
+            "over the seeds, whisker ± sd; "
             "paper: hatched).",
             "data": {"bars": bars, "ylabel": "local maps per view"},
         }

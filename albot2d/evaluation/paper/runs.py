@@ -26,11 +26,15 @@ from albot2d.errors import InputError
 
 __all__ = [
     "ALBOT_X",
+    "DEFAULT_READINGS",
     "PAPER_NOISE",
+    "READINGS",
     "RUNS",
     "PaperRun",
     "albot_x_available",
+    "reading_spec",
     "run_job",
+    "run_job_readings",
 ]
 
 ALBOT_X = "slam"
@@ -89,6 +93,10 @@ RUNS: dict[str, PaperRun] = {
                  stop_every_m=4.0),
         PaperRun("fig15_room", "fig6", "start_stop", route="fig15", steps=True,
                  views=True),
+        # Fig. 16's route (S → E7) with dataset 1 and Albot₁ alone: path-integration counts
+        # of several readings (``paper.readings_counts``); no experiment reads it
+        PaperRun("fig16_dataset1", "fig6", "dataset1", route="fig16", marks=("E7",)),
+        PaperRun("fig16_dataset2", "fig6", "dataset2", route="fig16", marks=("E7",)),
         PaperRun("fig11_open", "open", "dataset3", tour_kind="loop", tour_length_m=130.0,
                  mappers=("x",), marks=("half", "end"),
                  quality={"half": ("albot1",), "end": ("albot1", "x")}, egocentric_end=True),
@@ -152,38 +160,78 @@ def _snapshot(
     }
 
 
-def run_mappers(run: PaperRun, albot_x: bool) -> tuple[str, ...]:
-    """The mappers a run drives: Albot₁ first, then ``run.mappers`` with Albot_x named."""
+#: named readings of the paper → the Albot₁ mapper spec each one runs (any other
+#: ``albot1[...]`` spec is a reading too, named by itself)
+READINGS: dict[str, str] = {
+    "default": "albot1",
+    "paper_literal": "albot1[preset=paper_literal]",
+    "original": "albot1[preset=original]",
+    "start_stop": "albot1[preset=start_stop]",
+}
+DEFAULT_READINGS = ("default", "paper_literal")
+
+
+def reading_spec(reading: str) -> str:
+    """The mapper spec of a reading: a name of ``READINGS`` or an ``albot1[...]`` spec."""
+    if reading in READINGS:
+        return READINGS[reading]
+    if reading.startswith("albot1[") and reading.endswith("]"):
+        from albot2d.mapping.registry import mapper_factory
+
+        mapper_factory(reading)  # checks its options now
+        return reading
+    raise InputError(
+        f"unknown reading {reading!r}; valid: {', '.join(READINGS)} or an albot1[KEY=VALUE,...] "
+        "spec"
+    )
+
+
+def run_mappers(
+    run: PaperRun, albot_x: bool, albot1_specs: tuple[str, ...] = ("albot1",)
+) -> tuple[str, ...]:
+    """The mappers a run drives: Albot₁ (one per reading) first, then ``run.mappers`` with
+    Albot_x named."""
     x = ALBOT_X if albot_x else "naive"
-    names = ["albot1"] + [x if m == "x" else m for m in run.mappers]
+    names = [*albot1_specs] + [x if m == "x" else m for m in run.mappers]
     return tuple(dict.fromkeys(names))
 
 
 def run_job(
     run_name: str, seed: int, *, quick: bool, albot_x: bool, keep_figures: bool
 ) -> dict[str, Any]:
-    """Run ``RUNS[run_name]`` on ``seed``; the summary the experiments read.
+    """Run ``RUNS[run_name]`` on ``seed`` with the default Albot₁; the summary the
+    experiments read (``run_job_readings`` for several readings in one run)."""
+    return run_job_readings(
+        run_name, seed, quick=quick, albot_x=albot_x, keep_figures=keep_figures,
+        readings=("default",),
+    )["default"]  # fmt: skip
+
+
+def run_job_readings(
+    run_name: str,
+    seed: int,
+    *,
+    quick: bool,
+    albot_x: bool,
+    keep_figures: bool,
+    readings: tuple[str, ...] = ("default",),
+) -> dict[str, dict[str, Any]]:
+    """Run ``RUNS[run_name]`` on ``seed`` with one Albot₁ per reading beside the run's
+    other mappers, all on the same frames; per reading, the summary the experiments read,
+    in which that reading's Albot₁ is ``"albot1"``.
 
     The run goes through ``run_experiment`` without its scoring (``score=False``): the
     experiments read only counts, homing, the end-pose error, revisits and a few map
     accuracies, which are computed here and nothing else.
     """
     from albot2d.evaluation.run.experiment import RunSpec, run_experiment
-    from albot2d.evaluation.run.scoring import (
-        REVISIT_GAP_MAPS,
-        EvaluationParams,
-        counts_section,
-        egocentric_at,
-        end_pose_error,
-        homing_section,
-        homing_summary,
-        revisits_section,
-        trajectory_of,
-    )
+    from albot2d.evaluation.run.scoring import EvaluationParams
     from albot2d.evaluation.run.trace import HomingParams
 
     run = RUNS[run_name]
-    mappers = run_mappers(run, albot_x)
+    specs = {reading: reading_spec(reading) for reading in readings}
+    albot1_specs = tuple(dict.fromkeys(specs.values()))
+    mappers = run_mappers(run, albot_x, albot1_specs)
     spec = RunSpec(
         seed=seed, kind=run.kind, world_params=dict(run.world_params), profile=run.profile,
         noise=PAPER_NOISE, tour_kind=run.tour_kind, tour_length_m=run.tour_length_m,
@@ -197,7 +245,7 @@ def run_job(
         "targets": {},
         "travelled": 0.0,
         "last": None,
-        "views": [],
+        "views": {name: [] for name in albot1_specs},
     }
     keep_views = keep_figures and run.views
 
@@ -213,7 +261,8 @@ def run_job(
             state["travelled"] += math.hypot(*(pose[:2] - state["last"][:2]))
         state["last"] = pose
         if keep_views:
-            state["views"].append(_view_record(state["mappers"]["albot1"], frame))
+            for name in albot1_specs:
+                state["views"][name].append(_view_record(state["mappers"][name], frame))
         for mark, target in state["targets"].items():
             if mark not in state["snaps"] and state["travelled"] >= target - 0.05:
                 state["snaps"][mark] = _snapshot(
@@ -228,25 +277,93 @@ def run_job(
     assert truth is not None and world is not None  # the paper's runs are all simulated
     end = _snapshot(state["mappers"], truth[-1], state["travelled"], int(trace.frame_indices[-1]))
     last_waypoint = _last_waypoint(world, run)
+    cut = spec.max_frames is not None and trace.n_frames >= spec.max_frames
     for mark in run.marks:
         # The end; a --quick run cut short: the marks it never reached are taken at its
-        # end; a route ending at the mark's waypoint may stop a few cm short of it.
+        # end (marked not reached, so figures say where it stopped); a route ending at
+        # the mark's waypoint may stop a few cm short of it.
         if mark not in state["snaps"] and (
             mark == "end" or (quick and spec.max_frames) or mark == last_waypoint
         ):
-            state["snaps"][mark] = end
-    report = result.report
-    made = state["mappers"]
-    albot1 = made["albot1"]
+            reached = not cut and (mark == "end" or mark == last_waypoint)
+            state["snaps"][mark] = end | {"reached": reached}
+    others = tuple(m for m in mappers if m not in albot1_specs)
+    shared = _mapper_results(trace, state["mappers"], others)
+    x = ALBOT_X if albot_x else "naive"
+    shared_quality = _quality_at_marks(
+        state["snaps"],
+        {mark: tuple(x if m == "x" else m for m in names if m != "albot1")
+         for mark, names in run.quality.items()},
+        world, truth[0],
+    )  # fmt: skip
+    out: dict[str, dict[str, Any]] = {}
+    for reading, name in specs.items():
+        out[reading] = _reading_summary(
+            run, seed, spec, result, state, name, others, shared, shared_quality,
+            albot_x=albot_x,
+            quick=quick, keep_figures=keep_figures, keep_views=keep_views,
+        )  # fmt: skip
+        out[reading]["reading"] = reading
+        out[reading]["reading_mapper"] = name
+    return out
+
+
+def _mapper_results(
+    trace: Any, made: Mapping[str, Any], names: tuple[str, ...]
+) -> dict[str, dict[str, Any]]:
+    """Counts and end-pose error of each mapper in ``names``."""
+    from albot2d.evaluation.run.scoring import counts_section, end_pose_error, trajectory_of
+
     results: dict[str, dict[str, Any]] = {}
-    for name in mappers:
+    for name in names:
         poses = trajectory_of(name, made[name], trace.n_frames)
         end_error = end_pose_error(trace, poses)
         results[name] = {
             "counts": counts_section(trace, made[name]).to_dict(),
             "end_pose_error": None if end_error is None else end_error.to_dict(),
         }
-    homing = homing_section(trace, "albot1")
+    return results
+
+
+def _as_albot1(snap: dict[str, Any], name: str, others: tuple[str, ...]) -> dict[str, Any]:
+    """A snapshot in which the reading's mapper ``name`` is ``"albot1"`` (other readings
+    left out)."""
+    maps = {"albot1": snap["maps"][name]} | {o: snap["maps"][o] for o in others}
+    return snap | {"maps": maps}
+
+
+def _reading_summary(
+    run: PaperRun,
+    seed: int,
+    spec: Any,
+    result: Any,
+    state: dict[str, Any],
+    name: str,
+    others: tuple[str, ...],
+    shared: dict[str, dict[str, Any]],
+    shared_quality: dict[str, dict[str, Any]],
+    *,
+    albot_x: bool,
+    quick: bool,
+    keep_figures: bool,
+    keep_views: bool,
+) -> dict[str, Any]:
+    """The job summary with the Albot₁ mapper ``name`` as ``"albot1"``."""
+    from albot2d.evaluation.run.scoring import (
+        REVISIT_GAP_MAPS,
+        egocentric_at,
+        homing_section,
+        homing_summary,
+        revisits_section,
+    )
+
+    trace = result.trace
+    truth, world = trace.true_poses, result.world
+    snaps = {mark: _as_albot1(s, name, others) for mark, s in state["snaps"].items()}
+    report = result.report
+    albot1 = state["mappers"][name]
+    results = {"albot1": _mapper_results(trace, state["mappers"], (name,))[name]} | shared
+    homing = homing_section(trace, name)
     revisits = revisits_section(albot1, REVISIT_GAP_MAPS)
     results["albot1"] |= {
         "homing": [stop.to_dict() for stop in homing],
@@ -254,10 +371,11 @@ def run_job(
         "revisits": None if revisits is None else revisits.to_dict(),
     }
     if run.egocentric_end:
-        ego = egocentric_at(trace, trace.final, "albot1", world.obstacle_segments)
+        ego = egocentric_at(trace, trace.final, name, world.obstacle_segments)
         results["albot1"]["map"] = {"egocentric": None if ego is None else ego.to_dict()}
+    mappers = ("albot1", *others)
     summary: dict[str, Any] = {
-        "run": run_name, "seed": seed, "quick": quick, "mappers": list(mappers),
+        "run": run.name, "seed": seed, "quick": quick, "mappers": list(mappers),
         "frames": report["run"]["frames"], "travelled_m": report["run"]["travelled_m"],
         "true_travelled_m": report["run"]["true_travelled_m"],
         "tour_length_m": result.tour.length_m if result.tour is not None else None,
@@ -268,7 +386,7 @@ def run_job(
                          "counts": {n: {k: m[k] for k in ("views", "local_maps",
                                                           "path_integrations")}
                                     for n, m in s["maps"].items()}}
-                  for mark, s in state["snaps"].items()},
+                  for mark, s in snaps.items()},
     }  # fmt: skip
     if run.steps:
         from albot2d.evaluation.metrics.updates import albot1_update_flags, region_labels
@@ -287,25 +405,32 @@ def run_job(
 
             summary["updates"]["waypoint_along_m"] = waypoint_arclength_m(world, run.route)
     summary["path_integration_causes"] = path_integration_causes(albot1, trace, world)
-    if "E1#2" in state["snaps"] and "E7" in state["snaps"]:
+    if "E1#2" in snaps and "E7" in snaps:
         from albot2d.evaluation.paper.figdata import deleted_surfaces
 
-        summary["fig10_deleted"] = len(
-            deleted_surfaces(state["snaps"]["E1#2"], state["snaps"]["E7"])
-        )
+        summary["fig10_deleted"] = len(deleted_surfaces(snaps["E1#2"], snaps["E7"]))
     x = ALBOT_X if albot_x else "naive"
     wanted = {mark: tuple(x if m == "x" else m for m in names)
               for mark, names in run.quality.items()}  # fmt: skip
-    summary["map_quality_at_marks"] = _quality_at_marks(state["snaps"], wanted, world, truth[0])
+    mine = _quality_at_marks(
+        snaps, {mark: ("albot1",) for mark, names in wanted.items() if "albot1" in names},
+        world, truth[0],
+    )  # fmt: skip
+    quality = {}
+    for mark, names in wanted.items():
+        if mark in snaps:
+            both = mine.get(mark, {}) | shared_quality.get(mark, {})
+            quality[mark] = {n: both[n] for n in names if n in both}
+    summary["map_quality_at_marks"] = quality
     if keep_figures:
         summary["figures"] = {
             "world_walls": np.asarray(world.walls),
             "true_poses": truth,
             "odom_poses": trace.odom_poses,
-            "snaps": state["snaps"],
+            "snaps": snaps,
             "waypoints": dict(world.features.get("waypoints", {})),
             "updates": summary.get("updates"),
-            "views": state["views"] if keep_views else None,
+            "views": state["views"][name] if keep_views else None,
         }
     return summary
 

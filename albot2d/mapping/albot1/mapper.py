@@ -26,7 +26,7 @@ import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,11 +49,20 @@ from albot2d.perception import (
     extract_surfaces,
     rtsv,
     start_tracking,
+    trackable_mask,
 )
 from albot2d.perception.surfaces import Surfaces, transform_segments_fast
 from albot2d.validation import check_positive, check_positive_int
 
-__all__ = ["Albot1", "Albot1Params", "Localisation", "StepRecord", "UpdateSummary"]
+__all__ = [
+    "PAPER_LITERAL",
+    "PRESETS",
+    "Albot1",
+    "Albot1Params",
+    "Localisation",
+    "StepRecord",
+    "UpdateSummary",
+]
 
 
 class StepRecord(NamedTuple):
@@ -117,8 +126,18 @@ class Albot1Params:
       many tracked surfaces agree on it, its heading from their directions (a direction
       needs no corner: ``triangulation.heading_from_directions``); 0: path integration's
       heading too (the paper's "move using PI").
+    - ``move_using_pi``: what follows a view remembered by path integration because no
+      tracked surface was left. ``"restated"`` (default; ``albot1-reading.md``): that view
+      becomes the local map and the main loop goes on (the next view is tracked against
+      it, triangulated from 1–3 tracked surfaces, or path-integrated again with none).
+      ``"as_written"``: algorithm #4 as the paper writes it: every following view is
+      remembered by path integration too, without tracking, until one has more than three
+      (``min_tracked - 1``) trackable surfaces; that view is remembered (by path
+      integration, line 8) and tracking resumes from it.
 
-    ``Albot1Params.preset("paper")`` (the defaults) and ``preset("original")`` (the
+    ``Albot1Params.preset("default")`` (the defaults; ``"paper"`` is the same, its older
+    name), ``preset("paper_literal")`` (the paper's text wherever it speaks, see
+    ``PAPER_LITERAL``) and ``preset("original")`` (the
     authors' C++ code where it differs from the paper: key-endpoint matching with a fitness
     floor, no 3° viewing-angle test, update at < 3, heuristic 2 by fitness with the chosen
     surface's own heading and its position from the tracked surface's key end, every
@@ -138,9 +157,15 @@ class Albot1Params:
     heading_fallback_surfaces: int = 0
     odometry_fallback_m: float = 0.40
     odometry_fallback_deg: float = 5.0
+    move_using_pi: Literal["restated", "as_written"] = "restated"
 
     def __post_init__(self) -> None:
         check_positive_int(self, "min_tracked")
+        if self.move_using_pi not in ("restated", "as_written"):
+            raise InputError(
+                "Albot1Params.move_using_pi must be restated or as_written, "
+                f"got {self.move_using_pi!r}"
+            )
         check_positive(self, "odometry_fallback_m", "odometry_fallback_deg")
         if not isinstance(self.localise_every_view, bool):
             raise InputError(
@@ -155,10 +180,19 @@ class Albot1Params:
 
     @classmethod
     def preset(cls, name: str, **overrides: Any) -> Albot1Params:
-        """``"paper"``, ``"original"`` or ``"start_stop"`` (see the class doc), with field
-        overrides."""
-        if name == "paper":
+        """One of ``PRESETS`` (see the class doc), with field overrides."""
+        if name in ("default", "paper"):
             base = cls()
+        elif name == "paper_literal":
+            base = cls(
+                extraction=ExtractionParams(max_endpoint_gap_m=math.inf),
+                triangulation=TriangulationParams(
+                    max_pi_deviation_m=math.inf,
+                    max_pi_deviation_deg=math.inf,
+                    position_endpoint="current_real",
+                ),
+                move_using_pi="as_written",
+            )
         elif name == "original":
             base = cls(
                 tracking=TrackingParams(
@@ -177,8 +211,31 @@ class Albot1Params:
         elif name == "start_stop":
             base = cls(heading_fallback_surfaces=1)
         else:
-            raise InputError(f"unknown Albot1 preset {name!r}; valid: paper, original, start_stop")
+            raise InputError(f"unknown Albot1 preset {name!r}; valid: {', '.join(PRESETS)}")
         return dataclasses.replace(base, **overrides)
+
+
+#: ``Albot1Params.preset`` names (``"paper"`` is the old name of ``"default"``).
+PRESETS = ("default", "paper_literal", "original", "start_stop", "paper")
+
+#: What ``preset("paper_literal")`` changes from the defaults, and the paper's words for it.
+PAPER_LITERAL: dict[str, str] = {
+    "triangulation.max_pi_deviation_m=inf, triangulation.max_pi_deviation_deg=inf": (
+        "no gate against the path-integration estimate: heuristic 1 rules out affordances "
+        "only by their spread about the mean, heuristic 2 picks the one nearest path "
+        "integration (the paper's two heuristics, nothing else)"
+    ),
+    "triangulation.position_endpoint=current_real, extraction.max_endpoint_gap_m=inf": (
+        "a tracked surface affords the point of its occluding (unoccluded) endpoint in the "
+        "current view: RTSV's candidates are trackable (criterion 3: at least one endpoint "
+        "not occluded), so every tracked surface affords a point; the paper has no "
+        "'uncertain endpoint' flag"
+    ),
+    "move_using_pi=as_written": (
+        "algorithm #4 as written: once no tracked surface is left, every view is "
+        "remembered by path integration until one has more than three trackable surfaces"
+    ),
+}
 
 
 class _ViewState(NamedTuple):
@@ -214,16 +271,17 @@ class Albot1:
         on_localise: Callable[[Localisation], None] | None = None,
     ) -> None:
         self.params = params or Albot1Params()
+        self.on_localise = on_localise
         self.route = RouteMap()
         self.map = GlobalMap(self.params.global_map)
         self.timer = StageTimer()
         self.on_update = on_update
         self.on_view = on_view
-        self.on_localise = on_localise
         self.last_update: UpdateReport | None = None
         self._tracked: TrackedSurfaces | None = None
         self._prev: _ViewState | None = None
         self._use_vc = False  # the paper's Use-V(c) switch
+        self._pi_mode = False  # inside algorithm #4's loop (move_using_pi="as_written")
         self._next_surface_id = 0
         self._frame_maps: list[int] = []
         self._frame_offsets: list[NDArray[np.float64]] = []
@@ -314,6 +372,8 @@ class Albot1:
         tparams = self.params.tracking
         pi_pose = prev.pose_in_map @ increment
         steps = prev.steps_in_map + 1
+        if self._pi_mode:
+            return self._move_using_pi_step(frame_index, timestamp, view, pi_pose)
         # Line 4: S_t ← RTSV(V_c, S_t, α, δ).
         with self.timer.stage("tracking"):
             tracked, _ = rtsv(self._tracked, view, increment, tparams)
@@ -356,7 +416,26 @@ class Albot1:
         with self.timer.stage("localization"):
             pose_c, method = self.localise(tracked, pi_pose, steps)
         self._update_maps(frame_index, timestamp, view, pose_c, method, tracked=len(tracked))
+        if len(tracked) == 0 and self.params.move_using_pi == "as_written":
+            self._pi_mode = True  # line 9: shift to PI mode (algorithm #4)
         return tracked_after
+
+    def _move_using_pi_step(
+        self, frame_index: int, timestamp: float, view: Surfaces, pi_pose: Pose
+    ) -> int:
+        """Algorithm #4, lines 2–10, for one view: S_t ← the view's trackable surfaces
+        (line 5, no RTSV); the view is remembered by path integration (line 2 of the next
+        round, or line 8 when it has more than three trackable surfaces, which ends the
+        loop: "return ; to move using view navigation"). Returns |S_t|."""
+        if self.on_localise is not None:
+            empty = TrackedSurfaces.empty()
+            self.on_localise(Localisation(empty, pi_pose, 1, pi_pose, "path_integration"))
+        with self.timer.stage("tracking"):
+            trackable = int(np.count_nonzero(trackable_mask(view, self.params.tracking)))
+        self._update_maps(frame_index, timestamp, view, pi_pose, "path_integration", tracked=0)
+        if trackable >= self.params.min_tracked:
+            self._pi_mode = False
+        return trackable
 
     def _keep_tracking(
         self,
