@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from albot2d.errors import InputError
+from albot2d.limits import COORDINATE_LIMIT_M, MAX_JSON_DEPTH
 
 __all__ = [
     "COORDINATE_LIMIT_M",
@@ -82,10 +83,6 @@ def check_at_most(obj: object, name: str, maximum: float, why: str = "") -> None
         raise InputError(f"{_owner(obj)}.{name} must be <= {maximum:g}{reason}, got {value!r}")
 
 
-#: Largest magnitude of any coordinate or size in metres an input may hold (±1000 km).
-COORDINATE_LIMIT_M = 1e6
-
-
 def check_coordinates(values: ArrayLike, what: str, limit: float = COORDINATE_LIMIT_M) -> None:
     """Every number in ``values`` must be finite and within ±``limit``; names the first bad row."""
     arr = np.asarray(values, dtype=np.float64)
@@ -96,10 +93,6 @@ def check_coordinates(values: ArrayLike, what: str, limit: float = COORDINATE_LI
         shown = arr[row].tolist() if arr.ndim > 1 else arr[index].item()
         where = "".join(f"[{i}]" for i in row)
         raise InputError(f"{what}{where} is {shown!r}, outside the limit of ±{limit:g} m")
-
-
-#: Arrays and objects in a JSON input may nest at most this deep (albot2d's files need ~8).
-MAX_JSON_DEPTH = 64
 
 
 def parse_json(

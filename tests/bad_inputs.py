@@ -17,9 +17,11 @@ import shapely
 
 __all__ = [
     "N_BEAMS",
+    "box",
     "carmen_lines",
     "carmen_text",
     "crossing_edge",
+    "episode_record",
     "flaser_line",
     "nested",
     "person",
@@ -71,6 +73,32 @@ def person(doc: dict[str, Any], **changes: Any) -> dict[str, Any]:
     return ob | changes
 
 
+def box(doc: dict[str, Any], side_m: float = 0.4) -> dict[str, Any]:
+    """A valid box standing still in ``doc``: in free space, clear of the walls, the start
+    and the roadmap by more than the robot radius (as the generator places them)."""
+    free = shapely.Polygon(doc["free_space"]["exterior"], doc["free_space"]["holes"])
+    nodes = np.asarray(doc["roadmap"]["nodes"])
+    roadmap = shapely.MultiLineString([nodes[[i, j]].tolist() for i, j in doc["roadmap"]["edges"]])
+    start = shapely.Point(doc["start"][:2])
+    need = side_m + doc["robot_radius_m"] + 0.05
+    x0, y0, x1, y1 = free.bounds
+    for x in np.arange(x0 + need, x1, 0.1):
+        for y in np.arange(y0 + need, y1, 0.1):
+            spot = shapely.Point(x, y)
+            clear = min(free.exterior.distance(spot), roadmap.distance(spot))
+            if free.contains(spot) and clear > need and start.distance(spot) > need + 1.0:
+                half = side_m / 2
+                return {
+                    "kind": "box",
+                    "shape": [[-half, -half], [half, -half], [half, half], [-half, half]],
+                    "pose": [float(x), float(y), 0.3],
+                    "path": [],
+                    "speed_m_s": 0.0,
+                    "mass_kg": 10.0,
+                }
+    raise AssertionError("no free spot for a box")
+
+
 def crossing_edge(doc: dict[str, Any]) -> list[int]:
     """Two roadmap nodes of ``doc`` whose straight line crosses a wall."""
     walls = shapely.MultiLineString(np.asarray(doc["walls"]).reshape(-1, 2, 2).tolist())
@@ -115,3 +143,32 @@ def relations_text(rows: list[str] | None = None) -> str:
 def nested(depth: int) -> str:
     """JSON text of ``depth`` nested lists."""
     return "[" * depth + "]" * depth
+
+
+def episode_record(index: int, *, seed: int = 0, status: str = "ok") -> dict[str, Any]:
+    """A whole episodes.jsonl record of episode ``index`` of a campaign with ``seed``, as
+    albot2d writes it (the metrics shortened), with ``status`` and the fields it needs."""
+    record: dict[str, Any] = {
+        "episode": index,
+        "seed": {"entropy": seed, "spawn_key": [index]},
+        "run_seed": 1234 + index,
+        "world": {"kind": "rooms", "params": {"width_m": 14.0, "height_m": 14.0}},
+        "tour": {"kind": "loop", "min_length_m": 15.0, "length_m": 20.0},
+        "profile": "dataset3",
+        "noise": "typical",
+        "laser_noise": "sick_lms200",
+        "mapper": "albot1",
+        "status": status,
+        "checked": ["route_connected"],
+        "violations": {},
+        "error": None,
+        "metrics": {"frames": 10, "travelled_m": 20.0, "collided_frames": 0, "rpe_rot_deg": 0.5},
+        "digest": "0" * 64,
+        "timings": {"total_s": 1.0, "ms_per_view": 100.0},
+    }
+    if status == "violation":
+        record["violations"] = {"route_connected": ["the route map is not connected"]}
+    elif status == "crash":
+        record |= {"error": {"type": "RuntimeError", "message": "boom", "traceback": ""},
+                   "metrics": {}, "digest": None}  # fmt: skip
+    return record

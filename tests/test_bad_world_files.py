@@ -188,7 +188,7 @@ def _refuse_world(capsys: Any, path: Path, tmp_path: Path, *expected: str) -> No
 
 def test_the_valid_world_with_moving_obstacles_is_accepted() -> None:
     doc = bi.world_doc()
-    doc["dynamic_obstacles"] = [bi.person(doc), bi.person(doc, kind="box", speed_m_s=0.0)]
+    doc["dynamic_obstacles"] = [bi.person(doc), bi.box(doc)]
     world = world_from_json(bi.world_text(doc))
     assert len(world.dynamic_obstacles) == 2 and len(world.walls) > 0
 

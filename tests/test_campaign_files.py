@@ -20,23 +20,28 @@ from albot2d.evaluation.fuzz.campaign import (
     run_campaign,
 )
 from albot2d.evaluation.fuzz.lock import LOCK_NAME, CampaignLock
+from tests import bad_inputs as bi
 from tests.campaign_helpers import SMALL
+
+
+def record_line(index: int, seed: int = 0, status: str = "ok") -> bytes:
+    return json.dumps(bi.episode_record(index, seed=seed, status=status)).encode() + b"\n"
 
 
 def test_a_damaged_line_inside_the_file_is_an_error(tmp_path: Path) -> None:
     path = tmp_path / EPISODES_NAME
-    path.write_text('{"episode": 0, "status": "ok"}\nnot json\n{"episode": 2, "status": "ok"}\n')
+    path.write_bytes(record_line(0) + b"not json\n" + record_line(2))
     with pytest.raises(InputError, match=f"{EPISODES_NAME}:2: not an episode record"):
         read_episodes(path)
 
 
 def test_a_damaged_tail_is_left_out_to_be_redone(tmp_path: Path) -> None:
     path = tmp_path / EPISODES_NAME
-    whole = b'{"episode": 0, "status": "ok"}\n{"episode": 1, "status": "crash"}\n'
+    whole = record_line(0) + record_line(1, status="crash")
     for tail in (b'{"episode": 2, "sta', b"\x00" * 300, b"\x00" * 50 + b"\n" + b"\x00" * 9):
         path.write_bytes(whole + tail)
         assert read_episodes(path) == (
-            {0: {"episode": 0, "status": "ok"}, 1: {"episode": 1, "status": "crash"}},
+            {0: bi.episode_record(0), 1: bi.episode_record(1, status="crash")},
             len(whole),
         )
 
@@ -86,15 +91,6 @@ def test_resume_refuses_a_damaged_campaign_file(
     with pytest.raises(InputError, match=message):
         run_campaign(CampaignParams(episodes=1, **SMALL), tmp_path, resume=True)
     assert folder_state(tmp_path) == before
-
-
-def record_line(index: int, seed: int = 0) -> bytes:
-    return (
-        json.dumps(
-            {"episode": index, "status": "ok", "seed": {"entropy": seed, "spawn_key": [index]}}
-        ).encode()
-        + b"\n"
-    )
 
 
 @pytest.mark.parametrize(

@@ -1,17 +1,22 @@
 """Property-based fuzzing of the readers: mutated world files, CARMEN logs and relations
 files either read or raise ``InputError``, never anything else.
 
-Hypothesis mutates valid inputs (``tests/bad_inputs.py``) byte by byte and field by field,
-with the values that break readers (NaN, infinities, 1e308, huge integers, deep nesting,
-wrong types). A world that is accepted must also build its raycast grid and pymunk space;
-a log that is accepted must also go through the time-order rule. The ``ci`` profile tries
-25 inputs per test; ``HYPOTHESIS_PROFILE=fuzz python -m pytest tests/test_reader_fuzz.py``
-tries 5000.
+Also the gzip layer (bit flips, cut and spliced members, trailing garbage) and a
+campaign's files (``episodes.jsonl`` records and ``campaign.json``, read back on
+``--resume``). Hypothesis mutates valid inputs (``tests/bad_inputs.py``) byte by byte and
+field by field, with the values that break readers (NaN, infinities, 1e308, huge integers,
+deep nesting, wrong types). A world that is accepted must also build its raycast grid and
+pymunk space; a log that is accepted must also go through the time-order rule. The ``ci``
+profile tries 25 inputs per test;
+``HYPOTHESIS_PROFILE=fuzz python -m pytest tests/test_reader_fuzz.py`` tries 5000.
 """
 
 from __future__ import annotations
 
+import copy
+import gzip
 import json
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -193,3 +198,131 @@ def test_time_order_rule_restores_a_shuffled_log(frames, random, repeats) -> Non
         assert np.allclose(got.odom_increment.as_array(), want.odom_increment.as_array())
     invalid = np.concatenate([f.scan.ranges for f in shuffled])
     assert anomalies.non_finite_ranges == int((~np.isfinite(invalid)).sum())
+
+
+# ------------------------------------------------------------------ the gzip layer
+
+
+def _gzip_members(text: str, level: int, split: int) -> bytes:
+    """``text`` gzipped, cut into ``split`` members (readers must read every member)."""
+    data = text.encode()
+    step = max(1, len(data) // split)
+    return b"".join(
+        gzip.compress(data[k : k + step], compresslevel=level, mtime=0)
+        for k in range(0, len(data), step)
+    )
+
+
+@st.composite
+def _mutated_gzip(draw: st.DrawFn) -> bytes:
+    text = bi.carmen_text(bi.carmen_lines()[:8])
+    data = bytearray(_gzip_members(text, draw(st.integers(1, 9)), draw(st.integers(1, 4))))
+    for _ in range(draw(st.integers(0, 6))):
+        at = draw(st.integers(0, len(data)))
+        op = draw(st.sampled_from(["flip", "replace", "insert", "delete", "truncate", "append"]))
+        chunk = draw(st.binary(min_size=1, max_size=8))
+        if op == "flip" and at < len(data):
+            data[at] ^= 1 << draw(st.integers(0, 7))
+        elif op == "replace":
+            data[at : at + len(chunk)] = chunk
+        elif op == "insert":
+            data[at:at] = chunk
+        elif op == "delete":
+            del data[at : at + len(chunk)]
+        elif op == "truncate":
+            del data[max(at, 2) :]  # keep the magic bytes: it stays a "gzip" file
+        else:
+            data += draw(st.sampled_from([b"\x1f\x8b", b"\x00" * 8, gzip.compress(b"\n")]))
+    return bytes(data)
+
+
+@given(_mutated_gzip())
+def test_gzip_mutations_raise_only_input_error(tmp_path_factory, data: bytes) -> None:
+    """Flipped bits, cut or spliced members, trailing garbage: every corrupt gzip stream is
+    an ``InputError`` (never ``zlib.error``, ``EOFError``, ``BadGzipFile``), and whatever
+    reads must also read the same as the plain text would."""
+    folder = tmp_path_factory.mktemp("gz")
+    path = folder / "log.clf.gz"
+    path.write_bytes(data)
+    _check_log(path)
+    try:
+        text = gzip.decompress(data)
+    except (OSError, EOFError, zlib.error):
+        return  # the reader must have refused it (checked above: only InputError)
+    plain = folder / "log.clf"
+    plain.write_bytes(text)
+    try:
+        from_gzip = [f.timestamp for f in read_frames(path)]
+    except InputError:
+        return
+    assert from_gzip == [f.timestamp for f in read_frames(plain)]
+
+
+# ------------------------------------------------------------------ campaign files
+
+_CAMPAIGN_PARAMS = {
+    "episodes": 3, "seed": 0, "kinds": ["corridors"], "profile": "dataset3", "noise": "typical",
+    "laser_noise": "sick_lms200", "mapper": "albot1", "tour_kind": "loop",
+    "world_size_min_m": 12.0, "world_size_max_m": 14.0, "tour_length_min_m": 8.0,
+    "tour_length_max_m": 12.0,
+}  # fmt: skip
+
+
+@st.composite
+def _mutated_records(draw: st.DrawFn) -> bytes:
+    statuses = st.sampled_from(["ok", "violation", "crash"])
+    records: list[Any] = [
+        bi.episode_record(k, status=draw(statuses)) for k in range(draw(st.integers(1, 3)))
+    ]
+    for _ in range(draw(st.integers(0, 3))):
+        k = draw(st.integers(0, len(records) - 1))
+        path = draw(st.sampled_from(_paths(records[k])))
+        records[k] = _replace_at(records[k], path, draw(_JSON_VALUES))
+    lines = [json.dumps(r).encode() for r in records]
+    if draw(st.booleans()):
+        k = draw(st.integers(0, len(lines) - 1))
+        lines[k] = draw(_mutated_bytes(lines[k].decode()))
+    return b"\n".join(lines) + draw(st.sampled_from([b"\n", b"", b"\n\x00\x00", b"\n{"]))
+
+
+@given(_mutated_records())
+def test_episode_record_mutations_raise_only_input_error(tmp_path_factory, data: bytes) -> None:
+    """Any damage to episodes.jsonl is an ``InputError`` naming a line, or the records read
+    are whole: the summary is computed from them without error and agrees with itself."""
+    from albot2d.evaluation.fuzz.campaign import read_episodes
+    from albot2d.evaluation.fuzz.summary import summarise
+
+    path = tmp_path_factory.mktemp("c") / "episodes.jsonl"
+    path.write_bytes(data)
+    try:
+        records, _ = read_episodes(path)
+    except InputError:
+        return
+    summary = summarise(list(records.values()), {}, ran=0, wall_time_s=0.0, workers=1)
+    assert summary["ok"] + summary["violations"] + summary["crashes"] == summary["episodes"]
+    assert all(records[k]["metrics"].get("frames") is not None
+               for k in records if records[k]["status"] == "ok")  # fmt: skip
+
+
+@given(st.data())
+def test_campaign_file_mutations_raise_only_input_error(tmp_path_factory, data) -> None:
+    from albot2d.evaluation.fuzz.campaign import CampaignParams, read_campaign
+
+    doc = {
+        "format": "albot2d-campaign",
+        "format_version": 1,
+        "params": copy.deepcopy(_CAMPAIGN_PARAMS),
+    }
+    for _ in range(data.draw(st.integers(1, 3))):
+        path = data.draw(st.sampled_from(_paths(doc)))
+        doc = _replace_at(doc, path, data.draw(_JSON_VALUES))
+    text = json.dumps(doc)
+    if data.draw(st.booleans()):
+        text = data.draw(_mutated_bytes(text)).decode("utf-8", errors="replace")
+    folder = tmp_path_factory.mktemp("c")
+    (folder / "campaign.json").write_text(text)
+    try:
+        params = read_campaign(folder)
+    except InputError:
+        return
+    assert isinstance(params, CampaignParams) and params.episodes >= 1

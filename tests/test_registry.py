@@ -44,7 +44,7 @@ def test_user_plugin_by_module_and_class(tmp_path: Path, monkeypatch: pytest.Mon
         assert list(factories) == ["albot1", "mine"]  # the class's ``name`` attribute
         assert isinstance(factories["mine"](), Mapper)
         # A class without a usable name attribute is reported under its class name.
-        unnamed = type("Unnamed", (factories["mine"],), {"name": ""})
+        unnamed = type("Unnamed", (factories["mine"].cls,), {"name": ""})  # type: ignore[attr-defined]
         assert report_name("my_mapper:Unnamed", unnamed) == "Unnamed"
         with pytest.raises(InputError, match="missing pose"):
             mapper_factory("my_mapper:Broken")

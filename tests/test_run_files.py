@@ -134,5 +134,5 @@ def test_read_run_rejects_inconsistent_directories(tmp_path):
     with pytest.raises(InputError, match="not an albot2d run manifest"):
         read_run(out)
     (out / "run.json").write_text("{")
-    with pytest.raises(InputError, match=r"run\.json:1: invalid JSON"):
+    with pytest.raises(InputError, match=r"run\.json: not valid JSON"):
         read_run(out)

@@ -17,8 +17,10 @@ import numpy as np
 import shapely
 
 from albot2d.errors import InputError
+from albot2d.inputfiles import read_json_file
+from albot2d.limits import MAX_HOUSEEXPO_VERTICES
 from albot2d.seeding import make_rng
-from albot2d.validation import COORDINATE_LIMIT_M, parse_json
+from albot2d.validation import COORDINATE_LIMIT_M
 from worldgen.assemble import make_world
 from worldgen.params import MAX_WORLD_SIZE_M
 from worldgen.roadmap import RoadmapParams
@@ -51,6 +53,12 @@ def _numbers(value: Any, source: str, field: str, count: int) -> list[float]:
 def _check_verts(value: Any, source: str) -> np.ndarray:
     if not isinstance(value, list):
         raise _fail(source, f"verts must be a list of [x, y] points, got {value!r:.60}")
+    if len(value) > MAX_HOUSEEXPO_VERTICES:
+        raise _fail(
+            source,
+            f"verts has {len(value)} points, more than the limit of {MAX_HOUSEEXPO_VERTICES} "
+            "(MAX_HOUSEEXPO_VERTICES)",
+        )
     points = [_numbers(p, source, f"verts[{i}]", 2) for i, p in enumerate(value)]
     arr = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if len(np.unique(arr, axis=0)) < 3:
@@ -85,13 +93,8 @@ def _check_rooms(value: Any, source: str) -> tuple[list[str], np.ndarray]:
 def read_houseexpo(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Parse and check a HouseExpo json; returns ``verts`` ``(N, 2)``, ``id``, ``room_num``,
     ``bbox`` ``(4,)``, ``room_categories`` (list) and ``room_bboxes`` ``(K, 4)``."""
-    p = Path(path)
-    source = str(p)
-    try:
-        text = p.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise _fail(source, f"not UTF-8 text (byte {exc.start})") from exc
-    doc = parse_json(text, source)
+    source = str(Path(path))
+    doc = read_json_file(path, "HouseExpo plan")
     if not isinstance(doc, dict):
         raise _fail(source, "expected a HouseExpo JSON object with a verts field")
     missing = [key for key in ("verts", "id") if key not in doc]

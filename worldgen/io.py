@@ -27,6 +27,8 @@ import shapely
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
+from albot2d.inputfiles import read_limited
+from albot2d.limits import MAX_WORLD_FILE_BYTES
 from albot2d.validation import MAX_JSON_DEPTH, parse_json
 from worldgen.world import DynamicObstacle, World
 from worldgen.world_reader import (
@@ -48,8 +50,6 @@ __all__ = [
     "world_to_json",
 ]
 
-#: A world file may be at most this large (the largest generated worlds are a few MB).
-MAX_WORLD_FILE_BYTES = 256 * 1024 * 1024
 
 # ---------------------------------------------------------------- writing
 
@@ -190,12 +190,7 @@ def _encode_value(value: Any, field: str) -> Any:
 def load(path: str | os.PathLike[str]) -> World:
     """Read a world file written by ``save``; bad files raise ``InputError`` naming the problem."""
     p = Path(path)
-    size = p.stat().st_size
-    if size > MAX_WORLD_FILE_BYTES:
-        raise InputError(
-            f"{p}: {size} bytes, more than the limit of {MAX_WORLD_FILE_BYTES} for a world file"
-        )
-    data = p.read_bytes()
+    data = read_limited(p, MAX_WORLD_FILE_BYTES, "world file", "MAX_WORLD_FILE_BYTES")
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -224,7 +219,8 @@ def world_from_json(text: str, *, source: str = "<string>", validate: bool = Tru
     """
     if len(text) > MAX_WORLD_FILE_BYTES:
         raise InputError(
-            f"{source}: {len(text)} characters, more than the limit of {MAX_WORLD_FILE_BYTES}"
+            f"{source}: {len(text)} characters, more than the limit of {MAX_WORLD_FILE_BYTES} "
+            "(MAX_WORLD_FILE_BYTES)"
         )
     try:
         doc = parse_json(text, source, object_pairs_hook=_no_duplicate_keys)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from albot2d import limits as _limits
 from albot2d.errors import InputError
 from albot2d.validation import (
     check_at_most,
@@ -38,9 +39,9 @@ __all__ = [
 ]
 
 #: Largest world width or height (metres) a generator accepts.
-MAX_WORLD_SIZE_M = 500.0
+MAX_WORLD_SIZE_M = _limits.MAX_WORLD_SIZE_M
 #: Most moving obstacles a world may hold (generated or read from a file).
-MAX_DYNAMIC_OBSTACLES = 200
+MAX_DYNAMIC_OBSTACLES = _limits.MAX_DYNAMIC_OBSTACLES
 #: Densest clutter a generator places (items per 10 m² of floor).
 MAX_CLUTTER_PER_10M2 = 5.0
 #: Most hall parts, partition walls or open areas a generator lays out.

@@ -12,6 +12,11 @@ impossible or unbounded work:
 - a roadmap with at least one edge, every node a safe place for the disc, every edge
   disc-safe (no wall or clutter outline closer than the robot radius), and the start on
   the roadmap or joined to one of its nearest nodes by a disc-safe straight line;
+- total wall length at most :data:`MAX_TOTAL_WALL_LENGTH_M` (the raycast grid and every
+  beam's work grow with it);
+- every moving obstacle's outline (at its start pose) clear of the start disc, and those
+  that stand still (no speed or no path) clear of the roadmap by the robot radius, as
+  walls must be;
 - moving obstacles: a valid outline of at least :data:`MIN_OBSTACLE_AREA_M2`, speed at most
   :data:`MAX_OBSTACLE_SPEED_M_S`, mass at most :data:`MAX_OBSTACLE_MASS_KG`, inside bounds,
   and a walking person's path at least :data:`MIN_PERSON_PATH_M` long (a shorter one would
@@ -28,9 +33,10 @@ import math
 import numpy as np
 import shapely
 
+from albot2d import limits as _limits
 from albot2d.errors import InputError
 from worldgen.params import MAX_DYNAMIC_OBSTACLES, MAX_ROBOT_RADIUS_M
-from worldgen.world import MAX_OBSTACLE_SPEED_M_S, World
+from worldgen.world import MAX_OBSTACLE_SPEED_M_S, DynamicObstacle, World
 
 __all__ = [
     "MAX_CLUTTER_ITEMS",
@@ -40,6 +46,7 @@ __all__ = [
     "MAX_PATH_POINTS",
     "MAX_ROADMAP_NODES",
     "MAX_ROBOT_RADIUS_M",
+    "MAX_TOTAL_WALL_LENGTH_M",
     "MAX_WALLS",
     "MIN_OBSTACLE_AREA_M2",
     "MIN_PERSON_PATH_M",
@@ -47,10 +54,11 @@ __all__ = [
     "world_problem",
 ]
 
-MAX_WALLS = 500_000
-MAX_CLUTTER_ITEMS = 100_000
-MAX_ROADMAP_NODES = 200_000
-MAX_PATH_POINTS = 10_000
+MAX_WALLS = _limits.MAX_WALLS
+MAX_CLUTTER_ITEMS = _limits.MAX_CLUTTER_ITEMS
+MAX_ROADMAP_NODES = _limits.MAX_ROADMAP_NODES
+MAX_PATH_POINTS = _limits.MAX_PATH_POINTS
+MAX_TOTAL_WALL_LENGTH_M = _limits.MAX_TOTAL_WALL_LENGTH_M
 MIN_OBSTACLE_AREA_M2 = 1e-4  # a 1 cm square
 MAX_OBSTACLE_MASS_KG = 10_000.0
 MIN_PERSON_PATH_M = 0.1
@@ -67,7 +75,7 @@ def check_world(world: World) -> None:
 
 def world_problem(world: World) -> str | None:
     """The first reason ``world`` cannot be driven (see the module docstring), or None."""
-    for check in (_counts, _walls, _start, _roadmap, _obstacles):
+    for check in (_counts, _walls, _start, _roadmap, _obstacles, _static_obstacles):
         problem = check(world)
         if problem is not None:
             return problem
@@ -83,6 +91,11 @@ def _counts(world: World) -> str | None:
     ):
         if count > limit:
             return f"{what} has {count} items, more than the limit of {limit}"
+    w = world.walls
+    total = float(np.hypot(w[:, 2] - w[:, 0], w[:, 3] - w[:, 1]).sum()) if len(w) else 0.0
+    if total > MAX_TOTAL_WALL_LENGTH_M:
+        return (f"walls are {total:.0f} m long in all, more than the limit of "
+                f"{MAX_TOTAL_WALL_LENGTH_M:.0f} m (MAX_TOTAL_WALL_LENGTH_M)")  # fmt: skip
     if world.robot_radius_m > MAX_ROBOT_RADIUS_M:
         return f"robot_radius_m is {world.robot_radius_m!r}, more than {MAX_ROBOT_RADIUS_M} m"
     return None
@@ -194,4 +207,40 @@ def _obstacles(world: World) -> str | None:
             if 0.0 < length < MIN_PERSON_PATH_M or not math.isfinite(length):
                 return (f"{field}.path is {length!r} m long; a walking person needs at least "
                         f"{MIN_PERSON_PATH_M} m (or speed_m_s 0)")  # fmt: skip
+    return None
+
+
+def _outline(ob: DynamicObstacle) -> shapely.Polygon:
+    """An obstacle's outline placed at its start pose."""
+    c, s = math.cos(ob.pose.theta), math.sin(ob.pose.theta)
+    xy = ob.shape @ np.array([[c, s], [-s, c]]) + [ob.pose.x, ob.pose.y]
+    return shapely.Polygon(xy)
+
+
+def _static_obstacles(world: World) -> str | None:
+    """Obstacles against the start disc (every one) and the roadmap (those that stand
+    still), as walls are: a box on the start pose would hold the robot inside it, one on
+    the roadmap would block the tour."""
+    if not world.dynamic_obstacles:
+        return None
+    r = world.robot_radius_m
+    start = shapely.Point(world.start.x, world.start.y)
+    nodes, edges = world.roadmap.nodes, world.roadmap.edges
+    lines = shapely.linestrings(np.stack([nodes[edges[:, 0]], nodes[edges[:, 1]]], axis=1))
+    tree = shapely.STRtree(lines)
+    for i, ob in enumerate(world.dynamic_obstacles):
+        field = f"dynamic_obstacles[{i}]"
+        outline = _outline(ob)
+        if outline.distance(start) < r - _TOLERANCE_M:
+            return (f"{field} ({ob.kind} at {ob.pose.x!r}, {ob.pose.y!r}) overlaps the robot's "
+                    f"start disc (radius {r} m)")  # fmt: skip
+        moves = ob.speed_m_s > 0.0 and len(ob.path) >= 2
+        if moves:
+            continue
+        hits = tree.query(outline, predicate="dwithin", distance=max(r - _TOLERANCE_M, 0.0))
+        if len(hits):
+            k = int(np.min(hits))
+            return (f"{field} ({ob.kind} at {ob.pose.x!r}, {ob.pose.y!r}, standing still) is "
+                    f"closer than the robot radius ({r} m) to roadmap.edges[{k}] "
+                    f"{edges[k].tolist()}: it blocks the roadmap")  # fmt: skip
     return None

@@ -1,6 +1,9 @@
 """Checks a parsed world-file document field by field and builds the ``World`` (for ``io.load``).
 
-Every error is an ``InputError`` naming the source file, the field path (``walls[17]``,
+A wall that repeats another exactly is refused (many copies of one wall are the same world
+with far more work); arrays in ``params``/``features`` have at most ``MAX_ARRAY_DIMENSIONS``
+dimensions of ``MAX_ARRAY_ITEMS``. Every error is an ``InputError`` naming the source
+file, the field path (``walls[17]``,
 ``free_space.holes[2]``) and the offending value. The format itself is described in
 ``worldgen.io``. Every number must be finite. With ``validate`` (the default, and what every
 command uses) every coordinate and size must also lie within ±``COORDINATE_LIMIT_M`` (1e6 m)
@@ -19,6 +22,7 @@ import shapely
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
+from albot2d.limits import MAX_ARRAY_DIMENSIONS, MAX_ARRAY_ITEMS
 from albot2d.validation import COORDINATE_LIMIT_M
 from worldgen.world import DynamicObstacle, Roadmap, World
 from worldgen.world_checks import world_problem
@@ -79,6 +83,27 @@ def _short(value: Any, limit: int = 60) -> str:
         return f"an integer of {len(str(abs(value)))} digits"
     text = repr(value)
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _repeated_walls(walls: np.ndarray) -> tuple[int, int, int] | None:
+    """``(k, j, n)``: wall ``k`` is the first that repeats an earlier wall ``j`` exactly
+    (either direction), and ``n`` walls repeat one; ``None`` when no wall does.
+
+    A repeated wall adds nothing to a world but work (hundreds of thousands of copies of
+    one wall fill the raycast grid); no generated world has one.
+    """
+    if len(walls) < 2:
+        return None
+    x_flip = walls[:, 0] > walls[:, 2]
+    flip = x_flip | ((walls[:, 0] == walls[:, 2]) & (walls[:, 1] > walls[:, 3]))
+    canonical = np.where(flip[:, None], walls[:, [2, 3, 0, 1]], walls) + 0.0  # -0.0 → 0.0
+    _, first, inverse = np.unique(canonical, axis=0, return_index=True, return_inverse=True)
+    if len(first) == len(walls):
+        return None
+    owner = first[inverse.reshape(-1)]
+    repeats = np.flatnonzero(owner != np.arange(len(walls)))
+    k = int(repeats[0])
+    return k, int(owner[k]), len(repeats)
 
 
 class WorldReader:
@@ -203,6 +228,13 @@ class WorldReader:
             raise self.fail(f"bounds {bounds} need xmin < xmax and ymin < ymax")
         start = Pose(*self.numbers(doc["start"], "start", 3, "[x, y, theta]"))
         walls = self.rows(doc["walls"], "walls", 4, "[x1, y1, x2, y2]")
+        repeat = _repeated_walls(walls) if self.validate else None
+        if repeat is not None:
+            k, j, n = repeat
+            raise self.fail(
+                f"walls[{k}] repeats walls[{j}] exactly ({n} walls repeat another); "
+                "remove the repeats"
+            )
         if not isinstance(doc["clutter"], list):
             raise self.fail(f"clutter must be a list of polygons, got {_type_name(doc['clutter'])}")
         clutter = [self.polygon(p, f"clutter[{i}]") for i, p in enumerate(doc["clutter"])]
@@ -331,6 +363,12 @@ class WorldReader:
             )
         if not isinstance(shape, list) or not all(type(n) is int and n >= 0 for n in shape):
             raise self.fail(f"{field}.shape must be a list of sizes, got {_short(shape)}")
+        if len(shape) > MAX_ARRAY_DIMENSIONS or math.prod(n for n in shape if n) > MAX_ARRAY_ITEMS:
+            raise self.fail(
+                f"{field}.shape {_short(shape)} is beyond the limits of {MAX_ARRAY_DIMENSIONS} "
+                f"dimensions of at most {MAX_ARRAY_ITEMS} items (MAX_ARRAY_DIMENSIONS, "
+                "MAX_ARRAY_ITEMS)"
+            )
         if not isinstance(data, list) or len(data) != math.prod(shape):
             got = f"{len(data)} items" if isinstance(data, list) else _type_name(data)
             raise self.fail(f"{field}.data has {got}, shape {shape} needs {math.prod(shape)}")

@@ -1,10 +1,11 @@
 """The ``albot2d`` command line: one module per subcommand, each with ``register(subparsers)``.
 
-User errors (``InputError``, missing or unwritable files) print one line and exit 2,
-with no traceback and no partial output file. Output piped into a reader that stops early
-(``albot2d run --out D | head -1``) ends quietly with exit 0, as Unix tools do.
-``albot2d`` alone prints the help; ``albot2d --version`` the version. Help texts are the
-modules' docstrings without their reStructuredText markup.
+User errors (``InputError``, missing or unwritable files, a bad environment variable)
+print one line and exit 2, with no traceback and no partial output file. SIGTERM is
+handled like Ctrl-C (exit 130, everything cleaned up). Output piped into a reader that
+stops early (``albot2d run --out D | head -1``) ends quietly with exit 0, as Unix tools
+do. ``albot2d`` alone prints the help; ``albot2d --version`` the version. Help texts are
+the modules' docstrings without their reStructuredText markup.
 """
 
 from __future__ import annotations
@@ -62,13 +63,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _import_from_cwd() -> None:
-    """Plugin mappers (``module:Class``) import from the current folder, as with ``python -m``."""
-    cwd = os.getcwd()
-    if cwd not in sys.path and "" not in sys.path:
-        sys.path.append(cwd)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
@@ -78,10 +72,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
-    _import_from_cwd()
+    from albot2d.cli.environment import check_environment, sigterm_as_interrupt
+
     try:
         kernels()  # the environment is input too: a bad ALBOT2D_KERNELS fails before any work
-        status = int(args.handler(args) or 0)
+        check_environment(args.command)
+        with sigterm_as_interrupt():
+            status = int(args.handler(args) or 0)
         sys.stdout.flush()  # a closed pipe shows here, not at exit after main returned
         return status
     except BrokenPipeError:

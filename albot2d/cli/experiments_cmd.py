@@ -29,13 +29,13 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.errors import InputError
+from albot2d.limits import MAX_SEEDS as _MAX_SEEDS
 
 __all__ = ["parse_seeds", "register", "run"]
 
 SMOKE_RUN = "smoke run"  # the words --quick output is marked with, everywhere it shows
 FULL_SEEDS = "0-19"
 QUICK_SEEDS = "0-1"
-_MAX_SEEDS = 10_000
 
 
 def register(subparsers: Any) -> None:

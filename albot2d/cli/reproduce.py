@@ -8,7 +8,6 @@ it); neither command imports the other.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import Any
 
@@ -55,10 +54,11 @@ def _replay_child(doc: dict[str, Any], where: str, send: Any) -> None:
 def reproducer_document(path: str) -> dict[str, Any] | None:
     """The fuzzing reproducer at ``path``; ``None`` when it is anything else (a report,
     or not readable: ``read_report`` then says what is wrong)."""
+    from albot2d.inputfiles import read_json_file
+
     try:
-        with open(path, encoding="utf-8") as handle:
-            doc = json.load(handle)
-    except (OSError, ValueError, RecursionError):
+        doc = read_json_file(path, "report")
+    except (OSError, InputError):
         return None
     return doc if isinstance(doc, dict) and isinstance(doc.get("reproducer"), dict) else None
 

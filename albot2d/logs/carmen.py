@@ -6,7 +6,10 @@ record per data line, lazily; ``FLASER``/``RLASER`` (any beam count), ``ROBOTLAS
 skipped and counted in :attr:`CarmenReader.stats`. A malformed line raises
 :class:`~albot2d.errors.InputError` as ``file:line: <message> <what is wrong>``.
 
-Limits (named below, each refused as ``file:line``): pose numbers (headings too) within
+Limits (``albot2d.limits``, each refused as ``file:line``): a line of at most
+``MAX_LINE_BYTES``, ``MAX_TEXT_BYTES`` after decompression, ``MAX_LOG_SCANS`` laser lines
+and ``MAX_LOG_READINGS`` readings in all (counted as the lines stream by); pose numbers
+(headings too) within
 ±``COORDINATE_LIMIT_M`` (1e6), timestamps within ±:data:`TIMESTAMP_LIMIT_S`,
 at most :data:`MAX_BEAMS` readings per line, ``ROBOTLASER1`` angles within a turn and its
 max range within the coordinate limit. Ranges may be anything a laser writes (NaN, inf,
@@ -31,6 +34,7 @@ from numpy.typing import NDArray
 from albot2d.arrays import readonly
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
+from albot2d.limits import MAX_BEAMS, MAX_LOG_READINGS, MAX_LOG_SCANS
 from albot2d.logs.textio import open_text
 from albot2d.validation import COORDINATE_LIMIT_M
 
@@ -51,12 +55,13 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-#: Most readings (or remissions) one laser line may hold (a 0.01° sweep of 360° is 36,000).
-MAX_BEAMS = 65_536
 #: Largest timestamp magnitude in seconds (year ~5100 in Unix time).
 TIMESTAMP_LIMIT_S = 1e11
 #: Largest heading or laser angle magnitude in radians (just over one turn).
 ANGLE_LIMIT_RAD = 2.0 * math.pi + 1e-6
+
+# Distinct unknown message types counted one by one in the stats.
+_MAX_SKIPPED_TYPES = 256
 
 _POSE_NAMES = ("x", "y", "theta", "odom_x", "odom_y", "odom_theta")
 _STAMP_NAMES = ("ipc_timestamp", "ipc_hostname", "logger_timestamp")
@@ -203,18 +208,29 @@ def _count_error(context: str, tokens: list[str], expected: int, layout: _Layout
     return _LineError(f"{message} {got} fields, expected {expected} ({got - expected} extra)")
 
 
+def _cut(text: str, limit: int = 40) -> str:
+    """``text`` cut to ``limit`` characters for a message (a field may be megabytes)."""
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _shown(token: str) -> str:
+    return repr(_cut(token))
+
+
 def _float(
     tokens: list[str], index: int, name: str, *, finite: bool = True, limit: float = math.inf
 ) -> float:
     try:
         value = float(tokens[index])
     except ValueError:
-        raise _LineError(f"{name} {tokens[index]!r} (field {index}) is not a number") from None
+        raise _LineError(
+            f"{name} {_shown(tokens[index])} (field {index}) is not a number"
+        ) from None
     if finite and not math.isfinite(value):
-        raise _LineError(f"{name} {tokens[index]!r} (field {index}) is not finite")
+        raise _LineError(f"{name} {_shown(tokens[index])} (field {index}) is not finite")
     if abs(value) > limit:
         raise _LineError(
-            f"{name} {tokens[index]!r} (field {index}) is outside the limit of ±{limit:g}"
+            f"{name} {_shown(tokens[index])} (field {index}) is outside the limit of ±{limit:g}"
         )
     return value
 
@@ -227,7 +243,9 @@ def _int(tokens: list[str], index: int, name: str) -> int:
     try:
         value = int(tokens[index])
     except ValueError:
-        raise _LineError(f"{name} {tokens[index]!r} (field {index}) is not an integer") from None
+        raise _LineError(
+            f"{name} {_shown(tokens[index])} (field {index}) is not an integer"
+        ) from None
     if value < 0:
         raise _LineError(f"{name} must be >= 0, got {value} (field {index})")
     return value
@@ -251,7 +269,7 @@ def _floats(tokens: list[str], start: int, count: int, name: str) -> FloatArray:
                 float(text)
             except ValueError:
                 raise _LineError(
-                    f"{name} {k} {text!r} (field {start + k}) is not a number"
+                    f"{name} {k} {_shown(text)} (field {start + k}) is not a number"
                 ) from None
         raise
 
@@ -411,12 +429,29 @@ class CarmenReader:
     def __iter__(self) -> Iterator[Record]:
         self._counts, self._skipped = Counter(), Counter()
         self._lines = self._comments = self._blank = 0
+        scans = readings = 0
         with open_text(self.path) as handle:
             for line_number, line in enumerate(handle, start=1):
                 self._lines = line_number
                 record = self._parse_line(line, line_number)
-                if record is not None:
-                    yield record
+                if record is None:
+                    continue
+                if isinstance(record, LaserRecord):
+                    scans += 1
+                    readings += record.n_beams + (
+                        0 if record.remissions is None else len(record.remissions)
+                    )
+                    if scans > MAX_LOG_SCANS:
+                        raise InputError(
+                            f"{self.path}:{line_number}: more than {MAX_LOG_SCANS} laser "
+                            "scans, the limit (MAX_LOG_SCANS)"
+                        )
+                    if readings > MAX_LOG_READINGS:
+                        raise InputError(
+                            f"{self.path}:{line_number}: more than {MAX_LOG_READINGS} laser "
+                            "readings in all, the limit (MAX_LOG_READINGS)"
+                        )
+                yield record
 
     def _parse_line(self, line: str, line_number: int) -> Record | None:
         stripped = line.strip()
@@ -431,12 +466,20 @@ class CarmenReader:
         tokens = stripped.split()
         parser = _PARSERS.get(tokens[0])
         if parser is None:
-            self._skipped[tokens[0]] += 1
+            # Counted by type; past a few hundred distinct names (no real log has them)
+            # the rest are counted together, so the stats stay small.
+            name = tokens[0] if len(self._skipped) < _MAX_SKIPPED_TYPES else "(other)"
+            self._skipped[name[:40]] += 1
             return None
         try:
             record = parser(tokens, line_number)
         except _LineError as exc:
             raise InputError(f"{self.path}:{line_number}: {tokens[0]} {exc}") from None
+        except (IndexError, ValueError, OverflowError) as exc:  # a case the checks missed
+            raise InputError(
+                f"{self.path}:{line_number}: {tokens[0]} malformed ({type(exc).__name__}: "
+                f"{_cut(str(exc))})"
+            ) from None
         self._counts[tokens[0]] += 1
         return record
 

@@ -10,7 +10,9 @@ pixel's occupancy ``p = (255 − value) / 255`` reads back as 100 (p > 0.65), 0 
 or −1 (205: p = 0.19608).
 
 ``read_map_server`` loads any ``map_server`` map (trinary, scale or raw; any image format
-Pillow reads; needs the ``[maps]`` extra: PyYAML and Pillow) into an ``OccupancyGrid``.
+Pillow reads; needs the ``[maps]`` extra: PyYAML and Pillow) into an ``OccupancyGrid``,
+within ``albot2d.limits``: a YAML of at most ``MAX_MAP_YAML_BYTES`` without aliases, an
+image of at most ``MAX_MAP_PIXELS`` pixels (checked before it is decoded).
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ import numpy as np
 
 from albot2d.errors import InputError
 from albot2d.geometry.grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+from albot2d.inputfiles import read_limited
+from albot2d.limits import MAX_MAP_PIXELS, MAX_MAP_YAML_BYTES
 
 __all__ = [
     "FREE_PIXEL",
@@ -92,7 +96,7 @@ def _number(value: Any, key: str, where: Path) -> float:
     except (TypeError, ValueError):
         number = math.nan
     if not math.isfinite(number) or isinstance(value, bool):
-        raise InputError(f"{where}: {key} must be a number, got {value!r}")
+        raise InputError(f"{where}: {key} must be a number, got {str(value)[:60]!r}")
     return number
 
 
@@ -106,27 +110,39 @@ def read_map_server(path: str | os.PathLike[str]) -> OccupancyGrid:
         raise InputError(MISSING_EXTRA) from exc
     where = Path(path)
     try:
-        doc = yaml.safe_load(where.read_text(encoding="utf-8"))
+        text = read_limited(where, MAX_MAP_YAML_BYTES, "map YAML", "MAX_MAP_YAML_BYTES")
+        # Anchors and aliases (never in a map YAML) would let a few lines expand into
+        # gigabytes when the values are used: refused before the document is built.
+        if any(isinstance(event, yaml.AliasEvent) for event in yaml.parse(text)):
+            raise InputError(f"{where}: a map YAML with aliases (*name) is refused")
+        doc = yaml.safe_load(text)
     except OSError as exc:
         raise InputError(f"{where}: cannot read the map YAML ({exc.strerror})") from None
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        raise InputError(f"{where}: not a YAML file ({str(exc).splitlines()[0]})") from None
+    except (yaml.YAMLError, UnicodeDecodeError, RecursionError) as exc:
+        first = (str(exc).splitlines() or [type(exc).__name__])[0]
+        raise InputError(f"{where}: not a YAML file ({first})") from None
     if not isinstance(doc, dict):
         raise InputError(f"{where}: a map YAML is a mapping of keys, got {type(doc).__name__}")
     resolution = _number(_field(doc, "resolution", where), "resolution", where)
     origin = _field(doc, "origin", where)
     if not isinstance(origin, list) or len(origin) != 3:
-        raise InputError(f"{where}: origin must be [x, y, yaw], got {origin!r}")
+        raise InputError(f"{where}: origin must be [x, y, yaw], got {str(origin)[:60]!r}")
     ox, oy, oyaw = (_number(v, "origin", where) for v in origin)
     occupied = _number(doc.get("occupied_thresh", OCCUPIED_THRESH), "occupied_thresh", where)
     free = _number(doc.get("free_thresh", FREE_THRESH), "free_thresh", where)
     negate = bool(doc.get("negate", 0))
     mode = str(doc.get("mode", "trinary"))
     if mode not in ("trinary", "scale", "raw"):
-        raise InputError(f"{where}: mode must be trinary, scale or raw, got {mode!r}")
+        raise InputError(f"{where}: mode must be trinary, scale or raw, got {mode[:60]!r}")
     image_path = where.parent / str(_field(doc, "image", where))
     try:
         with Image.open(image_path) as image:
+            width, height = image.size
+            if width * height > MAX_MAP_PIXELS:
+                raise InputError(
+                    f"{where}: its image {image_path} is {width} x {height} pixels, more than "
+                    f"the limit of {MAX_MAP_PIXELS} (MAX_MAP_PIXELS)"
+                )
             has_alpha = image.mode in ("RGBA", "LA") or "transparency" in image.info
             rgba = np.asarray(image.convert("RGBA"), dtype=np.float64)
     except OSError as exc:

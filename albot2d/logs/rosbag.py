@@ -26,7 +26,9 @@ is zero, as some drivers leave it):
 
 Limits are the CARMEN reader's (``albot2d.logs.carmen``): at most ``MAX_BEAMS`` ranges per
 scan (also the longest sequence the deserialiser will allocate), angles within a turn,
-ranges and poses within ``COORDINATE_LIMIT_M``. Anything wrong — a truncated or corrupt
+ranges and poses within ``COORDINATE_LIMIT_M``, and the log budget of ``albot2d.limits``:
+at most ``MAX_LOG_SCANS`` scans and ``MAX_LOG_READINGS`` readings kept, ``MAX_BAG_MESSAGES``
+messages read per topic. Anything wrong — a truncated or corrupt
 file, a missing topic (the error names the topics the bag has), a topic of another type,
 no scans, no odometry — raises :class:`~albot2d.errors.InputError` naming the bag.
 """
@@ -48,6 +50,7 @@ from albot2d.errors import InputError
 from albot2d.frames import Frame, Scan
 from albot2d.geometry import Pose
 from albot2d.geometry.pose import wrap_angle
+from albot2d.limits import MAX_BAG_MESSAGES, MAX_LOG_READINGS, MAX_LOG_SCANS
 from albot2d.logs.carmen import ANGLE_LIMIT_RAD, MAX_BEAMS, TIMESTAMP_LIMIT_S
 from albot2d.validation import COORDINATE_LIMIT_M
 
@@ -208,6 +211,11 @@ class _Bag:
                 raise self._fail(exc, f"cannot decode {topic} message {index}") from None
             yield index, message, int(record_ns)
             index += 1
+            if index > MAX_BAG_MESSAGES:
+                raise InputError(
+                    f"{self.path}: more than {MAX_BAG_MESSAGES} messages on {topic}, the limit "
+                    "(MAX_BAG_MESSAGES)"
+                )
 
     def listing(self) -> str:
         if not self.topics:
@@ -478,7 +486,7 @@ def read_bag(
         odometry = _Odometry(stamps, poses)
         mounts: dict[str, _Mount] = {}
         frames: list[Frame] = []
-        dropped = 0
+        dropped = readings = 0
         laser = ""
         prev: Pose | None = None
         for k, msg, record_ns in bag.messages(scan_topic):
@@ -493,6 +501,12 @@ def read_bag(
             if frame_id not in mounts:
                 mounts[frame_id] = _mount(bag, base, frame_id)
             scan = _scan(msg, where, mounts[frame_id], stamp)
+            readings += len(scan.ranges)
+            if len(frames) >= MAX_LOG_SCANS or readings > MAX_LOG_READINGS:
+                raise InputError(
+                    f"{where}: more than {MAX_LOG_SCANS} scans or {MAX_LOG_READINGS} readings, "
+                    "the limits (MAX_LOG_SCANS, MAX_LOG_READINGS)"
+                )
             increment = Pose() if prev is None else prev.between(odom)
             frames.append(Frame(len(frames), stamp, scan, odom, increment))
             prev = odom

@@ -31,6 +31,7 @@ from albot2d.atomic import atomic_paths
 from albot2d.errors import InputError
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
+from albot2d.inputfiles import read_json_file
 from albot2d.logs.carmen_writer import LOG_PRECISION, FloatFormat, format_float
 from albot2d.logs.log_frames import read_frames, write_carmen
 from albot2d.logs.relations import (
@@ -185,20 +186,33 @@ def read_run(run_dir: str | os.PathLike[str]) -> Run:
     """Read a run directory written by :func:`write_run`."""
     directory = Path(run_dir)
     manifest_path = directory / MANIFEST_NAME
-    try:
-        manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{manifest_path}:{exc.lineno}: invalid JSON ({exc.msg})") from None
+    manifest = read_json_file(manifest_path, "run manifest")
     if not isinstance(manifest, dict) or manifest.get("format") != RUN_FORMAT:
         raise InputError(f"{manifest_path}: not an albot2d run manifest (format != {RUN_FORMAT!r})")
     files = {"log": LOG_NAME, "truth": TRUTH_NAME, "relations": RELATIONS_NAME}
-    files |= manifest.get("files", {})
+    given = manifest.get("files", {})
+    if not isinstance(given, dict) or set(given) - set(files):
+        raise InputError(f"{manifest_path}: files must map log, truth, relations to file names")
+    for key, name in given.items():
+        # Plain names inside the run directory: a manifest may not point elsewhere.
+        if not isinstance(name, str) or not name or Path(name).name != name or name in (".", ".."):
+            raise InputError(
+                f"{manifest_path}: files.{key} must be a file name in the run directory, "
+                f"got {str(name)[:60]!r}"
+            )
+    files |= given
+    collided_indices = manifest.get("collided_indices", [])
+    if not isinstance(collided_indices, list) or not all(type(k) is int for k in collided_indices):
+        raise InputError(f"{manifest_path}: collided_indices must be a list of integers")
+    params = manifest.get("params", {})
+    if not isinstance(params, dict):
+        raise InputError(f"{manifest_path}: params must be an object")
     frames = list(read_frames(directory / files["log"]))
     truth_path = directory / files["truth"]
     t, poses = read_truth(truth_path)
     if len(t) != len(frames):
         raise InputError(f"{truth_path}: {len(t)} poses for {len(frames)} scans in the log")
-    collided = set(manifest.get("collided_indices", []))
+    collided = set(collided_indices)
     out = []
     for k, frame in enumerate(frames):
         if abs(frame.timestamp - t[k]) > _TIMESTAMP_MATCH_S:
@@ -212,6 +226,6 @@ def read_run(run_dir: str | os.PathLike[str]) -> Run:
         directory=directory,
         frames=tuple(out),
         relations=read_relations(directory / files["relations"]),
-        params=manifest.get("params", {}),
+        params=params,
         manifest=manifest,
     )

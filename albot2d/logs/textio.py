@@ -1,13 +1,16 @@
 """Text file plumbing for the log formats: plain or gzip input (by magic bytes), atomic output.
 
 Readers open files with :func:`open_text`, which looks at the first two bytes rather than the
-suffix, so a gzipped log named ``.clf`` still reads. Writers use :func:`atomic_text_output`,
-which gzips when the target name ends in ``.gz`` (with a fixed header timestamp, so the same
-content always gives the same bytes) and renames into place only when writing succeeded.
+suffix, so a gzipped log named ``.clf`` still reads, and streams the lines within the limits
+of ``albot2d.limits`` (line length, bytes after decompression). Writers use
+:func:`atomic_text_output`, which gzips when the target name ends in ``.gz`` (with a fixed
+header timestamp, so the same content always gives the same bytes) and renames into place
+only when writing succeeded.
 """
 
 from __future__ import annotations
 
+import array
 import contextlib
 import gzip
 import io
@@ -21,6 +24,8 @@ import numpy as np
 
 from albot2d.atomic import atomic_path
 from albot2d.errors import InputError
+from albot2d.inputfiles import ReadsLines, binary_lines
+from albot2d.limits import MAX_TABLE_ROWS
 
 __all__ = ["GZIP_MAGIC", "atomic_text_output", "is_gzip", "open_text", "read_number_table"]
 
@@ -34,26 +39,24 @@ def is_gzip(path: str | os.PathLike[str]) -> bool:
 
 
 @contextlib.contextmanager
-def open_text(path: str | os.PathLike[str]) -> Iterator[TextIO]:
-    """Open ``path`` for reading text, decompressing gzip when the magic bytes say so.
+def open_text(path: str | os.PathLike[str]) -> Iterator[Iterator[str]]:
+    """The lines of ``path`` as text, decompressing gzip when the magic bytes say so.
 
-    Undecodable bytes become U+FFFD (the logs are ASCII; a stray byte then shows up as a
-    non-numeric field with a file:line error instead of a decode crash). A corrupt or
-    truncated gzip stream raises :class:`InputError` naming the file.
+    Streamed within a budget (``albot2d.inputfiles.binary_lines``): a line longer than
+    ``MAX_LINE_BYTES`` or more than ``MAX_TEXT_BYTES`` after decompression is refused with
+    an :class:`InputError` naming the file and the limit, as is corrupt or truncated gzip
+    data. Undecodable bytes become U+FFFD (the logs are ASCII; a stray byte then shows up
+    as a non-numeric field with a file:line error instead of a decode crash).
     """
+    source = os.fspath(path)
     compressed = is_gzip(path)
-    if compressed:
-        handle: TextIO = gzip.open(path, "rt", encoding="utf-8", errors="replace")  # noqa: SIM115
-    else:
-        handle = open(path, encoding="utf-8", errors="replace")  # noqa: SIM115
+    raw = open(path, "rb")  # noqa: SIM115 (closed below)
     try:
-        yield handle
-    except (EOFError, gzip.BadGzipFile, OSError) as exc:
-        if compressed and not isinstance(exc, FileNotFoundError):
-            raise InputError(f"{path}: corrupt or truncated gzip data ({exc})") from exc
-        raise
+        binary: ReadsLines = gzip.GzipFile(fileobj=raw, mode="rb") if compressed else raw
+        lines = binary_lines(binary, source)
+        yield (line.decode("utf-8", errors="replace") for line in lines)
     finally:
-        handle.close()
+        raw.close()
 
 
 @contextlib.contextmanager
@@ -78,6 +81,11 @@ def atomic_text_output(path: str | os.PathLike[str]) -> Iterator[TextIO]:
                 binary.close()
 
 
+def _shown(token: str) -> str:
+    """A field for a message, cut short (a field may be megabytes long)."""
+    return repr(token if len(token) <= 40 else token[:37] + "...")
+
+
 def read_number_table(
     path: str | os.PathLike[str],
     fields: tuple[str, ...],
@@ -91,7 +99,8 @@ def read_number_table(
     ``limits`` gives each field's largest magnitude (default: any finite number).
     """
     bounds = limits if limits is not None else (math.inf,) * len(fields)
-    rows: list[list[float]] = []
+    rows = array.array("d")  # flat: 8 bytes a number, not a Python float each
+    n_rows = 0
     with open_text(path) as handle:
         for line_number, line in enumerate(handle, start=1):
             text = line.split("#", 1)[0].strip()
@@ -111,14 +120,20 @@ def read_number_table(
                     value = math.nan
                 if not math.isfinite(value):
                     raise InputError(
-                        f"{path}:{line_number}: {what} field {name} {token!r} "
+                        f"{path}:{line_number}: {what} field {name} {_shown(token)} "
                         "is not a finite number"
                     )
                 if abs(value) > limit:
                     raise InputError(
-                        f"{path}:{line_number}: {what} field {name} {token!r} "
+                        f"{path}:{line_number}: {what} field {name} {_shown(token)} "
                         f"is outside the limit of ±{limit:g}"
                     )
                 row.append(value)
-            rows.append(row)
+            if n_rows >= MAX_TABLE_ROWS:
+                raise InputError(
+                    f"{path}:{line_number}: more than {MAX_TABLE_ROWS} {what} rows, the "
+                    "limit (MAX_TABLE_ROWS)"
+                )
+            rows.extend(row)
+            n_rows += 1
     return np.array(rows, dtype=np.float64).reshape(-1, len(fields))

@@ -1,5 +1,10 @@
 """Mapper names → factories, and user mappers given as ``module:Class``.
 
+A plugin's module is imported behind one guard and its class constructed behind another
+(``albot2d.plugins``): any failure, ``SystemExit`` included, is one ``InputError`` naming
+the plugin and the exception. Its module is found on ``sys.path`` or else in the current
+folder, by file location: the current folder is never added to ``sys.path``.
+
 Every factory takes no arguments and returns a fresh object that implements the mapper
 protocol. Built-in names: ``albot1``, ``naive``, ``truth`` (simulation only) and
 ``slam`` (loop-closing SLAM) and ``scan_odometry`` (its scan-matching front end alone),
@@ -8,11 +13,11 @@ when the ``[slam]`` extra is installed.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 
 from albot2d.errors import InputError
 from albot2d.mapping.protocol import Mapper
+from albot2d.plugins import PluginFactory, import_plugin
 
 __all__ = [
     "BUILTIN_MAPPERS",
@@ -102,10 +107,9 @@ def mapper_factory(spec: str) -> Callable[[], Mapper]:
             "or give your own as module:Class"
         )
     module_name, _, attr = spec.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as exc:
-        raise InputError(f"mapper {spec!r}: cannot import module {module_name!r}: {exc}") from exc
+    if not module_name or not attr:
+        raise InputError(f"mapper {spec!r}: give a plugin as module:Class")
+    module = import_plugin(module_name, f"mapper {spec!r}")
     cls = getattr(module, attr, None)
     if cls is None or not callable(cls):
         raise InputError(f"mapper {spec!r}: module {module_name!r} has no class {attr!r}")
@@ -114,7 +118,7 @@ def mapper_factory(spec: str) -> Callable[[], Mapper]:
         raise InputError(
             f"mapper {spec!r} does not implement the mapper protocol: missing {', '.join(missing)}"
         )
-    return cls
+    return PluginFactory(spec, cls)
 
 
 def report_name(spec: str, factory: Callable[[], Mapper]) -> str:

@@ -4,6 +4,7 @@
   ``episode_metrics``: the numbers a campaign keeps of it;
 - ``campaign``: ``run_campaign`` — episodes on a backend, streamed to disk, resumable;
   ``stream``: the ``episodes.jsonl`` record file; ``lock``: one campaign per folder;
+  ``files``: a campaign's files read back as untrusted input (``--resume``);
 - ``backends``: where episodes run (a local process pool or a dask.distributed cluster);
 - ``summary``: throughput, failures by invariant, metric distributions;
 - ``reproducer``: a failing episode written down and run again.

@@ -34,9 +34,7 @@ from typing import Any, Protocol
 from urllib.parse import urlsplit
 
 from albot2d.errors import InputError
-
-# More local processes than this only thrash the machine (each holds ~200 MB).
-MAX_LOCAL_WORKERS = 256
+from albot2d.limits import MAX_LOCAL_WORKERS
 
 __all__ = [
     "BACKENDS",

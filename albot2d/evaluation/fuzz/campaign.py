@@ -19,8 +19,8 @@
 - ``summary.json`` (``albot2d.evaluation.fuzz.summary.summarise``); ``albot2d fuzz``
   adds ``histograms.png`` (``albot2d.viz.campaign``).
 
-Ctrl-C: the first stops handing out episodes and lets the running ones finish and be
-written down, the second stops at once (the backend's workers are terminated); either way
+Ctrl-C (or SIGTERM): the first stops handing out episodes and lets the running ones finish
+and be written down, the second stops at once (the backend's workers are terminated); either way
 :class:`CampaignInterrupted` is raised and ``episodes.jsonl`` holds only whole lines.
 """
 
@@ -44,9 +44,12 @@ import numpy as np
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
 from albot2d.evaluation.fuzz.episode import EpisodeOutcome, EpisodeSpec, crash_outcome, run_episode
+from albot2d.evaluation.fuzz.files import check_campaign_values
 from albot2d.evaluation.fuzz.lock import CampaignLock
 from albot2d.evaluation.fuzz.stream import EpisodeLog, read_episodes, scan_episodes
 from albot2d.evaluation.fuzz.summary import summarise
+from albot2d.inputfiles import read_json_file
+from albot2d.limits import MAX_CAMPAIGN_EPISODES, MAX_TOUR_LENGTH_M
 from albot2d.validation import check_at_most
 from worldgen.params import MAX_WORLD_SIZE_M
 
@@ -70,10 +73,6 @@ HISTOGRAMS_NAME = "histograms.png"
 REPRODUCERS_DIR = "reproducers"
 _FORMAT = "albot2d-campaign"
 _FORMAT_VERSION = 1
-
-
-# The longest tour an episode may drive (a 100 km tour takes hours per episode).
-MAX_TOUR_LENGTH_M = 100_000.0
 
 
 @dataclass(frozen=True)
@@ -113,6 +112,11 @@ class CampaignParams:
             if isinstance(value, bool) or not isinstance(value, int) or value < least:
                 kind = "positive" if name == "episodes" else "non-negative"
                 raise InputError(f"{name} must be a {kind} integer, got {value!r}")
+        if self.episodes > MAX_CAMPAIGN_EPISODES:
+            raise InputError(
+                f"episodes must be at most {MAX_CAMPAIGN_EPISODES} (MAX_CAMPAIGN_EPISODES; "
+                f"run several campaigns with other seeds), got {self.episodes!r}"
+            )
         kinds = tuple(dict.fromkeys(self.kinds))
         if not kinds:
             raise InputError("give at least one world kind")
@@ -247,22 +251,23 @@ def read_campaign(out_dir: str | os.PathLike[str]) -> CampaignParams:
     """The parameters in ``out_dir/campaign.json``, checked to be a campaign albot2d wrote."""
     path = Path(out_dir) / CAMPAIGN_NAME
     try:
-        meta = json.loads(path.read_bytes())
+        meta = read_json_file(path, "campaign file")
     except FileNotFoundError:
         raise InputError(f"{path.parent} holds no campaign (no {CAMPAIGN_NAME})") from None
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{path}: not a campaign file written by albot2d ({exc})") from None
+    except InputError as exc:
+        raise InputError(f"not a campaign file written by albot2d: {exc}") from None
     if not isinstance(meta, dict) or meta.get("format") != _FORMAT:
         raise InputError(
             f"{path}: not a campaign file written by albot2d (format is not {_FORMAT!r})"
         )
     if meta.get("format_version") != _FORMAT_VERSION:
         raise InputError(
-            f"{path}: campaign format_version {meta.get('format_version')!r}, "
+            f"{path}: campaign format_version {str(meta.get('format_version'))[:40]}, "
             f"this albot2d reads {_FORMAT_VERSION}"
         )
     if not isinstance(meta.get("params"), dict):
         raise InputError(f"{path}: not a campaign file written by albot2d (no params)")
+    check_campaign_values(meta["params"], str(path))
     return CampaignParams.from_dict(meta["params"], where=str(path))
 
 
@@ -332,12 +337,17 @@ class _Interrupts:
 
     def __enter__(self) -> _Interrupts:
         if threading.current_thread() is threading.main_thread():
-            self._previous = signal.signal(signal.SIGINT, self._handler)
+            # SIGTERM (kill, a scheduler, docker stop) is a Ctrl-C: the same clean stop.
+            self._previous = {
+                signum: signal.signal(signum, self._handler)
+                for signum in (signal.SIGINT, signal.SIGTERM)
+            }
         return self
 
     def __exit__(self, *exc: object) -> None:
         if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
+            for signum, previous in self._previous.items():
+                signal.signal(signum, previous)
 
     def _handler(self, signum: int, frame: Any) -> None:
         self.count += 1

@@ -29,9 +29,11 @@ LOCK_NAME = "campaign.lock"
 
 
 def _pid_alive(pid: int) -> bool:
+    if pid <= 0:  # 0 would signal our own process group: no lock holder's pid
+        return False
     try:
         os.kill(pid, 0)
-    except ProcessLookupError:
+    except (ProcessLookupError, OverflowError):
         return False
     except PermissionError:  # runs, as another user
         return True
@@ -40,10 +42,12 @@ def _pid_alive(pid: int) -> bool:
 
 def _read_pid(path: Path) -> int | None:
     try:
-        text = path.read_text(encoding="ascii").strip()
+        with open(path, "rb") as handle:
+            data = handle.read(32)  # a pid has a few digits; anything longer is not one
+        text = data.decode("ascii").strip()
     except (OSError, UnicodeDecodeError):
         return None
-    return int(text) if text.isdigit() else None
+    return int(text) if text.isdigit() and len(text) <= 10 else None
 
 
 class CampaignLock:

@@ -11,6 +11,10 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.errors import InputError
+from albot2d.evaluation.fuzz.files import check_episode_record
+from albot2d.inputfiles import binary_lines
+from albot2d.limits import MAX_CAMPAIGN_EPISODES, MAX_EPISODE_RECORD_BYTES
+from albot2d.validation import parse_json
 
 __all__ = ["STATUSES", "EpisodeLog", "read_episodes", "scan_episodes"]
 
@@ -22,44 +26,62 @@ def scan_episodes(path: Path) -> tuple[list[tuple[int, dict[str, Any]]], int, in
     """(line number, record) of every whole line, the byte length of the whole part and the
     number of bytes after it (a damaged tail: a line cut off by a killed writer, or the
     zero bytes a crash can leave at the end of a file). Anything else that is not an
-    episode record, or an episode twice, is an error naming the line."""
-    data = path.read_bytes()
-    # Whole lines end with a newline; a writer that was killed leaves at most a cut-off
-    # last line. Lines of zero bytes at the end are left by a crash of the machine.
-    keep = data.rfind(b"\n") + 1
-    while keep > 0:
-        previous = data.rfind(b"\n", 0, keep - 1) + 1
-        if data[previous:keep].strip(b"\x00\n"):
-            break
-        keep = previous
+    episode record (``files.check_episode_record``), an episode twice, a line
+    longer than ``MAX_EPISODE_RECORD_BYTES`` or more than ``MAX_CAMPAIGN_EPISODES`` lines
+    is an error naming the line. Streamed: the file is never read whole."""
     records: list[tuple[int, dict[str, Any]]] = []
     lines_of: dict[int, int] = {}
-    for number, line in enumerate(data[:keep].split(b"\n")[:-1], start=1):
-        if not line.strip():
-            continue
-        try:
-            record = json.loads(line)
-        except ValueError:
-            record = None
-        index = record.get("episode") if isinstance(record, dict) else None
-        if (
-            not isinstance(index, int)
-            or isinstance(index, bool)
-            or index < 0
-            or record.get("status") not in STATUSES
-        ):
-            raise InputError(
-                f"{path}:{number}: not an episode record; the file is damaged "
-                "(move it away to start afresh)"
-            )
-        if index in lines_of:
-            raise InputError(
-                f"{path}:{number}: episode {index} again (first on line "
-                f"{lines_of[index]}); the file is damaged (two writers?)"
-            )
-        lines_of[index] = number
-        records.append((number, record))
-    return records, keep, len(data) - keep
+    keep = offset = 0
+    zero_lines: list[int] = []  # lines of zero bytes not (yet) known to be at the end
+    source = str(path)
+    with open(path, "rb") as handle:
+        lines = binary_lines(
+            handle,
+            source,
+            max_line_bytes=MAX_EPISODE_RECORD_BYTES,
+            max_total_bytes=(MAX_CAMPAIGN_EPISODES + 1) * MAX_EPISODE_RECORD_BYTES,
+            line_limit_name="MAX_EPISODE_RECORD_BYTES",
+            total_limit_name="MAX_CAMPAIGN_EPISODES lines of MAX_EPISODE_RECORD_BYTES",
+        )
+        for number, line in enumerate(lines, start=1):
+            offset += len(line)
+            if not line.endswith(b"\n"):
+                break  # a last line cut off by a killed writer: the damaged tail
+            if not line.strip():
+                continue  # a blank line
+            if not line.strip(b"\x00 \t\r\n"):
+                zero_lines.append(number)
+                continue
+            if zero_lines:  # zero bytes followed by a record: damage, not a tail
+                number = zero_lines[0]
+                raise InputError(
+                    f"{path}:{number}: not an episode record; the file is damaged "
+                    "(move it away to start afresh)"
+                )
+            keep = offset
+            if len(records) >= MAX_CAMPAIGN_EPISODES:
+                raise InputError(
+                    f"{path}:{number}: more than {MAX_CAMPAIGN_EPISODES} episode records, the "
+                    "limit (MAX_CAMPAIGN_EPISODES)"
+                )
+            where = f"{path}:{number}"
+            try:
+                record = check_episode_record(parse_json(line.decode("utf-8"), where), where)
+            except (InputError, UnicodeDecodeError) as exc:
+                raise InputError(
+                    f"{where}: not an episode record ({str(exc).removeprefix(where + ': ')}); "
+                    "the file is damaged (move it away to start afresh)"
+                ) from None
+            index = record["episode"]
+            if index in lines_of:
+                raise InputError(
+                    f"{path}:{number}: episode {index} again (first on line "
+                    f"{lines_of[index]}); the file is damaged (two writers?)"
+                )
+            lines_of[index] = number
+            records.append((number, record))
+    size = path.stat().st_size
+    return records, keep, max(size - keep, 0)
 
 
 def read_episodes(path: str | os.PathLike[str]) -> tuple[dict[int, dict[str, Any]], int]:

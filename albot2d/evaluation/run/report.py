@@ -19,8 +19,8 @@ from albot2d import __version__
 from albot2d.atomic import atomic_write_text
 from albot2d.compiled import kernels
 from albot2d.errors import InputError
+from albot2d.inputfiles import read_json_file
 from albot2d.plainjson import to_plain
-from albot2d.validation import parse_json
 
 if TYPE_CHECKING:
     from albot2d.evaluation.metrics.rpe import RPEResult
@@ -76,8 +76,7 @@ def write_report(path: str | os.PathLike[str], report: Mapping[str, Any]) -> Non
 
 def read_report(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read a report.json written by ``albot2d run``/``replay`` (checks its format)."""
-    with open(path, encoding="utf-8", errors="replace") as handle:
-        report = parse_json(handle.read(), str(path))
+    report = read_json_file(path, "report")
     if not isinstance(report, dict) or report.get("format") != REPORT_FORMAT:
         raise InputError(f"{path}: not an albot2d report (format != {REPORT_FORMAT!r})")
     version = report.get("format_version")
