@@ -47,7 +47,7 @@ from albot2d.perception.surfaces import Surfaces
 from albot2d.perception.tracking import TrackingParams, trackable_mask
 from albot2d.sim.driving import DrivingProfile
 from albot2d.sim.laser import LaserNoise
-from albot2d.sim.odometry import OdometryNoise
+from albot2d.sim.odometry import OdometryNoise, heading_variance_rad2
 from albot2d.validation import check_non_negative, check_positive
 
 __all__ = [
@@ -119,15 +119,15 @@ def odometry_heading_envelope(
     ``var[b] - var[a]`` and systematic error ``sys[b] - sys[a]``.
 
     Per row increment (true motion ``d`` metres, turn ``φ``): the random part of the
-    odometry motion model (``perturb_increment``: rot1 and rot2 each with σ = α1|rot| +
-    α2 d; the increment's turn split between them, the worst case being all of it in one
-    with the other still carrying α2 d), the systematic part at full strength (turn scale
-    error × φ, drift × d, the induced error × turn steps of the driving profile)."""
+    odometry model, a random walk along the motion (variance α1² per radian turned plus
+    α2² per metre driven: ``albot2d.sim.odometry.heading_variance_rad2``), and the
+    systematic part at full strength (turn scale error × φ, drift × d, the induced error ×
+    turn steps of the driving profile)."""
     poses = np.asarray(true_poses, dtype=np.float64)
     inc = between_arrays(poses[:-1], poses[1:]) if len(poses) > 1 else np.zeros((0, 3))
     dist = np.hypot(inc[:, 0], inc[:, 1])
     turn = np.abs(np.asarray(wrap_angle(inc[:, 2])))
-    var = (noise.alpha1 * turn + noise.alpha2 * dist) ** 2 + (noise.alpha2 * dist) ** 2
+    var = heading_variance_rad2(noise, dist, turn)
     turn_steps = np.ceil(turn / math.radians(profile.turn_step_deg) - 1e-9)
     induced_rad = math.radians(abs(noise.induced_step_deg) + abs(profile.induced_step_deg))
     systematic = (
