@@ -83,19 +83,20 @@ def test_direction_sigma_matches_a_monte_carlo_line_fit() -> None:
 
 
 def test_the_odometry_envelope_of_a_pure_turn_and_a_straight_move() -> None:
-    """By hand: a 90° turn on the spot has variance (α1 φ)² and systematic part
-    |turn scale| φ + induced × steps; 2 m straight, 2 (α2 d)² and drift × d."""
+    """By hand: odometry's heading error is a random walk along the motion, so a 90° turn
+    on the spot has variance α1² φ and systematic part |turn scale| φ + induced × steps;
+    2 m straight, α2² d and drift × d."""
     noise = OdometryNoise(alpha1=0.1, alpha2=0.02, turn_scale_error=0.05,
                           heading_drift_deg_per_m=0.5, induced_step_deg=1.0)  # fmt: skip
     turn = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, math.pi / 2]])
     var, sys = hb.odometry_heading_envelope(turn, noise, PROFILE)
     steps = math.ceil(90.0 / PROFILE.turn_step_deg - 1e-9)
     induced = math.radians(1.0 + abs(PROFILE.induced_step_deg)) * steps
-    assert var[1] == pytest.approx((0.1 * math.pi / 2) ** 2)
+    assert var[1] == pytest.approx(0.1**2 * math.pi / 2)
     assert sys[1] == pytest.approx(0.05 * math.pi / 2 + induced)
     move = np.array([[0.0, 0.0, 0.3], [2.0 * math.cos(0.3), 2.0 * math.sin(0.3), 0.3]])
     var, sys = hb.odometry_heading_envelope(move, noise, PROFILE)
-    assert var[1] == pytest.approx(2 * (0.02 * 2.0) ** 2)
+    assert var[1] == pytest.approx(0.02**2 * 2.0)
     assert sys[1] == pytest.approx(math.radians(0.5) * 2.0)
 
 
