@@ -16,9 +16,9 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
-import albot2d.mapping.albot1 as albot1
-import albot2d.mapping.global_map as global_map
-from albot2d.evaluation.setup import RunSpec, build_run, make_simulator
+import albot2d.mapping.albot1.global_map as global_map
+import albot2d.mapping.albot1.mapper as albot1
+from albot2d.evaluation.run.setup import RunSpec, build_run, make_simulator
 from albot2d.frames import Frame
 from albot2d.perception import extract_surfaces
 from albot2d.seeding import make_rng

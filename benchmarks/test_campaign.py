@@ -29,8 +29,8 @@ from typing import Any
 
 import pytest
 
-from albot2d.evaluation.backends import LocalBackend
-from albot2d.evaluation.campaign import CampaignParams, run_campaign
+from albot2d.evaluation.fuzz.backends import LocalBackend
+from albot2d.evaluation.fuzz.campaign import CampaignParams, run_campaign
 
 EPISODES = 20
 SEED = 2024
@@ -51,7 +51,7 @@ _seconds: dict[int, float] = {}
 # with the API both checkouts share (CampaignParams, run_campaign on this process).
 _CHILD = """
 import json, sys, tempfile, time
-from albot2d.evaluation.campaign import CampaignParams, run_campaign
+from albot2d.evaluation.fuzz.campaign import CampaignParams, run_campaign
 episodes, seed = int(sys.argv[1]), int(sys.argv[2])
 warm = CampaignParams(episodes=2, seed=1, kinds=("rooms",), world_size_max_m=15.0,
                       tour_length_min_m=10.0, tour_length_max_m=10.0)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from albot2d.mapping.deletion import GlobalMapParams
+from albot2d.mapping.albot1.deletion import GlobalMapParams
 from benchmarks.test_mapping import filled_map, maps_and_views, time_updates
 
 
@@ -34,7 +34,7 @@ def test_update_by_touching_path(benchmark, path: str) -> None:  # type: ignore[
     maps, views = maps_and_views((10_000,))
     with pytest.MonkeyPatch.context() as mp:
         if path == "geos":
-            mp.setattr("albot2d.mapping.global_map.quick_touch_ring", lambda *a: None)
+            mp.setattr("albot2d.mapping.albot1.global_map.quick_touch_ring", lambda *a: None)
         time_updates(benchmark, maps[10_000], views)
 
 
@@ -44,7 +44,7 @@ def test_visible_share(benchmark, backend: str) -> None:  # type: ignore[no-unty
     if backend == "numba":
         pytest.importorskip("numba")
     from albot2d.geometry import Pose
-    from albot2d.mapping.deletion import visible_share
+    from albot2d.mapping.albot1.deletion import visible_share
     from benchmarks.test_mapping import a_view
 
     rng = np.random.default_rng(1)

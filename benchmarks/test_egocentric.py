@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from albot2d.evaluation.egocentric import unique_on_grid
-from albot2d.evaluation.map_quality import sample_segments
+from albot2d.evaluation.metrics.egocentric import unique_on_grid
+from albot2d.evaluation.metrics.map_quality import sample_segments
 
 
 def unique_rows(points: np.ndarray, grid_m: float) -> np.ndarray:

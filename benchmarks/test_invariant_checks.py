@@ -17,10 +17,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from albot2d.evaluation import deletion_invariant as di
+from albot2d.evaluation.checks import deletion as di
 from albot2d.geometry import transform_segments
 from albot2d.mapping import Albot1, UpdateReport
-from albot2d.mapping.route_map import LocalMap
+from albot2d.mapping.albot1.route_map import LocalMap
 from tests.runs import map_frames, simulate
 from tests.test_deletion_invariant import _reference
 from worldgen.generate import generate

@@ -35,7 +35,7 @@ SURFACES = 820_000
 
 _SETUP = """
 import json, resource, numpy as np
-from albot2d.evaluation.setup import RunSpec, build_run
+from albot2d.evaluation.run.setup import RunSpec, build_run
 walls = build_run(RunSpec()).world.obstacle_segments
 rng = np.random.default_rng(0)
 n = {n}
@@ -45,7 +45,7 @@ a = walls[i, :2] + rng.uniform(0.0, 0.8, (n, 1)) * d
 b = a + 0.2 * d / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)[:, None]
 segs = np.hstack([a, b]) + rng.normal(0.0, 0.02, (n, 4))
 ids = np.sort(rng.integers(0, n // 6, n))
-import matplotlib.collections, albot2d.viz.maps, albot2d.evaluation.map_quality
+import matplotlib.collections, albot2d.viz.maps, albot2d.evaluation.metrics.map_quality
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 """
 
@@ -66,7 +66,7 @@ ax = albot2d.viz.maps.plot_map(segs, map_ids=ids)
 png_bytes(ax.get_figure(root=True), 100)
 """,
     "score_map_quality": """
-from albot2d.evaluation.map_quality import map_quality
+from albot2d.evaluation.metrics.map_quality import map_quality
 from albot2d.geometry import Pose
 seen = walls[:, :2][np.hypot(*(walls[:, :2] - [30.0, 20.0]).T) < 8.0]
 map_quality(segs, walls, start_pose=Pose(0.0, 0.0, 0.0), seen_points=seen)

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from albot2d.evaluation import RunSpec, run_experiment
-from albot2d.evaluation.alignment import _evo_trajectory, evo_pose_errors
+from albot2d.evaluation.metrics.alignment import _evo_trajectory, evo_pose_errors
 from albot2d.geometry import transform_segments
 from worldgen.regions import isovist_ranges, isovist_ranges_many
 
@@ -83,7 +83,7 @@ def test_isovists(benchmark: Any, run: Any, how: str) -> None:
 def test_map_sample_distances(
     benchmark: Any, run: Any, how: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    module = importlib.import_module("albot2d.evaluation.map_quality")
+    module = importlib.import_module("albot2d.evaluation.metrics.map_quality")
     if how == "every candidate":
         monkeypatch.setattr(module, "_may_be_nearest", lambda s, w, c: np.ones(len(w), bool))
     trace = run.trace

@@ -27,8 +27,8 @@ import pytest
 from albot2d.frames import Frame
 from albot2d.mapping import Albot1, Mapper
 from albot2d.mapping.slam import LoopClosingSLAM, ScanMatchingSLAM, SlamParams
-from albot2d.mapping.slam_graph import PoseGraphParams
-from albot2d.mapping.slam_loops import LoopClosureParams
+from albot2d.mapping.slam.loop_closure import LoopClosureParams
+from albot2d.mapping.slam.pose_graph import PoseGraphParams
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
 from worldgen import plan_tour

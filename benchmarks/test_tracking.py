@@ -17,7 +17,7 @@ from albot2d.perception.tracking import match_surfaces, rtsv, start_tracking, tr
 
 @pytest.fixture(scope="module")
 def rtsv_inputs():  # type: ignore[no-untyped-def]
-    from albot2d.evaluation.setup import RunSpec, build_run
+    from albot2d.evaluation.run.setup import RunSpec, build_run
 
     run = build_run(RunSpec(tour_length_m=60.0))
     frames = run.simulator.drive(run.tour, run.profile)
@@ -60,11 +60,11 @@ def test_rtsv(benchmark, rtsv_inputs) -> None:  # type: ignore[no-untyped-def]
 @pytest.fixture(scope="module")
 def triangulations():  # type: ignore[no-untyped-def]
     """Albot1's triangulate calls over the first 1,500 views of the default run."""
-    from albot2d.evaluation.setup import RunSpec, build_run
+    from albot2d.evaluation.run.setup import RunSpec, build_run
     from albot2d.mapping import Albot1
 
     calls = []
-    real = __import__("albot2d.mapping.albot1", fromlist=["triangulate"]).triangulate
+    real = __import__("albot2d.mapping.albot1.mapper", fromlist=["triangulate"]).triangulate
 
     def record(*args, **kwargs):  # type: ignore[no-untyped-def]
         calls.append((args, kwargs))
@@ -73,7 +73,7 @@ def triangulations():  # type: ignore[no-untyped-def]
     run = build_run(RunSpec())
     m = Albot1()
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr("albot2d.mapping.albot1.triangulate", record)
+        mp.setattr("albot2d.mapping.albot1.mapper.triangulate", record)
         for frame in itertools.islice(run.simulator.drive(run.tour, run.profile), 1500):
             m.observe(frame)
     return calls
@@ -83,7 +83,7 @@ def triangulations():  # type: ignore[no-untyped-def]
 @pytest.mark.parametrize("path", ["scalar", "array"])
 def test_triangulate(benchmark, triangulations, path: str) -> None:  # type: ignore[no-untyped-def]
     """The scalar path for fewer than 8 surfaces against the array path, side by side."""
-    import albot2d.mapping.triangulation as tri
+    import albot2d.mapping.albot1.triangulation as tri
 
     with pytest.MonkeyPatch.context() as mp:
         if path == "array":

@@ -9,7 +9,7 @@ The mapper protocol (``albot2d.mapping.Mapper``) asks for six methods and a ``na
 (the name the report, the tables and the exported files use). Frames: everything a
 mapper returns is in *its own* frame, whose origin is the robot's pose at the first
 frame it observed (x forward, y left). The evaluation anchors it at the true start pose
-(``albot2d.evaluation.alignment.in_world_frame``) to compare it with the world.
+(``albot2d.evaluation.metrics.alignment.in_world_frame``) to compare it with the world.
 
 This example places every view by odometry, like ``naive``, but keeps only the surfaces
 of the last ``keep_views`` views as its map: a mapper with a very short memory.

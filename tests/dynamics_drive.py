@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from albot2d.evaluation.sim_invariants import ClearanceChecker
+from albot2d.evaluation.checks.simulator import ClearanceChecker
 from albot2d.geometry import Pose
 from albot2d.sim.laser import LaserNoise
 from albot2d.sim.simulator import Simulator

@@ -17,7 +17,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from albot2d.evaluation.invariants import UpdateRecorder, ViewRecorder
+from albot2d.evaluation.checks.invariants import UpdateRecorder, ViewRecorder
 from albot2d.frames import Frame
 from albot2d.mapping import Albot1, Albot1Params, Mapper, MapperCounts
 from albot2d.seeding import make_rng

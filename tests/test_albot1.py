@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from albot2d.evaluation.invariants import ViewRecorder
+from albot2d.evaluation.checks.invariants import ViewRecorder
 from albot2d.geometry import Pose, point_segment_distance, transform_segments, wrap_angle
 from albot2d.mapping import Albot1, Albot1Params
 from albot2d.perception.surfaces import Surfaces
@@ -135,7 +135,7 @@ def test_params_are_validated() -> None:
 
 
 def test_mit_csail_log_runs_through(shared_data) -> None:  # type: ignore[no-untyped-def]
-    from albot2d.evaluation.rpe import relative_pose_error
+    from albot2d.evaluation.metrics.rpe import relative_pose_error
     from albot2d.logs import read_frames, read_relations
 
     frames = list(read_frames(shared_data / "raw" / "mit-csail.clf.gz"))

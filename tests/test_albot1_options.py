@@ -11,9 +11,9 @@ import pytest
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
-from albot2d.mapping.albot1 import Albot1, Albot1Params
+from albot2d.mapping.albot1.mapper import Albot1, Albot1Params
+from albot2d.mapping.albot1.triangulation import TriangulationParams, triangulate
 from albot2d.mapping.registry import mapper_factory, resolve_mappers
-from albot2d.mapping.triangulation import TriangulationParams, triangulate
 from albot2d.perception import Surfaces, TrackingParams, rtsv, start_tracking
 from albot2d.perception.tracking import key_endpoints, match_fitness
 

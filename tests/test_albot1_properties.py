@@ -13,7 +13,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from albot2d.evaluation.map_quality import map_quality
+from albot2d.evaluation.metrics.map_quality import map_quality
 from albot2d.geometry import Pose, between_arrays, transform_segments, wrap_angle
 from albot2d.mapping import Albot1
 from albot2d.seeding import make_rng

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from albot2d.evaluation import RunSpec, run_experiment
-from albot2d.evaluation.alignment import (
+from albot2d.evaluation.metrics.alignment import (
     _evo_trajectory,
     absolute_pose_error,
     evo_absolute_pose_error,

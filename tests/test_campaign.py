@@ -15,17 +15,17 @@ import pytest
 
 from albot2d.cli import main
 from albot2d.errors import InputError
-from albot2d.evaluation.backends import DaskBackend, LocalBackend
-from albot2d.evaluation.campaign import (
+from albot2d.evaluation.fuzz.backends import DaskBackend, LocalBackend
+from albot2d.evaluation.fuzz.campaign import (
     EPISODES_NAME,
     CampaignParams,
     read_episodes,
     reproducer_path,
     run_campaign,
 )
-from albot2d.evaluation.campaign_summary import COMPARED_METRICS, format_summary, summarise
-from albot2d.evaluation.episode import EpisodeSpec, episode_seed, run_episode
-from albot2d.evaluation.reproducer import replay_reproducer
+from albot2d.evaluation.fuzz.episode import EpisodeSpec, episode_seed, run_episode
+from albot2d.evaluation.fuzz.reproducer import replay_reproducer
+from albot2d.evaluation.fuzz.summary import COMPARED_METRICS, format_summary, summarise
 from tests.campaign_helpers import SMALL
 from worldgen.generate import generate
 from worldgen.params import PARAMS_BY_KIND
@@ -40,7 +40,7 @@ import numpy as np
 from albot2d.geometry import Pose
 from albot2d.mapping import MapperCounts, MapSnapshot
 from albot2d.mapping.baselines import NaiveIntegration
-from albot2d.mapping.route_map import RouteMap
+from albot2d.mapping.albot1.route_map import RouteMap
 
 
 class Tiny:
@@ -423,7 +423,7 @@ def test_an_episode_runs_with_the_heap_frozen_and_hands_it_back() -> None:
     ``_heap_frozen``), and the heap is as it was afterwards, frozen or not."""
     import gc
 
-    from albot2d.evaluation.campaign import _heap_frozen
+    from albot2d.evaluation.fuzz.campaign import _heap_frozen
 
     assert gc.get_freeze_count() == 0
     with _heap_frozen():

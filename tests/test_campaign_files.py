@@ -11,15 +11,15 @@ from pathlib import Path
 import pytest
 
 from albot2d.errors import InputError
-from albot2d.evaluation import campaign_lock
-from albot2d.evaluation.campaign import (
+from albot2d.evaluation.fuzz import lock as campaign_lock
+from albot2d.evaluation.fuzz.campaign import (
     CAMPAIGN_NAME,
     EPISODES_NAME,
     CampaignParams,
     read_episodes,
     run_campaign,
 )
-from albot2d.evaluation.campaign_lock import LOCK_NAME, CampaignLock
+from albot2d.evaluation.fuzz.lock import LOCK_NAME, CampaignLock
 from tests.campaign_helpers import SMALL
 
 

@@ -23,14 +23,14 @@ from pathlib import Path
 import pytest
 
 from albot2d.errors import InputError
-from albot2d.evaluation.campaign import (
+from albot2d.evaluation.fuzz.campaign import (
     CAMPAIGN_NAME,
     EPISODES_NAME,
     CampaignParams,
     read_episodes,
     run_campaign,
 )
-from albot2d.evaluation.campaign_lock import LOCK_NAME
+from albot2d.evaluation.fuzz.lock import LOCK_NAME
 
 psutil = pytest.importorskip("psutil")
 

@@ -14,14 +14,14 @@ import pytest
 import shapely
 import shapely.affinity
 
-from albot2d.evaluation import hit_geometry
-from albot2d.evaluation.campaign import CampaignParams
-from albot2d.evaluation.deletion_invariant import _ahead, _seen_samples
-from albot2d.evaluation.episode import EpisodeSpec
-from albot2d.evaluation.episode_metrics import complete_scores, episode_metrics
-from albot2d.evaluation.experiment import ExperimentResult, run_experiment
-from albot2d.evaluation.scoring import EvaluationParams
-from albot2d.evaluation.sim_invariants import SegmentGrid
+from albot2d.evaluation.checks import hit_geometry
+from albot2d.evaluation.checks.deletion import _ahead, _seen_samples
+from albot2d.evaluation.checks.simulator import SegmentGrid
+from albot2d.evaluation.fuzz.campaign import CampaignParams
+from albot2d.evaluation.fuzz.episode import EpisodeSpec
+from albot2d.evaluation.fuzz.episode_metrics import complete_scores, episode_metrics
+from albot2d.evaluation.run.experiment import ExperimentResult, run_experiment
+from albot2d.evaluation.run.scoring import EvaluationParams
 from albot2d.geometry import Pose
 from tests.campaign_helpers import SMALL
 from tests.digests import canonical

@@ -15,7 +15,7 @@ import pytest
 
 from albot2d.cli import main
 from albot2d.evaluation import RunSpec, run_experiment
-from albot2d.evaluation.replay import find_relations, log_stem
+from albot2d.evaluation.run.replay import find_relations, log_stem
 from albot2d.geometry import Pose
 from albot2d.logs import read_frames, read_relations, read_run, write_run
 from albot2d.seeding import RUN_STREAMS, stream_seed

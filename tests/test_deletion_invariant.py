@@ -12,12 +12,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from albot2d.evaluation import deletion_invariant as di
-from albot2d.evaluation.invariant_base import InvariantError
+from albot2d.evaluation.checks import deletion as di
+from albot2d.evaluation.checks.violation import InvariantError
 from albot2d.geometry import Pose, transform_segments
 from albot2d.mapping import Albot1, Albot1Params, UpdateReport
-from albot2d.mapping.deletion import GlobalMapParams
-from albot2d.mapping.route_map import LocalMap
+from albot2d.mapping.albot1.deletion import GlobalMapParams
+from albot2d.mapping.albot1.route_map import LocalMap
 from tests.runs import map_frames, simulate
 from worldgen.generate import generate
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from albot2d.geometry import Pose
-from albot2d.mapping.deletion import visible_share
+from albot2d.mapping.albot1.deletion import visible_share
 
 pytest.importorskip("numba")
 
@@ -43,7 +43,7 @@ def test_numba_share_equals_numpy_on_random_scenes(seed: int) -> None:
 
 
 def test_numba_share_equals_numpy_on_an_office_run() -> None:
-    from albot2d.evaluation.setup import RunSpec, build_run
+    from albot2d.evaluation.run.setup import RunSpec, build_run
     from albot2d.geometry import transform_segments
     from albot2d.mapping import Albot1
 
@@ -87,14 +87,14 @@ def test_quick_touching_is_geos_touching_on_random_views(seed: int) -> None:
     the view's surfaces pushed ~r out, across the lateral axis, and clutter."""
     import shapely
 
-    from albot2d.mapping.deletion import (
+    from albot2d.mapping.albot1.deletion import (
         GlobalMapParams,
         quick_touch_ring,
         quick_touching_mask,
         touching_mask,
         view_polygon,
     )
-    from albot2d.mapping.deletion_numba import classify_touching
+    from albot2d.mapping.albot1.deletion_numba import classify_touching
 
     rng = np.random.default_rng(seed)
     params = GlobalMapParams()
@@ -128,7 +128,7 @@ def test_quick_touching_is_geos_touching_on_random_views(seed: int) -> None:
 
 
 def test_ring_check_refuses_what_it_cannot_vouch_for() -> None:
-    from albot2d.mapping.deletion_numba import ring_is_clearly_simple
+    from albot2d.mapping.albot1.deletion_numba import ring_is_clearly_simple
 
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     bowtie = np.array([[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]])
@@ -142,7 +142,7 @@ def test_ring_check_refuses_what_it_cannot_vouch_for() -> None:
 def test_global_map_with_and_without_quick_touching_agree_on_an_office_run() -> None:
     """Whole runs: every update report (but P, built lazily) and the final map equal the
     GEOS path's (P built and tested for every update), for two deletion rules."""
-    from albot2d.evaluation.setup import RunSpec, build_run
+    from albot2d.evaluation.run.setup import RunSpec, build_run
     from albot2d.mapping import Albot1, Albot1Params, GlobalMapParams, UpdateReport
 
     run = build_run(RunSpec(tour_length_m=25.0))
@@ -161,7 +161,9 @@ def test_global_map_with_and_without_quick_touching_agree_on_an_office_run() -> 
             m = Albot1(params, on_update=record)
             with pytest.MonkeyPatch.context() as mp:
                 if not quick:
-                    mp.setattr("albot2d.mapping.global_map.quick_touch_ring", lambda *a: None)
+                    mp.setattr(
+                        "albot2d.mapping.albot1.global_map.quick_touch_ring", lambda *a: None
+                    )
                 for frame in frames:
                     m.observe(frame)
             snap = m.global_map()
@@ -172,7 +174,7 @@ def test_global_map_with_and_without_quick_touching_agree_on_an_office_run() -> 
 
 @pytest.mark.parametrize("seed", range(4))
 def test_compiled_facing_and_seen_side_equal_the_numpy_masks(seed: int) -> None:
-    from albot2d.mapping.deletion import facing_mask, facing_seen_mask, seen_side_mask
+    from albot2d.mapping.albot1.deletion import facing_mask, facing_seen_mask, seen_side_mask
 
     rng = np.random.default_rng(seed)
     segs = random_segments(rng, 300)

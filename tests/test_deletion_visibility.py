@@ -13,11 +13,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from albot2d.errors import InputError
-from albot2d.evaluation import invariants as inv
+from albot2d.evaluation.checks import invariants as inv
 from albot2d.geometry import Pose, transform_segments
 from albot2d.mapping import Albot1
-from albot2d.mapping.deletion import seen_side_mask, visible_share
-from albot2d.mapping.global_map import GlobalMap, GlobalMapParams
+from albot2d.mapping.albot1.deletion import seen_side_mask, visible_share
+from albot2d.mapping.albot1.global_map import GlobalMap, GlobalMapParams
 
 WALL = np.array([[5.0, -2.0, 5.0, 2.0]])  # scan order: lower bearing first
 # Two pieces of that wall with a doorway between y = -0.5 and 0.5.

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from albot2d.errors import InputError
-from albot2d.evaluation.invariants import InvariantError
-from albot2d.evaluation.sim_invariants import ClearanceChecker
+from albot2d.evaluation.checks.invariants import InvariantError
+from albot2d.evaluation.checks.simulator import ClearanceChecker
 from albot2d.geometry import Pose
 from albot2d.seeding import make_rng
 from albot2d.sim.dynamics import MAX_MOVING_OBSTACLES, Dynamics, PhysicsParams

@@ -7,14 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from albot2d.evaluation.egocentric import (
+from albot2d.evaluation.metrics.egocentric import (
     EgocentricParams,
     egocentric_quality,
     in_robot_frame,
     seen_window_local,
     unique_on_grid,
 )
-from albot2d.evaluation.map_quality import sample_segments
+from albot2d.evaluation.metrics.map_quality import sample_segments
 from albot2d.geometry import Pose, transform_segments
 
 # A corridor 2 m wide along +x in the world, the robot at (10, 0) facing +x.
@@ -73,7 +73,7 @@ def test_grid_keeps_one_point_per_cell_and_params_are_checked() -> None:
 
 def test_a_run_reports_egocentric_quality_revisits_and_updates_by_region() -> None:
     """report.json carries the new sections for a view-based mapper (and None otherwise)."""
-    from albot2d.evaluation.experiment import RunSpec, run_experiment
+    from albot2d.evaluation.run.experiment import RunSpec, run_experiment
 
     spec = RunSpec(kind="office", seed=1, profile="start_stop", tour_kind="circuit",
                    noise="pioneer3dx", mappers=("albot1", "naive"), max_frames=40)  # fmt: skip
@@ -94,9 +94,9 @@ def test_stops_scored_while_driving_equal_the_kept_inputs_scored_later() -> None
     """With the true walls, drive_mappers scores each stop there and then and keeps no map
     copies (memory follows the map, not stops × map); the scores equal those computed
     afterwards from the kept window and maps, stop by stop, mapper by mapper."""
-    from albot2d.evaluation.scoring import egocentric_at
-    from albot2d.evaluation.setup import RunSpec, build_run
-    from albot2d.evaluation.trace import HomingParams, Trace, drive_mappers
+    from albot2d.evaluation.run.scoring import egocentric_at
+    from albot2d.evaluation.run.setup import RunSpec, build_run
+    from albot2d.evaluation.run.trace import HomingParams, Trace, drive_mappers
 
     spec = RunSpec(kind="office", seed=2, world_params={"width_m": 30.0, "height_m": 24.0},
                    profile="dataset3", tour_length_m=30.0, max_frames=600)  # fmt: skip

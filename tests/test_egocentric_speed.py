@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from albot2d.evaluation.egocentric import _covered, _grid_samples_within, unique_on_grid
-from albot2d.evaluation.map_quality import (
+from albot2d.evaluation.metrics.egocentric import _covered, _grid_samples_within, unique_on_grid
+from albot2d.evaluation.metrics.map_quality import (
     nearest_segment_distance,
     nearest_segment_distance_bounded,
     sample_segments,

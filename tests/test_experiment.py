@@ -25,8 +25,8 @@ from albot2d.evaluation import (
     drive_mappers,
     run_experiment,
 )
-from albot2d.evaluation.experiment import evaluation_params_from_report
-from albot2d.evaluation.report import (
+from albot2d.evaluation.run.experiment import evaluation_params_from_report
+from albot2d.evaluation.run.report import (
     format_homing_table,
     format_summary_table,
     report_json,

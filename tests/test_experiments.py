@@ -170,7 +170,7 @@ def test_path_integration_causes_are_split_and_cut_at_the_mark():
 def test_run_experiment_without_scoring_drives_the_same_run():
     import numpy as np
 
-    from albot2d.evaluation.experiment import RunSpec, run_experiment
+    from albot2d.evaluation.run.experiment import RunSpec, run_experiment
 
     spec = RunSpec(kind="fig6", seed=1, route="fig15", profile="start_stop", noise="pioneer3dx",
                    mappers=("albot1", "naive"), max_frames=8)  # fmt: skip

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from albot2d.evaluation import RunSpec, run_experiment
-from albot2d.evaluation.alignment import (
+from albot2d.evaluation.metrics.alignment import (
     absolute_pose_error,
     align_se2,
     in_world_frame,
     map_in_world_frame,
 )
-from albot2d.evaluation.export import export_files, segments_csv, tum_text
+from albot2d.evaluation.run.export import export_files, segments_csv, tum_text
 from albot2d.geometry import compose_arrays, transform_segments
 
 SPEC = RunSpec(

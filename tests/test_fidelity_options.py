@@ -11,8 +11,8 @@ import pytest
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
-from albot2d.mapping.albot1 import Albot1Params
-from albot2d.mapping.triangulation import TriangulationParams, pose_affordances, triangulate
+from albot2d.mapping.albot1.mapper import Albot1Params
+from albot2d.mapping.albot1.triangulation import TriangulationParams, pose_affordances, triangulate
 from albot2d.perception.surfaces import Surfaces
 
 WALLS = np.array([[3.0, -2.0, 3.0, 2.0], [1.0, 2.0, 2.5, 2.0], [1.0, -2.0, 2.5, -2.0]])

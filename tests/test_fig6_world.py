@@ -79,7 +79,7 @@ def test_too_small_for_the_shape_is_an_input_error():
 
 
 def test_runspec_route_starts_at_s_and_drives_the_route():
-    from albot2d.evaluation.experiment import RunSpec, run_experiment
+    from albot2d.evaluation.run.experiment import RunSpec, run_experiment
 
     spec = RunSpec(kind="fig6", seed=2, route="fig8_clockwise", profile="start_stop",
                    mappers=("truth",), max_frames=4)  # fmt: skip

@@ -10,9 +10,9 @@ from hypothesis import strategies as st
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
-from albot2d.mapping.deletion import group_maps
-from albot2d.mapping.global_map import GlobalMap, GlobalMapParams, view_polygon
-from albot2d.mapping.spatial_index import SegmentGridIndex
+from albot2d.geometry.spatial_index import SegmentGridIndex
+from albot2d.mapping.albot1.deletion import group_maps
+from albot2d.mapping.albot1.global_map import GlobalMap, GlobalMapParams, view_polygon
 
 
 def seg(x0: float, y0: float, x1: float, y1: float) -> np.ndarray:

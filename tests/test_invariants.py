@@ -1,4 +1,4 @@
-"""The invariant checks (albot2d.evaluation.invariants): each passes on real runs and fails
+"""The invariant checks (albot2d.evaluation.checks.invariants): each passes on real runs and fails
 on a run broken on purpose; property tests of the simulator and of Albot1's heading error
 over random worlds; Albot1 against raw odometry on average."""
 
@@ -13,14 +13,14 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from albot2d.evaluation import invariants as inv
-from albot2d.evaluation import sim_invariants as sim_inv
-from albot2d.evaluation.campaign import CampaignParams
-from albot2d.evaluation.episode import EpisodeSpec, run_episode
+from albot2d.evaluation.checks import invariants as inv
+from albot2d.evaluation.checks import simulator as sim_inv
+from albot2d.evaluation.fuzz.campaign import CampaignParams
+from albot2d.evaluation.fuzz.episode import EpisodeSpec, run_episode
 from albot2d.frames import Frame, Scan
 from albot2d.geometry import Pose, transform_segments
 from albot2d.mapping import Albot1, StepRecord, UpdateReport
-from albot2d.mapping.route_map import RouteMap
+from albot2d.mapping.albot1.route_map import RouteMap
 from albot2d.sim.driving import get_profile
 from albot2d.sim.laser import Laser, LaserNoise
 from albot2d.sim.odometry import NOISE_PRESETS

@@ -1,4 +1,4 @@
-"""Albot1's per-link error budget (albot2d.evaluation.link_errors)."""
+"""Albot1's per-link error budget (albot2d.studies.link_errors)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,11 @@ from itertools import islice
 import numpy as np
 import pytest
 
-from albot2d.evaluation.link_errors import (
+from albot2d.evaluation.run.setup import RunSpec, build_run
+from albot2d.geometry import Pose
+from albot2d.mapping.albot1.mapper import Albot1
+from albot2d.perception.surfaces import Surfaces
+from albot2d.studies.link_errors import (
     LinkError,
     RecordingAlbot1,
     kind_summary,
@@ -17,10 +21,6 @@ from albot2d.evaluation.link_errors import (
     record_run,
     window_budget,
 )
-from albot2d.evaluation.setup import RunSpec, build_run
-from albot2d.geometry import Pose
-from albot2d.mapping.albot1 import Albot1
-from albot2d.perception.surfaces import Surfaces
 
 NAN = float("nan")
 
@@ -105,7 +105,7 @@ def test_cli_overrides_nested_fields(capsys: pytest.CaptureFixture[str]) -> None
 def test_each_kind_of_path_integration_is_told_apart() -> None:
     """Hand-built tracked walls: none left, ends imprecise in both views, every
     affordance beyond the gate, and the heading taken from the walls' directions."""
-    from albot2d.mapping.albot1 import Albot1Params
+    from albot2d.mapping.albot1.mapper import Albot1Params
     from albot2d.perception import TrackedSurfaces, start_tracking
     from albot2d.perception.tracking import TrackingParams
 

@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 import shapely
 
-from albot2d.evaluation.map_quality import (
+from albot2d.evaluation.metrics.map_quality import (
     MapQualityParams,
     map_quality,
     nearest_segment_distance,
 )
 from albot2d.geometry import Pose
 
-# The module (``albot2d.evaluation.map_quality`` the attribute is the function).
-mq = importlib.import_module("albot2d.evaluation.map_quality")
+# The module (``albot2d.evaluation.metrics.map_quality`` the attribute is the function).
+mq = importlib.import_module("albot2d.evaluation.metrics.map_quality")
 
 
 def _map(rng: np.random.Generator, n: int, span: float) -> np.ndarray:

@@ -8,13 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from albot2d.evaluation import trace as trace_module
-from albot2d.evaluation import updates
-from albot2d.evaluation.egocentric import in_robot_frame
-from albot2d.evaluation.setup import RunSpec, build_run, build_world
+from albot2d.evaluation.metrics import updates
+from albot2d.evaluation.metrics.egocentric import in_robot_frame
+from albot2d.evaluation.run import trace as trace_module
+from albot2d.evaluation.run.setup import RunSpec, build_run, build_world
 from albot2d.mapping import baselines
+from albot2d.mapping.albot1.global_map import GlobalMap
 from albot2d.mapping.baselines import IntegratedMap, NaiveIntegration, PoseLog
-from albot2d.mapping.global_map import GlobalMap
 
 
 def _views(seed: int, n: int) -> list[np.ndarray]:

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from albot2d.errors import InputError
-from albot2d.evaluation.homing import homing, homing_to_start
-from albot2d.evaluation.rpe import relative_pose_error
+from albot2d.evaluation.metrics.homing import homing, homing_to_start
+from albot2d.evaluation.metrics.rpe import relative_pose_error
 from albot2d.geometry import Pose, between_arrays
 
 
@@ -90,7 +90,7 @@ def test_homing_to_start_compares_each_trajectory_in_its_own_frame() -> None:
 
 # -- map quality ----------------------------------------------------------------------
 def test_map_quality_known_offsets() -> None:
-    from albot2d.evaluation.map_quality import map_quality, sample_segments
+    from albot2d.evaluation.metrics.map_quality import map_quality, sample_segments
 
     truth = np.array([[0.0, 0.0, 10.0, 0.0]])
     # A map surface 5 cm off the wall, expressed in a mapper frame whose origin is the
@@ -113,7 +113,7 @@ def test_map_quality_known_offsets() -> None:
 
 
 def test_sample_segments_spacing_and_endpoints() -> None:
-    from albot2d.evaluation.map_quality import sample_segments
+    from albot2d.evaluation.metrics.map_quality import sample_segments
 
     pts = sample_segments(np.array([[0, 0, 1, 0], [0, 0, 0, 0.01]], float), 0.25)
     assert len(pts) == 5 + 2
@@ -130,10 +130,10 @@ def test_map_sample_distances_equal_the_nearest_wall_tree_query(
 
     import shapely
 
-    from albot2d.evaluation.map_quality import _sample_distances, sample_segments
+    from albot2d.evaluation.metrics.map_quality import _sample_distances, sample_segments
 
     if small_blocks:  # many blocks and chunks, as on a long run's maps
-        module = importlib.import_module("albot2d.evaluation.map_quality")
+        module = importlib.import_module("albot2d.evaluation.metrics.map_quality")
         monkeypatch.setattr(module, "_BLOCK_SAMPLES", 700)
         monkeypatch.setattr(module, "_CHUNK_PAIRS", 900)
 
@@ -161,7 +161,7 @@ def test_pruning_candidate_walls_changes_no_distance(
     on walls meeting at corners, parallel faces and a map drifted off them."""
     import importlib
 
-    module = importlib.import_module("albot2d.evaluation.map_quality")
+    module = importlib.import_module("albot2d.evaluation.metrics.map_quality")
     rng = np.random.default_rng(seed)
     # A grid of rooms: two faces 0.15 m apart per wall, so parallel candidates abound.
     lines = [[x + dx, 0.0, x + dx, 20.0] for x in range(0, 21, 5) for dx in (0.0, 0.15)]

@@ -112,16 +112,22 @@ def test_systematic_bias() -> None:
     assert _as_tuple(turn) == pytest.approx((0.0, 0.0, 0.5))
 
 
-def test_random_noise_needs_rng_and_draws_three_normals() -> None:
-    noise = OdometryNoise(alpha3=0.1)
+def test_random_noise_needs_rng_and_draws_per_cell_of_path() -> None:
+    noise = OdometryNoise(alpha3=0.1, resolution_m=0.5)
     with pytest.raises(ValueError, match="rng"):
         Odometry(noise)
-    a, b = np.random.default_rng(7), np.random.default_rng(7)
-    odom = Odometry(noise, a)
-    for _ in range(5):
-        odom.update(Pose(1.0, 0.0, 0.0))
-    b.standard_normal(15)
-    assert a.standard_normal() == b.standard_normal()
+    # Two normals per 0.5 m cell, drawn in blocks: 5 m is 10 cells, 20 normals, whatever
+    # the reads; one 5 m read and fifty 10 cm reads report the same pose.
+    once, often = (
+        Odometry(noise, np.random.default_rng(7)),
+        Odometry(noise, np.random.default_rng(7)),
+    )
+    once.update(Pose(5.0, 0.0, 0.0))
+    for _ in range(50):
+        often.update(Pose(0.1, 0.0, 0.0))
+    assert once.pose.x == pytest.approx(often.pose.x, abs=1e-12)
+    z = np.random.default_rng(7).standard_normal(20)[1::2]
+    assert once.pose.x == pytest.approx(5.0 + 0.1 * math.sqrt(0.5) * z.sum(), abs=1e-12)
 
 
 def test_reading_properties() -> None:

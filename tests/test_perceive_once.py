@@ -15,7 +15,7 @@ from albot2d.mapping import (
     NaiveIntegration,
     PerceivingMapper,
 )
-from albot2d.mapping.global_map import MapSnapshot
+from albot2d.mapping.albot1.global_map import MapSnapshot
 from albot2d.mapping.protocol import MapperCounts, takes_perceived_views
 from albot2d.perception import ExtractionParams
 from albot2d.seeding import make_rng

@@ -14,8 +14,8 @@ import pytest
 pytest.importorskip("matplotlib")
 
 from albot2d.evaluation import RunSpec, run_experiment
-from albot2d.evaluation.experiment import ExperimentResult
-from albot2d.evaluation.homing import HomingResult
+from albot2d.evaluation.metrics.homing import HomingResult
+from albot2d.evaluation.run.experiment import ExperimentResult
 from albot2d.viz import error_curves, plot_errors_vs_distance, plot_estimated_paths, plot_homing
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from albot2d.evaluation.trace import StepTimes
+from albot2d.evaluation.run.trace import StepTimes
 
 pytest.importorskip("matplotlib")
 

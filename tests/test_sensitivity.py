@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from albot2d.errors import InputError
-from albot2d.evaluation.sensitivity import (
+from albot2d.studies.sensitivity import (
     PAPER_FIG8,
     SensitivitySetup,
     format_table,

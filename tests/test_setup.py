@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from albot2d.errors import InputError
-from albot2d.evaluation.homing import HomingResult
-from albot2d.evaluation.results import HomingStop, HomingSummary, ProcessCounts
-from albot2d.evaluation.setup import RunSpec, build_run, check_spec
+from albot2d.evaluation.metrics.homing import HomingResult
+from albot2d.evaluation.run.results import HomingStop, HomingSummary, ProcessCounts
+from albot2d.evaluation.run.setup import RunSpec, build_run, check_spec
 from albot2d.seeding import RUN_STREAMS, stream_seed
 from albot2d.sim.laser import LASER_NOISE_PRESETS, LaserNoise, laser_noise_preset
 from albot2d.sim.odometry import noise_preset
@@ -92,7 +92,7 @@ def test_typed_scores_are_the_report_sections() -> None:
 def test_the_help_texts_defaults_are_the_dataclasses_defaults() -> None:
     """The CLI names RunSpec's/CampaignParams' defaults for --help without importing them."""
     from albot2d.cli import common, fuzz_cmd
-    from albot2d.evaluation.campaign import CampaignParams
+    from albot2d.evaluation.fuzz.campaign import CampaignParams
 
     spec = RunSpec()
     assert spec.kind == common.DEFAULT_KIND and spec.profile == common.DEFAULT_PROFILE

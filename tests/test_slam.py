@@ -17,8 +17,8 @@ import pytest
 
 from albot2d.cli import main
 from albot2d.errors import InputError
-from albot2d.evaluation.map_quality import map_quality
-from albot2d.evaluation.rpe import relative_pose_error
+from albot2d.evaluation.metrics.map_quality import map_quality
+from albot2d.evaluation.metrics.rpe import relative_pose_error
 from albot2d.frames import Frame, Scan, beam_angles
 from albot2d.geometry import Pose, between_arrays
 from albot2d.logs.relations import relations_from_truth
@@ -179,7 +179,7 @@ def test_front_end_is_kiss_icps_own_step_unless_map_updates_are_thinned(
     from kiss_icp.kiss_icp import KissICP
 
     from albot2d.mapping.protocol import StageTimer
-    from albot2d.mapping.slam_front import KissIcpOdometry, _planar, se2_matrix_4x4
+    from albot2d.mapping.slam.front_end import KissIcpOdometry, _planar, se2_matrix_4x4
 
     frames = office_run[1][:120]
     ours = KissIcpOdometry(ScanMatchingParams(), StageTimer())
@@ -208,10 +208,10 @@ def test_scan_to_scan_prior_recovers_the_mit_logs_fast_turns(
     previous scan alone pulls the heading to the truth (README, issue 11), so with the
     scan-to-scan prior far fewer short relations are off by more than 5°; ``gated`` takes
     its heading only on the scans where the two disagree by more than 2°."""
-    from albot2d.evaluation.rpe import relation_errors
+    from albot2d.evaluation.metrics.rpe import relation_errors
     from albot2d.logs import read_frames, read_relations
     from albot2d.mapping.protocol import StageTimer
-    from albot2d.mapping.slam_front import KissIcpOdometry
+    from albot2d.mapping.slam.front_end import KissIcpOdometry
 
     frames = list(read_frames(shared_data / "raw" / "mit-csail.clf.gz"))[:400]
     rel = read_relations(shared_data / "relations" / "mit-csail.relations")

@@ -16,8 +16,8 @@ from albot2d.errors import InputError
 from albot2d.frames import Frame
 from albot2d.geometry import between_arrays
 from albot2d.mapping.slam import LoopClosingSLAM, SlamParams
-from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams
-from albot2d.mapping.slam_loops import LoopClosureParams, LoopVerifier
+from albot2d.mapping.slam.loop_closure import LoopClosureParams, LoopVerifier
+from albot2d.mapping.slam.pose_graph import PoseGraph, PoseGraphParams
 from tests.runs import map_frames, office_loop, require_slam_extra
 
 

@@ -19,8 +19,8 @@ from albot2d.geometry import between_arrays, compose_arrays
 from albot2d.mapping import Mapper
 from albot2d.mapping.registry import BUILTIN_MAPPERS
 from albot2d.mapping.slam import LoopClosingSLAM, ScanMatchingSLAM, SlamParams
-from albot2d.mapping.slam_graph import PoseGraph, PoseGraphParams
-from albot2d.mapping.slam_loops import LoopClosureParams, registration_information
+from albot2d.mapping.slam.loop_closure import LoopClosureParams, registration_information
+from albot2d.mapping.slam.pose_graph import PoseGraph, PoseGraphParams
 from tests.runs import map_frames, office_loop, require_slam_extra
 
 

@@ -11,13 +11,13 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from albot2d.geometry import Pose
-from albot2d.mapping import GlobalMap, GlobalMapParams
-from albot2d.mapping.spatial_index import (
+from albot2d.geometry.spatial_index import (
     CompiledGridIndex,
     SegmentGridIndex,
     grid_index,
     sorted_unique,
 )
+from albot2d.mapping import GlobalMap, GlobalMapParams
 
 
 def random_segments(rng: np.random.Generator, n: int) -> np.ndarray:

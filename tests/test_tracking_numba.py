@@ -57,7 +57,7 @@ def test_numba_matching_equals_numpy_on_random_views(seed: int) -> None:
 
 
 def test_numba_matching_equals_numpy_over_a_simulated_run() -> None:
-    from albot2d.evaluation.setup import RunSpec, build_world, make_simulator
+    from albot2d.evaluation.run.setup import RunSpec, build_world, make_simulator
     from albot2d.sim.driving import get_profile
     from worldgen import plan_tour
 

@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from albot2d.geometry import Pose, wrap_angle
-from albot2d.mapping.triangulation import (
+from albot2d.mapping.albot1.triangulation import (
     TriangulationParams,
     heading_from_directions,
     pose_affordances,

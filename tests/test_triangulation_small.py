@@ -10,9 +10,9 @@ import itertools
 import numpy as np
 import pytest
 
-import albot2d.mapping.triangulation as tri
+import albot2d.mapping.albot1.triangulation as tri
 from albot2d.geometry import Pose
-from albot2d.mapping.triangulation import TriangulationParams, triangulate
+from albot2d.mapping.albot1.triangulation import TriangulationParams, triangulate
 from albot2d.perception.surfaces import Surfaces
 
 
@@ -62,7 +62,7 @@ def test_scalar_path_equals_array_path_on_random_views(seed: int) -> None:
 
 
 def test_scalar_path_equals_array_path_on_an_office_run() -> None:
-    from albot2d.evaluation.setup import RunSpec, build_run
+    from albot2d.evaluation.run.setup import RunSpec, build_run
     from albot2d.mapping import Albot1
 
     calls = []
@@ -75,7 +75,7 @@ def test_scalar_path_equals_array_path_on_an_office_run() -> None:
     run = build_run(RunSpec(tour_length_m=25.0))
     m = Albot1()
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr("albot2d.mapping.albot1.triangulate", record)
+        mp.setattr("albot2d.mapping.albot1.mapper.triangulate", record)
         for frame in itertools.islice(run.simulator.drive(run.tour, run.profile), 600):
             m.observe(frame)
     assert len(calls) > 50
@@ -101,9 +101,12 @@ def test_compiled_kernel_equals_the_python_floats(seed: int) -> None:
     integration, tight and loose gates and consensus, flipped and occluded ends."""
     pytest.importorskip("numba")
     from albot2d.compiled import compiled_kernel
-    from albot2d.mapping.triangulation_scalar import triangulate_small, triangulate_small_python
+    from albot2d.mapping.albot1.triangulation_scalar import (
+        triangulate_small,
+        triangulate_small_python,
+    )
 
-    assert compiled_kernel("albot2d.mapping.triangulation_numba", "triangulate_kernel")
+    assert compiled_kernel("albot2d.mapping.albot1.triangulation_numba", "triangulate_kernel")
     rng = np.random.default_rng(1000 + seed)
     local, current, true = random_pair(rng, int(rng.integers(0, 8)))
     spread = float(rng.choice([0.01, 0.2, 2.0]))

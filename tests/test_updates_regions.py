@@ -7,13 +7,13 @@ import pytest
 import shapely
 
 from albot2d.errors import InputError
-from albot2d.evaluation.updates import (
+from albot2d.evaluation.metrics.updates import (
     albot1_update_flags,
     update_counts,
     updates_by_region,
 )
 from albot2d.geometry import Pose
-from albot2d.mapping.albot1 import StepRecord
+from albot2d.mapping.albot1.mapper import StepRecord
 from worldgen import make_world
 from worldgen.regions import RegionParams, isovist_ranges, region_kind_at
 

@@ -107,7 +107,7 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
 def spec_from_args(args: argparse.Namespace) -> Any:
     """The RunSpec of ``run``'s (and ``simulate``'s) options; options not given take
     RunSpec's defaults."""
-    from albot2d.evaluation.setup import RunSpec
+    from albot2d.evaluation.run.setup import RunSpec
 
     params = world_params(args)
     if args.world is not None and (args.kind is not None or params):
@@ -253,7 +253,7 @@ def _step_figure(result: Any, no_figures: bool) -> dict[str, bytes]:
 def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, bytes]) -> None:
     """Write the files (figures, exports) and report.json atomically; report.json is
     renamed into place last."""
-    from albot2d.evaluation.report import REPORT_NAME, report_json
+    from albot2d.evaluation.run.report import REPORT_NAME, report_json
 
     text = report_json(report).encode("utf-8")
     # the report (given first) is renamed into place last
@@ -275,7 +275,7 @@ def finish(
     """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
     maps, write everything; on any failure remove the output directory again if this
     command created it."""
-    from albot2d.evaluation.export import export_files
+    from albot2d.evaluation.run.export import export_files
 
     try:
         result = compute()
@@ -315,7 +315,7 @@ def progress_bar(total: float | None, unit: str, desc: str) -> Any:
 
 def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
     """The result tables on stdout, or (``--json``) the report itself."""
-    from albot2d.evaluation.report import (
+    from albot2d.evaluation.run.report import (
         REPORT_NAME,
         format_homing_table,
         format_summary_table,
@@ -356,7 +356,7 @@ def differences(a: Any, b: Any, path: str = "") -> list[str]:
 def report_differences(recorded: Mapping[str, Any], report: Mapping[str, Any]) -> list[str]:
     """Where ``report`` differs from the ``recorded`` one (a report.json or a fuzzing
     reproducer), apart from wall-clock timings, file lists and the version."""
-    from albot2d.evaluation.report import without_timings
+    from albot2d.evaluation.run.report import without_timings
 
     return differences(
         {k: v for k, v in without_timings(dict(recorded)).items() if k not in _NOT_COMPARED},

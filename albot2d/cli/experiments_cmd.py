@@ -92,7 +92,7 @@ def _check_out(text: str | None) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    from albot2d.evaluation.backends import make_backend
+    from albot2d.evaluation.fuzz.backends import make_backend
     from albot2d.evaluation.paper import EXPERIMENTS, plan_jobs, run_experiments
 
     out = _check_out(args.out)

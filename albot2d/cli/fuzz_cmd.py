@@ -115,7 +115,7 @@ def _range(values: list[str] | None, option: str) -> tuple[float, float] | None:
 
 
 def _params(args: argparse.Namespace) -> Any:
-    from albot2d.evaluation.campaign import CampaignParams
+    from albot2d.evaluation.fuzz.campaign import CampaignParams
 
     if args.episodes is None:
         raise InputError("give --episodes N, the number of episodes to run")
@@ -148,7 +148,7 @@ def _workers(text: str | None) -> int:
 
 
 def _check_backend(args: argparse.Namespace) -> str:
-    from albot2d.evaluation.backends import BACKENDS
+    from albot2d.evaluation.fuzz.backends import BACKENDS
 
     name = args.backend or DEFAULTS["backend"]
     if name not in BACKENDS:
@@ -166,7 +166,7 @@ def _check_backend(args: argparse.Namespace) -> str:
 
 
 def _write_histograms(out: Path, no_figures: bool) -> str | None:
-    from albot2d.evaluation.campaign import EPISODES_NAME, HISTOGRAMS_NAME, read_episodes
+    from albot2d.evaluation.fuzz.campaign import EPISODES_NAME, HISTOGRAMS_NAME, read_episodes
 
     if no_figures:
         return None
@@ -191,9 +191,9 @@ def _note(line: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.cli.common import prepare_out_dir
-    from albot2d.evaluation.backends import make_backend
-    from albot2d.evaluation.campaign import CampaignInterrupted, run_campaign
-    from albot2d.evaluation.campaign_summary import format_summary
+    from albot2d.evaluation.fuzz.backends import make_backend
+    from albot2d.evaluation.fuzz.campaign import CampaignInterrupted, run_campaign
+    from albot2d.evaluation.fuzz.summary import format_summary
 
     params = _params(args)
     workers = _workers(args.workers)
@@ -262,7 +262,7 @@ def _replay_isolated(doc: dict[str, Any], where: str) -> tuple[int | None, dict[
 
 
 def _replay_child(doc: dict[str, Any], where: str, send: Any) -> None:
-    from albot2d.evaluation.reproducer import reproduce_episode
+    from albot2d.evaluation.fuzz.reproducer import reproduce_episode
 
     send.send(reproduce_episode(doc, where=where)[0].record)
 
@@ -283,7 +283,7 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     invariant check, write its report and figures to ``--out`` (unless it crashes), say
     whether the run and the failure came out the same; exit 1 when it still fails."""
     from albot2d.cli import common
-    from albot2d.evaluation.reproducer import reproduce_episode, reproducer_spec
+    from albot2d.evaluation.fuzz.reproducer import reproduce_episode, reproducer_spec
 
     where = args.reproduce
     recorded = doc["reproducer"].get("episode")
@@ -297,7 +297,7 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
         print(f"reproduce: crash: {type(exc).__name__}: {exc} (drawing the episode)")
         return 1
     # A mapper that cannot be imported here is bad input, not a reproduced crash.
-    from albot2d.evaluation.setup import check_spec
+    from albot2d.evaluation.run.setup import check_spec
 
     check_spec(spec.run_spec())
     out, created = common.prepare_out_dir(args.out)

@@ -103,7 +103,7 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.evaluation import DEFAULT_REPLAY_MAPPERS, find_relations, replay_log
-    from albot2d.evaluation.replay import check_replay_mappers
+    from albot2d.evaluation.run.replay import check_replay_mappers
     from albot2d.logs.relations import read_relations
     from albot2d.mapping.registry import resolve_mappers
 

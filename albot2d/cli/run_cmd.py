@@ -118,8 +118,8 @@ def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.evaluation import RunSpec, evaluation_params_from_report, run_experiment
-    from albot2d.evaluation.report import read_report
-    from albot2d.evaluation.setup import check_spec
+    from albot2d.evaluation.run.report import read_report
+    from albot2d.evaluation.run.setup import check_spec
 
     recorded = None
     if args.reproduce is not None:

@@ -85,7 +85,7 @@ def _render_png(world: Any, frames: list[Any], title: str) -> bytes | None:
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.cli.common import spec_from_args
-    from albot2d.evaluation.setup import build_run
+    from albot2d.evaluation.run.setup import build_run
     from albot2d.logs import write_run
     from albot2d.logs.run_files import LOG_NAME, MANIFEST_NAME, RELATIONS_NAME, TRUTH_NAME
 

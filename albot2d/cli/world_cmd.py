@@ -68,7 +68,7 @@ def _build_world(args: argparse.Namespace, seed: int | None, params: dict[str, A
         return worldgen.from_houseexpo(args.from_houseexpo, seed=seed, **params)
     if args.kind is None:
         raise InputError("give --kind KIND or --from-houseexpo PLAN.json")
-    from albot2d.evaluation.setup import RunSpec, build_world
+    from albot2d.evaluation.run.setup import RunSpec, build_world
 
     # generate() rejects an unknown kind with the list of valid kinds, and bad
     # parameters with the field name and value.

@@ -1,44 +1,44 @@
-"""Evaluation: relative pose error, homing, map quality, and the experiments that use them.
+"""Evaluation: run the mappers on simulated or recorded runs, score them, check them, fuzz them.
 
-- ``experiment``: ``run_experiment(RunSpec)`` — world, tour, simulator, every mapper, report;
-- ``replay``: ``replay_log(path)`` — the same on a recorded CARMEN log and its relations;
-- ``setup``: ``build_run(RunSpec)`` — the one path from a run description to world, tour
-  and simulator;
-- ``trace`` / ``scoring``: stream frames through the mappers once, then score the trace
-  into typed ``results`` (report.json, tables, figures and fuzz metrics are views);
-- ``report``: report.json's header, writing, reading and the printed tables;
-- ``rpe``, ``homing``, ``map_quality``: the metrics themselves;
-- ``alignment``: a mapper's frame → the world frame, APE after SE(2) alignment;
-- ``export``: TUM trajectories and CSV maps of a run folder.
+- ``run``: the run pipeline (``RunSpec`` → world, tour, simulator → every mapper → typed
+  scores → report.json), ``run_experiment`` and ``replay_log``;
+- ``metrics``: relative pose error, APE after alignment, homing, map quality;
+- ``checks``: invariants of a run and its mapper, for the tests and the fuzzer;
+- ``fuzz``: campaigns of random episodes, their records and summaries;
+- ``paper``: the paper's experiments regenerated beside its numbers.
+
+Inside, ``metrics`` and ``checks`` import nothing of the others; ``run`` imports
+``metrics``; ``fuzz`` imports ``run``, ``metrics`` and ``checks``; ``paper`` imports all.
+This package re-exports the entry points a user of the library needs.
 """
 
-from albot2d.evaluation.alignment import (
+from albot2d.evaluation.metrics.alignment import (
     AbsolutePoseError,
     absolute_pose_error,
     in_world_frame,
     map_in_world_frame,
 )
-from albot2d.evaluation.experiment import (
+from albot2d.evaluation.metrics.homing import HomingResult, homing, homing_to_start
+from albot2d.evaluation.metrics.map_quality import MapQuality, MapQualityParams, map_quality
+from albot2d.evaluation.metrics.rpe import RPEResult, RPEStats, relative_pose_error
+from albot2d.evaluation.run.experiment import (
     DEFAULT_MAPPERS,
     ExperimentResult,
     RunSpec,
     evaluation_params_from_report,
     run_experiment,
 )
-from albot2d.evaluation.homing import HomingResult, homing, homing_to_start
-from albot2d.evaluation.map_quality import MapQuality, MapQualityParams, map_quality
-from albot2d.evaluation.replay import DEFAULT_REPLAY_MAPPERS, find_relations, replay_log
-from albot2d.evaluation.report import (
+from albot2d.evaluation.run.replay import DEFAULT_REPLAY_MAPPERS, find_relations, replay_log
+from albot2d.evaluation.run.report import (
     REPORT_NAME,
     format_homing_table,
     format_summary_table,
     read_report,
     write_report,
 )
-from albot2d.evaluation.results import MapperScores, OdometryScores, RunScores
-from albot2d.evaluation.rpe import RPEResult, RPEStats, relative_pose_error
-from albot2d.evaluation.scoring import EvaluationParams, score_mappers, score_run
-from albot2d.evaluation.trace import HomingParams, StepTimes, Trace, drive_mappers
+from albot2d.evaluation.run.results import MapperScores, OdometryScores, RunScores
+from albot2d.evaluation.run.scoring import EvaluationParams, score_mappers, score_run
+from albot2d.evaluation.run.trace import HomingParams, StepTimes, Trace, drive_mappers
 
 __all__ = [
     "DEFAULT_MAPPERS",

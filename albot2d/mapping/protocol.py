@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
-from albot2d.mapping.route_map import RouteMap
+from albot2d.mapping.albot1.route_map import RouteMap
 from albot2d.perception import ExtractionParams, Surfaces
 from albot2d.reprs import compact_fields
 

@@ -18,7 +18,7 @@ __all__ = ["BUILTIN_MAPPERS", "mapper_factory", "report_name", "resolve_mappers"
 
 
 def _albot1() -> Mapper:
-    from albot2d.mapping.albot1 import Albot1
+    from albot2d.mapping.albot1.mapper import Albot1
 
     return Albot1()
 
@@ -80,8 +80,8 @@ def _albot1_variant(spec: str) -> Callable[[], Mapper]:
                 f"mapper {spec!r}: options are key=value with keys {', '.join(_ALBOT1_OPTIONS)}"
             )
         options[key.strip()] = value.strip()
-    from albot2d.mapping.albot1 import Albot1, Albot1Params
-    from albot2d.mapping.deletion import GlobalMapParams
+    from albot2d.mapping.albot1.deletion import GlobalMapParams
+    from albot2d.mapping.albot1.mapper import Albot1, Albot1Params
 
     overrides: dict[str, object] = {}
     if "deletion" in options:

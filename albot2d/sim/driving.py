@@ -38,12 +38,14 @@ from numpy.typing import ArrayLike
 
 from albot2d.errors import InputError
 from albot2d.geometry import Pose
+from albot2d.sim.commands import VelocityCommand
 from albot2d.sim.odometry import StepKind
 from albot2d.validation import check_finite, check_non_negative, check_positive, check_positive_int
 
 __all__ = [
     "PROFILES",
     "DrivingProfile",
+    "Instruction",
     "Step",
     "TourController",
     "get_profile",
@@ -118,6 +120,15 @@ class DrivingProfile:
         if kind == "turn":
             return abs(amount) / math.radians(self.turn_rate_deg_s)
         return abs(amount) / self.speed_m_s
+
+    def command(self, kind: StepKind, amount: float) -> tuple[VelocityCommand, float]:
+        """The velocity command and its duration (s) that turn or move by ``amount`` (rad
+        or m) at the profile's nominal speeds."""
+        duration = self.step_duration_s(kind, amount)
+        if kind == "turn":
+            rate = math.copysign(math.radians(self.turn_rate_deg_s), amount)
+            return VelocityCommand(0.0, rate), duration
+        return VelocityCommand(math.copysign(self.speed_m_s, amount), 0.0), duration
 
 
 _DATASET1 = DrivingProfile("dataset1", move_step_m=0.10, turn_step_deg=1.0)
@@ -207,11 +218,21 @@ class Step(NamedTuple):
     waypoint: int
 
 
+class Instruction(NamedTuple):
+    """A ``Step`` as a velocity command held for ``dt_s`` seconds."""
+
+    step: Step
+    command: VelocityCommand
+    dt_s: float
+
+
 class TourController:
     """Closed-loop turn-then-move driving through ``waypoints`` (from the true pose).
 
-    Call ``next_step(pose)`` for the next command (None when the tour is done) and
-    ``report(step, collided)`` after executing it.
+    Call ``next_instruction(pose)`` for the next velocity command, how long to hold it
+    and whether to take a view after it (None when the tour is done), execute it
+    (``Simulator.step``'s physics) and ``report(step, collided)``. ``next_step`` gives
+    the same as a turn or move amount.
     """
 
     def __init__(self, waypoints: ArrayLike, profile: str | DrivingProfile) -> None:
@@ -249,6 +270,13 @@ class TourController:
             n = max(1, math.ceil(dist / p.move_step_m - _SPLIT_SLACK))
             return Step("move", dist / n, True, self.index)
         return None
+
+    def next_instruction(self, pose: Pose) -> Instruction | None:
+        step = self.next_step(pose)
+        if step is None:
+            return None
+        command, dt_s = self.profile.command(step.kind, step.amount)
+        return Instruction(step, command, dt_s)
 
     def report(self, step: Step, collided: bool) -> None:
         """Tell the controller whether ``step`` was blocked (only moves can be)."""

@@ -49,14 +49,20 @@ class RobotParams:
       obstacle (the disc is swept with radius ``radius_m + contact_skin_m``).
     - ``max_substep_s``: velocity commands are integrated in arc sub-steps at most this long,
       each collision-checked.
+    - ``max_speed_m_s`` / ``max_turn_rate_deg_s``: ``Simulator.step`` clamps a velocity
+      command's forward speed (either direction) and turn rate to these (a Pioneer 3-DX:
+      1.2 m/s and 300°/s, its operations manual's maxima). Velocity changes are immediate:
+      no acceleration limit is modelled.
     """
 
     radius_m: float = 0.25
     contact_skin_m: float = 1e-6
     max_substep_s: float = 0.05
+    max_speed_m_s: float = 1.2
+    max_turn_rate_deg_s: float = 300.0
 
     def __post_init__(self) -> None:
-        check_positive(self, "radius_m", "max_substep_s")
+        check_positive(self, "radius_m", "max_substep_s", "max_speed_m_s", "max_turn_rate_deg_s")
         check_non_negative(self, "contact_skin_m")
 
 
@@ -298,6 +304,54 @@ class KinematicRobot:
                 break
         increment = total if total is not None else Pose()
         return MoveResult(self._pose, distance, turned, collided, increment)
+
+    def follow(
+        self,
+        v_m_s: float,
+        omega_rad_s: float,
+        tick_s: float,
+        ticks: int,
+        *,
+        on_tick: Callable[[Pose, Pose], None] | None = None,
+    ) -> tuple[MoveResult, list[Pose]]:
+        """Follow the unicycle arc of constant (v, ω) for ``ticks`` ticks of ``tick_s``.
+
+        Each tick is swept along its chord and collision-checked, and composed onto the
+        pose (``pose ← pose ⊕ piece``), so composing the returned pieces from the start
+        pose (as odometry does) gives the true pose bit for bit. ``on_tick(previous,
+        new)`` runs after each tick (the physics; it may call ``refuse_substep``, which
+        undoes that tick). The first blocked tick ends the motion there. The simulator's
+        time-stepped core; arguments are the caller's to check.
+        """
+        sub = _arc_increment(v_m_s, omega_rad_s, tick_s)
+        sub_length = abs(v_m_s) * tick_s
+        pieces: list[Pose] = []
+        distance = turned = 0.0
+        collided = False
+        for _ in range(ticks):
+            previous = self._pose
+            moved, fraction, _ = self._slide(previous, None, sub)
+            if on_tick is not None:
+                self._substep_start = previous
+                try:
+                    on_tick(previous, self._pose)
+                finally:
+                    self._substep_start = None
+                if self._refused:
+                    self._refused = False
+                    collided = True
+                    break
+            pieces.append(moved)
+            distance += sub_length * fraction
+            turned += moved.theta
+            if fraction < 1.0:
+                collided = True
+                break
+        increment = pieces[0] if len(pieces) == 1 else Pose()
+        if len(pieces) > 1:
+            for piece in pieces:
+                increment = increment.compose(piece)
+        return MoveResult(self._pose, distance, turned, collided, increment), pieces
 
     def _slide(
         self, anchor: Pose, before: Pose | None, increment: Pose

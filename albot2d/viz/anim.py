@@ -33,7 +33,7 @@ from albot2d.viz.maps import (
 from albot2d.viz.run_figures import mapper_extent
 
 if TYPE_CHECKING:
-    from albot2d.evaluation.experiment import ExperimentResult
+    from albot2d.evaluation.run.experiment import ExperimentResult
 
 __all__ = ["animated_mapper", "ffmpeg_available", "render_map_animation"]
 
@@ -52,7 +52,7 @@ def ffmpeg_available() -> bool:
 def animated_mapper(result: ExperimentResult) -> str | None:
     """The mapper to animate: ``albot1`` if present, else the first with a map history
     (a route map), else None."""
-    from albot2d.evaluation.scoring import route_of
+    from albot2d.evaluation.run.scoring import route_of
 
     names = [n for n, m in result.trace.mappers.items() if route_of(m) is not None]
     return "albot1" if "albot1" in names else (names[0] if names else None)
@@ -60,7 +60,7 @@ def animated_mapper(result: ExperimentResult) -> str | None:
 
 def _moments(result: ExperimentResult, name: str, count: int) -> list[tuple[int, int]]:
     """(trace row, map update) pairs spread evenly over the run, the last at its end."""
-    from albot2d.evaluation.scoring import route_of
+    from albot2d.evaluation.run.scoring import route_of
 
     trace = result.trace
     route = route_of(trace.mappers[name])

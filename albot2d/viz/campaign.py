@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from albot2d.evaluation.campaign_summary import mapper_vs_odometry
+from albot2d.evaluation.fuzz.summary import mapper_vs_odometry
 from albot2d.viz._figure import new_figure, png_bytes
 
 if TYPE_CHECKING:

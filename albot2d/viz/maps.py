@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.collections import LineCollection
 
-    from albot2d.mapping.route_map import RouteMap
+    from albot2d.mapping.albot1.route_map import RouteMap
     from worldgen.world import World
 
 __all__ = [

@@ -45,8 +45,8 @@ if TYPE_CHECKING:
     from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure
 
-    from albot2d.evaluation.experiment import ExperimentResult
-    from albot2d.evaluation.results import HomingStop
+    from albot2d.evaluation.run.experiment import ExperimentResult
+    from albot2d.evaluation.run.results import HomingStop
 
 __all__ = [
     "error_curves",
@@ -242,7 +242,7 @@ def _paths_panel(ax: Axes, result: ExperimentResult, extent: Extent | None) -> N
 def mapper_extent(result: ExperimentResult, name: str) -> Extent | None:
     """The extent that holds everything of mapper ``name`` over the run: its estimated
     path, final map, every remembered view, the true path and the world."""
-    from albot2d.evaluation.scoring import route_of
+    from albot2d.evaluation.run.scoring import route_of
 
     trace, mapper = result.trace, result.trace.mappers[name]
     start = None if trace.true_poses is None else trace.true_poses[0]
@@ -273,7 +273,7 @@ def _colorbar(fig: Figure, lines: LineCollection, ax: Axes) -> None:
 def error_curves(result: ExperimentResult) -> dict[str, tuple[FloatArray, FloatArray]]:
     """Per mapper and ``odometry``: (position error m, heading error deg) at every view,
     each trajectory anchored at the true start pose (needs the truth)."""
-    from albot2d.evaluation.alignment import in_world_frame
+    from albot2d.evaluation.metrics.alignment import in_world_frame
     from albot2d.geometry import between_arrays, wrap_angle
 
     trace = result.trace
@@ -339,7 +339,7 @@ def render_experiment_figures(
 
 
 def _render_all(result: ExperimentResult, dpi: int) -> dict[str, bytes]:
-    from albot2d.evaluation.scoring import route_of
+    from albot2d.evaluation.run.scoring import route_of
 
     out: dict[str, bytes] = {}
     trace, names = result.trace, list(result.trace.mappers)

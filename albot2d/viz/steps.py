@@ -21,7 +21,7 @@ from albot2d.viz._figure import new_figure, png_bytes
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-    from albot2d.evaluation.trace import StepTimes
+    from albot2d.evaluation.run.trace import StepTimes
 
 __all__ = ["plot_step_times", "read_steps_csv", "render_step_times_png"]
 
@@ -37,7 +37,7 @@ def read_steps_csv(path: str) -> dict[str, NDArray[np.float64]]:
 
 
 def _columns(data: StepTimes | Mapping[str, ArrayLike]) -> dict[str, NDArray[np.float64]]:
-    from albot2d.evaluation.trace import StepTimes
+    from albot2d.evaluation.run.trace import StepTimes
 
     if isinstance(data, StepTimes):
         return {name: data.column(name) for name in data.columns}

@@ -1,7 +1,7 @@
 """Run the paper's experiments over seeds on a campaign backend and gather the results.
 
 Jobs are (run, seed) pairs (``runs.RUNS``), each run once however many experiments read it;
-they go to the backend (``albot2d.evaluation.backends``: a local process pool or dask), and
+they go to the backend (``albot2d.evaluation.fuzz.backends``: a local process pool or dask), and
 each experiment is computed from the job summaries in seed order once all are in, so the
 results are the same bit for bit whatever the number of workers or the backend. Only the
 first seed's runs keep the map snapshots the figures are drawn from.
@@ -60,7 +60,7 @@ def run_experiments(
 ) -> ExperimentsOutcome:
     """Compute the experiments ``names`` over ``seeds``; ``backend`` defaults to this
     process; ``on_job(run, seed)`` is called as each job finishes (progress)."""
-    from albot2d.evaluation.backends import LocalBackend
+    from albot2d.evaluation.fuzz.backends import LocalBackend
 
     t0 = time.perf_counter()
     names = list(names)

@@ -154,7 +154,7 @@ def _pi_reason(causes: dict[str, Any], ours: dict[str, Any]) -> str | None:
     t1, t2 = m["dataset1"], m["dataset2"]
     share = ours.get("path_integrations_more_with_dataset2_share")
     same = ours.get("same_true_path_datasets_1_and_2_share")
-    from albot2d.mapping.albot1 import Albot1Params
+    from albot2d.mapping.albot1.mapper import Albot1Params
     from albot2d.sim.driving import get_profile
 
     gate = Albot1Params().tracking

@@ -1,7 +1,7 @@
 """``fig14``, ``fig15``, ``fig16``: how Albot₁ updates its map, and what odometry does to it.
 
 - ``fig14``: start–stop on the Fig. 6 route; moves (move/turn instructions) per global-map
-  update by region kind (``albot2d.evaluation.updates``): the paper updates after at most
+  update by region kind (``albot2d.evaluation.metrics.updates``): the paper updates after at most
   2 moves in corridors and after at least 2 in the open area.
 - ``fig15``: the sequence of views and updates with their method while leaving a room
   (the fig6 world's ``fig15`` route: into a room, turn round, out): triangulation, then
@@ -33,7 +33,7 @@ class FIG14:
 
     @staticmethod
     def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
-        from albot2d.evaluation.updates import update_counts
+        from albot2d.evaluation.metrics.updates import update_counts
 
         moves_by_kind: dict[str, list[list[int]]] = {}
         for j in jobs["fig6_start_stop"]:

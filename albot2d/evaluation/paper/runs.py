@@ -168,8 +168,8 @@ def run_job(
     experiments read only counts, homing, the end-pose error, revisits and a few map
     accuracies, which are computed here and nothing else.
     """
-    from albot2d.evaluation.experiment import RunSpec, run_experiment
-    from albot2d.evaluation.scoring import (
+    from albot2d.evaluation.run.experiment import RunSpec, run_experiment
+    from albot2d.evaluation.run.scoring import (
         REVISIT_GAP_MAPS,
         EvaluationParams,
         counts_section,
@@ -180,7 +180,7 @@ def run_job(
         revisits_section,
         trajectory_of,
     )
-    from albot2d.evaluation.trace import HomingParams
+    from albot2d.evaluation.run.trace import HomingParams
 
     run = RUNS[run_name]
     mappers = run_mappers(run, albot_x)
@@ -271,7 +271,7 @@ def run_job(
                   for mark, s in state["snaps"].items()},
     }  # fmt: skip
     if run.steps:
-        from albot2d.evaluation.updates import albot1_update_flags, region_labels
+        from albot2d.evaluation.metrics.updates import albot1_update_flags, region_labels
 
         flags = albot1_update_flags(albot1.steps, trace.frame_indices)
         regions = region_labels(world, truth[:, :2])
@@ -327,7 +327,7 @@ def path_integration_causes(albot1: Any, trace: Any, world: Any) -> dict[str, An
     """Every local map Albot₁ placed by path integration: its frame, how many tracked
     surfaces were left (0: none to triangulate from; > 0: the triangulation afforded no
     pose within the gates), whether that view ended a turn, and the region kind there."""
-    from albot2d.evaluation.updates import region_labels
+    from albot2d.evaluation.metrics.updates import region_labels
     from albot2d.geometry import wrap_angle
 
     rows = {int(f): k for k, f in enumerate(np.asarray(trace.frame_indices).tolist())}
@@ -392,7 +392,7 @@ def _quality_at_marks(
 ) -> dict[str, dict[str, Any]]:
     """Anchored map accuracy (p95, m) and surface count of the ``wanted`` mappers at each
     mark (mark → mapper names)."""
-    from albot2d.evaluation.map_quality import map_quality
+    from albot2d.evaluation.metrics.map_quality import map_quality
     from albot2d.geometry import Pose
 
     out: dict[str, dict[str, Any]] = {}

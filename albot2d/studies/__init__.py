@@ -1,0 +1,11 @@
+"""Studies: one-off measurements with their own command lines (``python -m
+albot2d.studies.NAME``), kept out of the library's core.
+
+- ``link_errors``: Albot₁'s error budget, each route-map link's error by how it was made;
+- ``sensitivity``: start–stop homing against odometry noise, moves per update by region.
+
+They use the library only through its public API and the mapper's public hooks.
+May import: everything but the interfaces (CLI, viz).
+"""
+
+__all__: list[str] = []
