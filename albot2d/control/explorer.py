@@ -12,10 +12,14 @@ its own ``KnowledgeGrid`` of what the laser has shown. Each plan:
 3. Dijkstra from the robot's cell (``grid_search.nearest_goal_path``) to the nearest goal,
    the path cut down to its corners.
 
-It follows the path with velocity commands (turn on the spot towards the next corner when
-far off heading, else drive with a proportional heading correction, at most
+It follows the path corner to corner with velocity commands (turn on the spot towards the
+next corner when more than ``turn_in_place_rad`` off heading, else drive with a
+proportional heading correction, at most
 ``speed_mps`` / ``turn_rate_radps``) and plans again every ``replan_period_s``, on arrival,
-after a collision, or when the laser shows something within ``stop_distance_m`` ahead. A goal
+after a collision (first backing off for ``back_off_s`` along the way it came), or when
+the laser shows something in the strip the disc would sweep in the next
+``stop_distance_m``. When its own cell is impassable (hard against a wall) the search
+starts from the passable cells within a diameter that it sees in a straight line. A goal
 it arrives at without clearing its frontier, or makes no progress towards for
 ``stuck_time_s``, is given up. It begins by turning once on the spot (the laser sees only
 forward) and is finished when no frontier is reachable.
@@ -29,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from albot2d.control.grid_search import dilate, nearest_goal_path, simplify_path
+from albot2d.control.grid_search import dilate, nearest_goal_path, segment_clear, simplify_path
 from albot2d.control.knowledge import GridSpec, KnowledgeGrid
 from albot2d.frames import Scan
 from albot2d.geometry import Pose, wrap_angle
@@ -54,25 +58,28 @@ class ExplorerParams:
     comfort_margin_m: float = 0.3
     comfort_cost: float = 4.0
     frontier_reach_m: float = 0.5
-    lookahead_m: float = 0.6
-    turn_in_place_rad: float = 0.6
+    corner_tolerance_m: float = 0.15
+    turn_in_place_rad: float = 0.3
     heading_gain: float = 2.0
     goal_tolerance_m: float = 0.3
     replan_period_s: float = 2.0
     stop_distance_m: float = 0.15
     stuck_time_s: float = 15.0
     give_up_radius_m: float = 1.0
+    back_off_s: float = 0.5
+    back_off_speed_mps: float = 0.2
+    control_period_s: float = 0.1
     initial_spin: bool = True
 
     def __post_init__(self) -> None:
         check_positive(
             self, "resolution_m", "sensing_range_m", "speed_mps", "turn_rate_radps",
-            "lookahead_m", "turn_in_place_rad", "heading_gain", "goal_tolerance_m",
-            "replan_period_s", "stuck_time_s", "comfort_cost",
+            "corner_tolerance_m", "turn_in_place_rad", "heading_gain", "goal_tolerance_m",
+            "replan_period_s", "stuck_time_s", "comfort_cost", "control_period_s",
         )  # fmt: skip
         check_non_negative(
             self, "wall_margin_m", "comfort_margin_m", "frontier_reach_m", "stop_distance_m",
-            "give_up_radius_m",
+            "give_up_radius_m", "back_off_s", "back_off_speed_mps",
         )  # fmt: skip
 
 
@@ -96,6 +103,7 @@ class FrontierExplorer:
         self._last_heading: float | None = None
         self._next_plan_s = 0.0
         self._replan = True
+        self._backing_s = 0.0
         self._progress_s = 0.0
         self._best_goal_dist = math.inf
 
@@ -108,7 +116,9 @@ class FrontierExplorer:
             self._spin_left -= abs(float(wrap_angle(pose.theta - self._last_heading)))
         self._last_heading = pose.theta
         if collided:
+            # Back off along the way it came (free: it was just there), then plan again.
             self._replan = True
+            self._backing_s = self.params.back_off_s
         if scan is None:
             return np.zeros(0, dtype=np.intp)
         if self._path is not None and self._blocked_ahead(scan):
@@ -116,9 +126,10 @@ class FrontierExplorer:
         return self.knowledge.integrate(pose, scan)
 
     def _blocked_ahead(self, scan: Scan) -> bool:
-        near = self.radius_m + self.params.stop_distance_m
-        ahead = scan.valid & (np.abs(scan.angles) < math.radians(30.0))
-        return bool((scan.ranges[ahead] < near).any())
+        """A return inside the strip the disc would sweep in the next ``stop_distance_m``."""
+        pts = scan.points()
+        ahead = (pts[:, 0] > 0.0) & (pts[:, 0] < self.radius_m + self.params.stop_distance_m)
+        return bool((ahead & (np.abs(pts[:, 1]) < self.radius_m)).any())
 
     # -- acting ------------------------------------------------------------------------
 
@@ -129,6 +140,9 @@ class FrontierExplorer:
             return None
         if self._spin_left > 0.0:
             return 0.0, p.turn_rate_radps
+        if self._backing_s > 0.0:
+            self._backing_s -= p.control_period_s
+            return -p.back_off_speed_mps, 0.0
         if self._path is not None and self._goal is not None:
             d = math.hypot(self._goal[0] - pose.x, self._goal[1] - pose.y)
             if d < self._best_goal_dist - 0.2:
@@ -154,7 +168,8 @@ class FrontierExplorer:
         p, k = self.params, self.knowledge
         r = self.spec.resolution_m
         occupied = k.occupied
-        hard = dilate(occupied, (self.radius_m + p.wall_margin_m) / r + 0.5)
+        # An occupied cell's wall may lie anywhere in it: up to half a diagonal nearer.
+        hard = dilate(occupied, (self.radius_m + p.wall_margin_m) / r + math.sqrt(0.5))
         hard |= dilate(k.unknown, self.radius_m / r)
         soft = dilate(occupied, (self.radius_m + p.wall_margin_m + p.comfort_margin_m) / r)
         cost = np.where(soft, p.comfort_cost, 1.0)
@@ -222,14 +237,23 @@ class FrontierExplorer:
         yy, xx = np.mgrid[y0:y1, x0:x1]
         d = np.hypot(yy - iy, xx - ix)
         ok = passable[y0:y1, x0:x1] & (d <= k)
-        return (yy[ok] * self.spec.nx + xx[ok]).astype(np.int64), d[ok] * 4.0
+        clear = ~self.knowledge.occupied
+        here = np.array([iy, ix], dtype=np.float64)
+        sy, sx = yy[ok], xx[ok]
+        sight = np.array(
+            [segment_clear(clear, here, np.array([y, x], dtype=np.float64)) for y, x in zip(sy, sx, strict=True)],
+            dtype=bool,
+        )
+        sy, sx = sy[sight], sx[sight]
+        return (sy * self.spec.nx + sx).astype(np.int64), d[ok][sight] * 4.0
 
     def _follow(self, pose: Pose) -> tuple[float, float]:
         p = self.params
         path = self._path
         assert path is not None
-        # Drop corners already reached (the last one is the goal).
-        while len(path) > 1 and math.hypot(path[0, 0] - pose.x, path[0, 1] - pose.y) < p.lookahead_m:
+        # Drop corners reached (the last one is the goal). Corners are driven to, not cut:
+        # the straight legs between them are what the plan checked.
+        while len(path) > 1 and math.hypot(path[0, 0] - pose.x, path[0, 1] - pose.y) < p.corner_tolerance_m:
             path = path[1:]
         self._path = path
         gx, gy = path[0]
