@@ -31,9 +31,17 @@ from albot2d.sim.laser import laser_noise_preset
 from albot2d.sim.odometry import noise_preset
 from worldgen.world import World
 
-__all__ = ["AlbotEnv"]
+__all__ = ["POSE_BOUND_M", "AlbotEnv", "pose_space"]
 
 _SEED_BOUND = 2**31 - 1
+#: Bound of the pose observations' x and y (m): far beyond any building, but finite.
+POSE_BOUND_M = 1000.0
+
+
+def pose_space() -> spaces.Box:
+    """``[x, y, theta]``: metres within ``POSE_BOUND_M``, theta in [-π, π]."""
+    high = np.array([POSE_BOUND_M, POSE_BOUND_M, math.pi])
+    return spaces.Box(-high, high, dtype=np.float64)
 
 
 def _finite_action(action: Any) -> tuple[float, float]:
@@ -45,6 +53,13 @@ def _finite_action(action: Any) -> tuple[float, float]:
         name = ("v_mps", "omega_radps")[int(np.flatnonzero(bad)[0])]
         raise InputError(f"action {name} must be finite, got {action!r}")
     return float(arr[0]), float(arr[1])
+
+
+def _clipped(pose: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A pose inside ``pose_space`` (theta is wrapped already; x, y beyond the bound only
+    after kilometres of odometry drift)."""
+    return np.clip(pose, -np.array([POSE_BOUND_M, POSE_BOUND_M, math.pi]),
+                   np.array([POSE_BOUND_M, POSE_BOUND_M, math.pi]))  # fmt: skip
 
 
 class AlbotEnv(gymnasium.Env[dict[str, NDArray[Any]], NDArray[np.float32]]):
@@ -103,7 +118,7 @@ class AlbotEnv(gymnasium.Env[dict[str, NDArray[Any]], NDArray[np.float32]]):
         lp = self.laser_params
         return {
             "ranges": spaces.Box(0.0, lp.max_range_m, shape=(lp.n_beams,), dtype=np.float32),
-            "odometry": spaces.Box(-np.inf, np.inf, shape=(3,), dtype=np.float64),
+            "odometry": pose_space(),
         }
 
     def _observation(self, obs: Observation) -> dict[str, NDArray[Any]]:
@@ -112,8 +127,8 @@ class AlbotEnv(gymnasium.Env[dict[str, NDArray[Any]], NDArray[np.float32]]):
                 np.where(obs.scan.valid, obs.scan.ranges, self.laser_params.max_range_m),
                 0.0, self.laser_params.max_range_m,
             ).astype(np.float32)  # fmt: skip
-        odom = self._start.between(obs.odom_pose)
-        return {"ranges": self._ranges.copy(), "odometry": odom.as_array()}
+        odom = self._start.between(obs.odom_pose).as_array()
+        return {"ranges": self._ranges.copy(), "odometry": _clipped(odom)}
 
     def _info(self, obs: Observation) -> dict[str, Any]:
         return {

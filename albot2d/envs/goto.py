@@ -19,7 +19,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from albot2d.envs.base import AlbotEnv
+from albot2d.envs.base import AlbotEnv, _clipped, pose_space
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, wrap_angle
 from albot2d.sim.commands import Observation
@@ -62,12 +62,12 @@ class GoToEnv(AlbotEnv):
 
     def _observation_spaces(self) -> dict[str, spaces.Space[Any]]:
         out = super()._observation_spaces()
-        out["goal"] = spaces.Box(-np.inf, np.inf, shape=(3,), dtype=np.float64)
+        out["goal"] = pose_space()
         return out
 
     def _observation(self, obs: Observation) -> dict[str, NDArray[Any]]:
         out = super()._observation(obs)
-        out["goal"] = obs.odom_pose.between(self.goal).as_array()
+        out["goal"] = _clipped(obs.odom_pose.between(self.goal).as_array())
         return out
 
     def _draw_goal(self) -> Pose:
