@@ -38,15 +38,17 @@ def test_check_env_passes(env_cls: type) -> None:
 @pytest.mark.parametrize("env_id", ["albot2d/Explore-v0", "albot2d/GoTo-v0"])
 def test_same_seed_same_episode(env_id: str) -> None:
     env = gymnasium.make(env_id, **SMALL)
-    actions = np.random.default_rng(7).uniform(
-        env.action_space.low, env.action_space.high, size=(25, 2)
-    ).astype(np.float32)
+    actions = (
+        np.random.default_rng(7)
+        .uniform(env.action_space.low, env.action_space.high, size=(25, 2))
+        .astype(np.float32)
+    )
 
     def episode(seed: int) -> list[tuple]:
         obs, info = env.reset(seed=seed)
         out = [(obs["ranges"].tobytes(), obs["odometry"].tobytes(), info["world_seed"])]
         for a in actions:
-            obs, reward, term, trunc, info = env.step(a)
+            obs, reward, term, _trunc, info = env.step(a)
             out.append((obs["ranges"].tobytes(), obs["odometry"].tobytes(), reward, term))
         return out
 
@@ -77,7 +79,7 @@ def test_explore_reward_is_new_floor_and_baseline_explores() -> None:
     policy = baseline_policy(env)
     total = info["explored_m2"]
     for _ in range(300):
-        obs, reward, term, trunc, info = env.step(policy(obs, info))
+        obs, reward, term, _trunc, info = env.step(policy(obs, info))
         assert reward >= 0.0
         total += reward
         if term:
@@ -99,7 +101,7 @@ def test_goto_terminates_at_the_goal() -> None:
             action = [0.0 if abs(bearing) > 0.3 else min(0.5, dist), 2.0 * bearing]
         else:
             action = [0.0, 2.0 * gth]
-        obs, reward, terminated, truncated, info = env.step(np.clip(action, -1.0, 1.0))
+        obs, _reward, terminated, _truncated, info = env.step(np.clip(action, -1.0, 1.0))
         if terminated:
             break
     assert terminated, info
@@ -107,13 +109,11 @@ def test_goto_terminates_at_the_goal() -> None:
 
 
 def test_make_vec_async() -> None:
-    envs = gymnasium.make_vec(
-        "albot2d/Explore-v0", num_envs=2, vectorization_mode="async", **SMALL
-    )
+    envs = gymnasium.make_vec("albot2d/Explore-v0", num_envs=2, vectorization_mode="async", **SMALL)
     try:
-        obs, info = envs.reset(seed=[1, 2])
+        obs, _ = envs.reset(seed=[1, 2])
         assert obs["ranges"].shape == (2, 181)
-        obs, reward, term, trunc, info = envs.step(np.zeros((2, 2), dtype=np.float32))
+        obs, reward, _term, _trunc, _info = envs.step(np.zeros((2, 2), dtype=np.float32))
         assert reward.shape == (2,)
     finally:
         envs.close()

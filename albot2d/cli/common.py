@@ -94,7 +94,11 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     )
     drive.add_argument(
         "--tour-kind",
-        help=f"{', '.join(TOUR_KIND_NAMES)} (default {DEFAULT_TOUR_KIND})",
+        "--tour",
+        dest="tour_kind",
+        help=f"{', '.join(TOUR_KIND_NAMES)} (default {DEFAULT_TOUR_KIND}), or explore: a "
+        "frontier explorer drives until it has seen everything it can reach or for 30 "
+        "simulated minutes",
     )
     drive.add_argument(
         "--tour-length",

@@ -118,7 +118,9 @@ class ExplorationResult:
             "reachable_cells": self.reachable_cells,
             "cell_area_m2": self.cell_area_m2,
             "final_coverage": round(self.final_coverage, 4),
-            "seen_floor_m2": round(self.final_coverage * self.reachable_cells * self.cell_area_m2, 3),
+            "seen_floor_m2": round(
+                self.final_coverage * self.reachable_cells * self.cell_area_m2, 3
+            ),
             "time_to_coverage_s": {
                 f"{m:.2f}": (None if (t := self.time_to(m)) is None else round(t, 3))
                 for m in _MILESTONES
@@ -150,8 +152,10 @@ class ExploreDrive:
         start: Pose | None = None,
     ) -> None:
         for name, value in (("max_time_s", max_time_s), ("dt_s", dt_s)):
-            if isinstance(value, bool) or not isinstance(value, int | float) or not (
-                math.isfinite(value) and value > 0
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, int | float)
+                or not (math.isfinite(value) and value > 0)
             ):
                 raise InputError(f"ExploreDrive {name} must be a positive number, got {value!r}")
         self.simulator = simulator

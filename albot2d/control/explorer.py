@@ -161,7 +161,9 @@ class FrontierExplorer:
             self.given_up.append(self._goal)
             gx, gy = self._goal
             xs, ys = self._centres
-            self._given_up_mask |= (xs - gx) ** 2 + (ys - gy) ** 2 <= self.params.give_up_radius_m**2
+            self._given_up_mask |= (xs - gx) ** 2 + (
+                ys - gy
+            ) ** 2 <= self.params.give_up_radius_m**2
         self._path, self._goal, self._replan = None, None, True
 
     def _costs(self) -> FloatArray:
@@ -224,7 +226,9 @@ class FrontierExplorer:
         self._goal = goal
         self._path = xy[1:] if len(xy) > 1 else xy
 
-    def _seeds(self, pose: Pose, passable: NDArray[np.bool_]) -> tuple[NDArray[np.int64], FloatArray]:
+    def _seeds(
+        self, pose: Pose, passable: NDArray[np.bool_]
+    ) -> tuple[NDArray[np.int64], FloatArray]:
         """The passable cells the search starts from: the robot's own, or when that is
         impassable (hard against a wall), the passable cells within one radius of it."""
         iy, ix = self.spec.cell_of(pose.x, pose.y)
@@ -241,7 +245,10 @@ class FrontierExplorer:
         here = np.array([iy, ix], dtype=np.float64)
         sy, sx = yy[ok], xx[ok]
         sight = np.array(
-            [segment_clear(clear, here, np.array([y, x], dtype=np.float64)) for y, x in zip(sy, sx, strict=True)],
+            [
+                segment_clear(clear, here, np.array([y, x], dtype=np.float64))
+                for y, x in zip(sy, sx, strict=True)
+            ],
             dtype=bool,
         )
         sy, sx = sy[sight], sx[sight]
@@ -253,7 +260,10 @@ class FrontierExplorer:
         assert path is not None
         # Drop corners reached (the last one is the goal). Corners are driven to, not cut:
         # the straight legs between them are what the plan checked.
-        while len(path) > 1 and math.hypot(path[0, 0] - pose.x, path[0, 1] - pose.y) < p.corner_tolerance_m:
+        while (
+            len(path) > 1
+            and math.hypot(path[0, 0] - pose.x, path[0, 1] - pose.y) < p.corner_tolerance_m
+        ):
             path = path[1:]
         self._path = path
         gx, gy = path[0]

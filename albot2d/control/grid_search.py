@@ -54,7 +54,7 @@ def dijkstra_to_goal(
             continue
         done[i] = True
         if goal[i]:
-            return i, parent, dist
+            return int(i), parent, dist
         iy = i // nx
         ix = i - iy * nx
         ci = cost[i]

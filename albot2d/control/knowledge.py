@@ -8,7 +8,8 @@ bounding box tested at once with numpy): cells inside it become ``FREE`` and cou
 Each cell keeps log-odds evidence (``HIT_LOG_ODDS`` per return in it, ``PASS_LOG_ODDS`` per
 fan covering it, clamped): a mixed-pixel return in mid-air is cleared by the next few
 scans, a wall hit scan after scan stays. A cell is occupied while its evidence is positive.
-``mark_footprint`` makes the cells under the robot free without counting them as seen (the robot stands there; it has not looked).
+``mark_footprint`` makes the cells under the robot free without counting them as seen (the
+robot stands there; it has not looked).
 """
 
 from __future__ import annotations
@@ -80,7 +81,9 @@ class GridSpec:
         iy = int(np.clip(math.floor((y - self.origin_y_m) / self.resolution_m), 0, self.ny - 1))
         return iy, ix
 
-    def cells_of(self, points: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.bool_]]:
+    def cells_of(
+        self, points: FloatArray
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.bool_]]:
         """``(iy, ix, inside)`` of ``(N, 2)`` points; outside points get index 0."""
         ix = np.floor((points[:, 0] - self.origin_x_m) / self.resolution_m).astype(np.intp)
         iy = np.floor((points[:, 1] - self.origin_y_m) / self.resolution_m).astype(np.intp)
@@ -132,10 +135,10 @@ class KnowledgeGrid:
         ex = laser.x + reach * np.cos(world)
         ey = laser.y + reach * np.sin(world)
         r = spec.resolution_m
-        ix0 = max(int(math.floor((min(ex.min(), laser.x) - spec.origin_x_m) / r)), 0)
-        ix1 = min(int(math.floor((max(ex.max(), laser.x) - spec.origin_x_m) / r)) + 1, spec.nx)
-        iy0 = max(int(math.floor((min(ey.min(), laser.y) - spec.origin_y_m) / r)), 0)
-        iy1 = min(int(math.floor((max(ey.max(), laser.y) - spec.origin_y_m) / r)) + 1, spec.ny)
+        ix0 = max(math.floor((min(ex.min(), laser.x) - spec.origin_x_m) / r), 0)
+        ix1 = min(math.floor((max(ex.max(), laser.x) - spec.origin_x_m) / r) + 1, spec.nx)
+        iy0 = max(math.floor((min(ey.min(), laser.y) - spec.origin_y_m) / r), 0)
+        iy1 = min(math.floor((max(ey.max(), laser.y) - spec.origin_y_m) / r) + 1, spec.ny)
         new = np.zeros(0, dtype=np.intp)
         if ix1 > ix0 and iy1 > iy0:
             dx = (spec.origin_x_m + (np.arange(ix0, ix1) + 0.5) * r - laser.x)[None, :]

@@ -16,7 +16,7 @@ maximum range; the latest scan when the laser did not fire in a step) and ``odom
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium
 import numpy as np
@@ -65,7 +65,7 @@ def _clipped(pose: NDArray[np.float64]) -> NDArray[np.float64]:
 class AlbotEnv(gymnasium.Env[dict[str, NDArray[Any]], NDArray[np.float32]]):
     """Base class: world, simulator, action and observation spaces, rendering."""
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 10}  # noqa: RUF012
 
     def __init__(
         self,
@@ -101,10 +101,10 @@ class AlbotEnv(gymnasium.Env[dict[str, NDArray[Any]], NDArray[np.float32]]):
         self.render_mode = render_mode
         v = self.robot_params.max_speed_m_s
         w = math.radians(self.robot_params.max_turn_rate_deg_s)
-        self.action_space = spaces.Box(
+        self.action_space: spaces.Box = spaces.Box(  # type: ignore[assignment]
             low=np.array([-v, -w], dtype=np.float32), high=np.array([v, w], dtype=np.float32)
         )
-        self.observation_space = spaces.Dict(self._observation_spaces())
+        self.observation_space = spaces.Dict(self._observation_spaces())  # type: ignore[assignment]
         self.world: World | None = None
         self.simulator: Simulator | None = None
         self.last: Observation | None = None

@@ -72,7 +72,9 @@ class ExploreEnv(AlbotEnv):
     def _info_with_coverage(self, obs: Observation) -> dict[str, Any]:
         info = self._info(obs)
         info["coverage"] = self.coverage
-        info["explored_m2"] = 0.0 if self.floor is None else self._seen * self.floor.spec.cell_area_m2
+        info["explored_m2"] = (
+            0.0 if self.floor is None else self._seen * self.floor.spec.cell_area_m2
+        )
         return info
 
     def reset(
@@ -97,7 +99,13 @@ class ExploreEnv(AlbotEnv):
         terminated = self.coverage >= self.done_coverage
         if self.render_mode == "human":
             self.render()
-        return self._observation(obs), float(reward), terminated, False, self._info_with_coverage(obs)
+        return (
+            self._observation(obs),
+            float(reward),
+            terminated,
+            False,
+            self._info_with_coverage(obs),
+        )
 
     def _render_layers(self) -> dict[str, Any]:
         if self.knowledge is None:
