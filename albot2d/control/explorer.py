@@ -224,7 +224,11 @@ class FrontierExplorer:
         if self._goal is None or math.hypot(goal[0] - self._goal[0], goal[1] - self._goal[1]) > 0.5:
             self._best_goal_dist, self._progress_s = math.inf, time_s
         self._goal = goal
-        self._path = xy[1:] if len(xy) > 1 else xy
+        # The first cell is the robot's own (skip it) or, when that was impassable, the
+        # passable cell the search started from: drive there first, clear of the wall.
+        iy, ix = self.spec.cell_of(pose.x, pose.y)
+        own = int(corners[0, 0]) == iy and int(corners[0, 1]) == ix
+        self._path = xy[1:] if own and len(xy) > 1 else xy
 
     def _seeds(
         self, pose: Pose, passable: NDArray[np.bool_]
