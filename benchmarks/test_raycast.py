@@ -7,7 +7,7 @@ The robot stands at random poses inside rooms; each call is one 181-beam, 180° 
 (pymunk: static ``Segment`` shapes of radius 0) and give the same ranges (checked).
 
 Ours runs once per kernel: ``numpy`` (vectorised) and ``numba`` (compiled, the default when
-numba is installed: ``pip install -e '.[fast]'``); each is warmed up (and JIT-compiled)
+numba imports); each is warmed up (and JIT-compiled)
 before timing. Run: ``python -m pytest benchmarks/test_raycast.py --benchmark-only
 --benchmark-group-by=group``; compare the groups' min and median times (the mean suffers
 most from other processes on a shared machine), and ``extra_info['Mrays_per_s']`` (from

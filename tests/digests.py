@@ -21,7 +21,7 @@ CPU's SIMD or libm does not count, anything larger does) — and hashed section 
     python -m tests.digests --update     # rerun the cases, rewrite tests/digests.json
     python -m tests.digests              # rerun and list the sections that differ
 
-numba: with the ``fast`` extra the raycaster, line extraction and laser noise run compiled.
+numba (a default dependency) runs the raycaster, line extraction and laser noise compiled.
 The two paths are not bit-identical here (measured: ``run`` and ``replay`` match, but the
 fuzz episodes' own pose/map byte digests and one homing maximum differ without numba), so
 digests.json records which path made it (``numba``) and a failure names both paths.
@@ -49,7 +49,7 @@ MIT_LOG = Path("raw") / "mit-csail.clf.gz"
 # Wall-clock fields and things that name this build or machine rather than the result.
 _DROPPED = frozenset({
     "wall_time_s", "timing_ms", "timings", "episodes_per_min", "workers", "albot2d_version",
-    "figures", "exports",
+    "kernels", "figures", "exports",
 })  # fmt: skip
 _SIGNIFICANT_DIGITS = 12
 

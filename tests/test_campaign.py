@@ -28,7 +28,7 @@ from albot2d.evaluation.fuzz.reproducer import replay_reproducer
 from albot2d.evaluation.fuzz.summary import COMPARED_METRICS, format_summary, summarise
 from tests.campaign_helpers import SMALL
 from worldgen.generate import generate
-from worldgen.params import PARAMS_BY_KIND
+from worldgen.kinds import get_kind
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -157,7 +157,7 @@ def test_an_episode_depends_on_the_seed_and_its_index_only() -> None:
     assert len({s.run_seed for s in specs}) == len(specs)
     assert {s.kind for s in specs} == set(many.kinds)
     for s in specs:
-        low = max(PARAMS_BY_KIND[s.kind].min_size_m, many.world_size_min_m)
+        low = max(get_kind(s.kind).params.min_size_m, many.world_size_min_m)
         for size in s.world_params.values():
             assert low <= size <= max(low, many.world_size_max_m)
         assert many.tour_length_min_m <= s.tour_length_m <= many.tour_length_max_m

@@ -12,8 +12,8 @@ import dataclasses
 import numpy as np
 import pytest
 
+from albot2d.errors import InvariantError
 from albot2d.evaluation.checks import deletion as di
-from albot2d.evaluation.checks.violation import InvariantError
 from albot2d.geometry import Pose, transform_segments
 from albot2d.mapping import Albot1, Albot1Params, UpdateReport
 from albot2d.mapping.albot1.deletion import GlobalMapParams
@@ -21,7 +21,7 @@ from albot2d.mapping.albot1.route_map import LocalMap
 from tests.runs import map_frames, simulate
 from worldgen.generate import generate
 
-# The compiled prefilter when numba imports (the fast extra), and the numpy path.
+# The compiled prefilter when numba imports, and the numpy path.
 BACKENDS = ("numpy", "numba") if di._kernels() is not None else ("numpy",)
 PRESETS = {
     "visible": GlobalMapParams(),

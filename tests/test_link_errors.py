@@ -14,11 +14,12 @@ from albot2d.mapping.albot1.mapper import Albot1
 from albot2d.perception.surfaces import Surfaces
 from albot2d.studies.link_errors import (
     LinkError,
-    RecordingAlbot1,
+    LinkRecorder,
     kind_summary,
     link_errors,
     main,
     record_run,
+    recording_albot1,
     window_budget,
 )
 
@@ -60,14 +61,14 @@ def test_window_budget_splits_a_known_chain_by_kind() -> None:
 
 def test_recording_changes_nothing_and_path_integration_is_exact_without_noise() -> None:
     spec = RunSpec(noise="none", mappers=("albot1",))
-    mapper, truth, travelled = record_run(spec, max_frames=250)
+    mapper, recorder, truth, travelled = record_run(spec, max_frames=250)
     setup = build_run(spec)
     plain = Albot1()
     for frame in islice(setup.simulator.drive(setup.tour, setup.profile), 250):
         plain.observe(frame)
-    assert isinstance(mapper, RecordingAlbot1)
+    assert mapper.on_localise is recorder
     np.testing.assert_array_equal(mapper.route.relative_poses(), plain.route.relative_poses())
-    links = link_errors(mapper, truth, travelled)
+    links = link_errors(mapper, recorder, truth, travelled)
     assert len(links) == len(mapper.route) > 10
     assert links[0].kind == "start"
     # without odometry noise path integration is the truth, on every link
@@ -125,17 +126,18 @@ def test_each_kind_of_path_integration_is_told_apart() -> None:
             tracked.ids, tracked.local, Surfaces(moved.segments, occ, beams, flags)
         )
 
-    def kind(mapper: RecordingAlbot1, tracked: TrackedSurfaces) -> str:
-        mapper._triangulate_or_move_using_pi(tracked, odometric, 1)
-        return mapper.localisations[-1].kind  # type: ignore[union-attr]
+    def kind(recording: tuple[Albot1, LinkRecorder], tracked: TrackedSurfaces) -> str:
+        mapper, recorder = recording
+        mapper.localise(tracked, odometric, 1)
+        return recorder.localisations[-1].kind
 
-    paper = RecordingAlbot1()
+    paper = recording_albot1()
     assert kind(paper, TrackedSurfaces.empty()) == "pi_no_tracked"
     assert kind(paper, tracked_pair(True, truth)) == "pi_no_endpoint"
     assert kind(paper, tracked_pair(False, truth)) == "triangulation"
     # the walls say the view is 2 m from where odometry puts it: beyond 0.4 m per step
     assert kind(paper, tracked_pair(False, Pose(2.3, 0.1, truth.theta))) == "pi_gated"
-    fallback = RecordingAlbot1(Albot1Params(heading_fallback_surfaces=1))
+    fallback = recording_albot1(Albot1Params(heading_fallback_surfaces=1))
     assert kind(fallback, tracked_pair(True, truth)) == "pi_surface_heading"
-    record = paper.localisations[2]
+    record = paper[1].localisations[2]
     assert record is not None and record.tracked == 3 and record.consistent == 3

@@ -101,8 +101,8 @@ def test_the_readme_has_a_library_example_and_commands() -> None:
     commands = readme_commands()
     for expected in (
         "albot2d run --out out/",
-        "albot2d simulate --out sim1/",
-        "albot2d world --kind office --out office.json --png office.png",
+        "albot2d simulate --kind rooms --seed 1 --profile dataset3 --max-frames 200 --out sim1/",
+        "albot2d world --kind office --seed 3 --out office.json --png office.png",
     ):
         assert expected in commands
 

@@ -1,7 +1,7 @@
-"""Triangulation from a few surfaces (the scalar path, fewer than 8) gives the array path's
-pose bit for bit: random local maps and views (flipped directions, occluded and uncertain
-ends, surfaces without beams, poses far from path integration, several gates) and the
-views a simulated office run localises."""
+"""Triangulation from a few surfaces (the compiled path, fewer than 8) gives the array
+path's pose bit for bit: random local maps and views (flipped directions, occluded and
+uncertain ends, surfaces without beams, poses near and far from path integration, several
+gates and consensus widths) and the views a simulated office run localises."""
 
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ from albot2d.perception.surfaces import Surfaces
 
 
 def both_paths(*args, **kwargs) -> tuple[Pose | None, Pose | None]:  # type: ignore[no-untyped-def]
+    pytest.importorskip("numba")  # without numba both would be the array path
     fast = triangulate(*args, **kwargs)
     small, tri._SMALL = tri._SMALL, 0  # the array path for every size
     try:
@@ -45,23 +46,30 @@ def random_pair(rng: np.random.Generator, n: int) -> tuple[Surfaces, Surfaces, P
     return local, current, true
 
 
-@pytest.mark.parametrize("seed", range(60))
-def test_scalar_path_equals_array_path_on_random_views(seed: int) -> None:
-    rng = np.random.default_rng(seed)
-    n = int(rng.integers(0, 8))
-    local, current, true = random_pair(rng, n)
-    pi = Pose(true.x + rng.normal(0, 0.2), true.y + rng.normal(0, 0.2), rng.normal(0, 0.1))
-    params = TriangulationParams(
-        heading_consensus_deg=float(rng.choice([0.0, 1.0, 3.0])),
-        max_pi_deviation_m=None if rng.random() < 0.5 else float(rng.uniform(0.05, 1.0)),
-        max_pi_deviation_deg=None if rng.random() < 0.5 else float(rng.uniform(1.0, 10.0)),
-    )
-    steps = int(rng.integers(1, 4))
-    fast, slow = both_paths(local, current, pi, params, steps=steps, gate=(0.4, 5.0))
-    assert repr(fast) == repr(slow)
+def test_compiled_path_equals_array_path_on_random_views() -> None:
+    """260 random views; the comparison counts only where a pose came out (both ``None``
+    says nothing), and most views must give one."""
+    located = 0
+    for seed in range(260):
+        rng = np.random.default_rng(seed)
+        n = int(rng.integers(1, 8))
+        local, current, true = random_pair(rng, n)
+        spread = float(rng.choice([0.01, 0.2, 2.0]))
+        pi = Pose(true.x + rng.normal(0, spread), true.y + rng.normal(0, spread),
+                  float(true.theta + rng.normal(0, spread / 4)))  # fmt: skip
+        params = TriangulationParams(
+            heading_consensus_deg=float(rng.choice([0.0, 1.0, 3.0, 30.0])),
+            max_pi_deviation_m=None if rng.random() < 0.5 else float(rng.uniform(0.05, 1.0)),
+            max_pi_deviation_deg=None if rng.random() < 0.5 else float(rng.uniform(1.0, 20.0)),
+        )
+        steps = int(rng.integers(1, 5))
+        fast, slow = both_paths(local, current, pi, params, steps=steps, gate=(0.4, 5.0))
+        assert repr(fast) == repr(slow), seed
+        located += fast is not None
+    assert located >= 130, located
 
 
-def test_scalar_path_equals_array_path_on_an_office_run() -> None:
+def test_compiled_path_equals_array_path_on_an_office_run() -> None:
     from albot2d.evaluation.run.setup import RunSpec, build_run
     from albot2d.mapping import Albot1
 
@@ -92,29 +100,3 @@ def test_other_heuristics_take_the_array_path() -> None:
     assert not tri._small_path_covers(TriangulationParams(heading="selected"))
     assert not tri._small_path_covers(TriangulationParams(choose="fitness"))
     assert not tri._small_path_covers(TriangulationParams(use_outlier_heuristic=False))
-
-
-@pytest.mark.parametrize("seed", range(200))
-def test_compiled_kernel_equals_the_python_floats(seed: int) -> None:
-    """The compiled small path (numba) against the same path in Python floats, which the
-    tests above hold equal to the array path: many views, near and far from path
-    integration, tight and loose gates and consensus, flipped and occluded ends."""
-    pytest.importorskip("numba")
-    from albot2d.compiled import compiled_kernel
-    from albot2d.mapping.albot1.triangulation_scalar import (
-        triangulate_small,
-        triangulate_small_python,
-    )
-
-    assert compiled_kernel("albot2d.mapping.albot1.triangulation_numba", "triangulate_kernel")
-    rng = np.random.default_rng(1000 + seed)
-    local, current, true = random_pair(rng, int(rng.integers(0, 8)))
-    spread = float(rng.choice([0.01, 0.2, 2.0]))
-    pi = Pose(true.x + rng.normal(0, spread), true.y + rng.normal(0, spread),
-              float(rng.normal(0, spread)))  # fmt: skip
-    params = TriangulationParams(heading_consensus_deg=float(rng.choice([0.0, 1.0, 3.0, 30.0])))
-    k = int(rng.integers(1, 5))
-    gate_m, gate_deg = float(rng.uniform(0.05, 1.0)), float(rng.uniform(0.5, 20.0))
-    fast = triangulate_small(local, current, pi, params, k, gate_m, gate_deg)
-    slow = triangulate_small_python(local, current, pi, params, k, gate_m, gate_deg)
-    assert repr(fast) == repr(slow)

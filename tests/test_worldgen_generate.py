@@ -14,11 +14,13 @@ import pytest
 import shapely
 from hypothesis import given
 
-from worldgen import KINDS, generate
+from worldgen import generate, kind_names
 from worldgen.strategies import worlds
 from worldgen.world import World
 
 CLEARANCE_TOL = 1e-9
+
+KINDS = kind_names()
 
 
 def node_clearance(world: World) -> float:

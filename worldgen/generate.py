@@ -30,27 +30,28 @@ from typing import Any
 
 import numpy as np
 
-from albot2d.errors import InputError
 from albot2d.plainjson import to_plain
 from albot2d.seeding import make_rng
 from albot2d.validation import params_from_mapping
 from worldgen.assemble import make_world
-from worldgen.kinds import LAYOUTS
+from worldgen.kinds import get_kind, world_kinds
 from worldgen.kinds._dynamic import add_dynamic_obstacles
-from worldgen.params import PARAMS_BY_KIND, CommonParams
+from worldgen.params import CommonParams
 from worldgen.world import World
 
-__all__ = ["KINDS", "generate", "make_params"]
+__all__ = ["generate", "kind_names", "make_params"]
 
-KINDS: tuple[str, ...] = tuple(PARAMS_BY_KIND)
+
+def kind_names() -> tuple[str, ...]:
+    """The names of every known world kind (``worldgen.kinds.world_kinds``)."""
+    return tuple(world_kinds())
 
 
 def make_params(kind: str, **params: Any) -> CommonParams:
     """The validated parameter dataclass of ``kind`` (InputError on unknown kind or names)."""
-    if kind not in PARAMS_BY_KIND:
-        raise InputError(f"unknown world kind {kind!r}; valid kinds: {', '.join(KINDS)}")
+    cls = get_kind(kind).params
     given = {k: v for k, v in params.items() if v is not None or k not in {"width_m", "height_m"}}
-    return params_from_mapping(PARAMS_BY_KIND[kind], given, where=f"world kind {kind!r}")
+    return params_from_mapping(cls, given, where=f"world kind {kind!r}")
 
 
 def generate(
@@ -61,7 +62,7 @@ def generate(
     height_m: float | None = None,
     **params: Any,
 ) -> World:
-    """A procedural World of ``kind`` (one of ``KINDS``) from ``seed``.
+    """A procedural World of ``kind`` (one of ``kind_names()``) from ``seed``.
 
     ``width_m``/``height_m`` default per kind (40x40 m; office and mixed 60x40 m); other
     keyword parameters are the fields of the kind's dataclass in ``worldgen.params``.
@@ -69,10 +70,11 @@ def generate(
     p = make_params(kind, width_m=width_m, height_m=height_m, **params)
     rng = make_rng(seed)
     rect = np.array([0.0, 0.0, p.width_m, p.height_m])
-    layout = LAYOUTS[kind](rect, p, rng)
+    record = get_kind(kind)
+    layout = record.layout(rect, p, rng)
     doorways = layout.doorway_array()
     features: dict[str, Any] = dict(layout.features)
-    if len(doorways) or kind in {"rooms", "office", "mixed"}:
+    if len(doorways) or record.reports_doorways:
         widths = np.hypot(doorways[:, 2] - doorways[:, 0], doorways[:, 3] - doorways[:, 1])
         features["doorways"] = doorways.tolist()
         features["door_widths_m"] = widths.tolist()

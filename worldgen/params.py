@@ -27,7 +27,6 @@ __all__ = [
     "MAX_PART_COUNT",
     "MAX_ROBOT_RADIUS_M",
     "MAX_WORLD_SIZE_M",
-    "PARAMS_BY_KIND",
     "CommonParams",
     "CorridorsParams",
     "Fig6Params",
@@ -342,13 +341,3 @@ class Fig6Params(_DoorParams):
         ring_h = self.room_depth_max_m + self.hall_depth_max_m + 2.0 * small + 4.0
         _check_at_least(self, "width_m", ring_w, "(room bands, the ring and the cross corridor)")
         _check_at_least(self, "height_m", ring_h, "(room band, hall, the ring and two rooms)")
-
-
-PARAMS_BY_KIND: dict[str, type[CommonParams]] = {
-    "corridors": CorridorsParams,
-    "rooms": RoomsParams,
-    "open": OpenParams,
-    "office": OfficeParams,
-    "fig6": Fig6Params,
-    "mixed": MixedParams,
-}

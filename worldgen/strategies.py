@@ -14,8 +14,8 @@ from typing import Any
 
 from hypothesis import strategies as st
 
-from worldgen.generate import KINDS, generate
-from worldgen.params import PARAMS_BY_KIND
+from worldgen.generate import generate, kind_names
+from worldgen.kinds import get_kind
 from worldgen.world import World
 
 __all__ = ["world_specs", "worlds"]
@@ -32,15 +32,15 @@ def _size(draw: st.DrawFn, low_m: float, high_m: float) -> float:
 @st.composite
 def world_specs(
     draw: st.DrawFn,
-    kinds: Sequence[str] = KINDS,
+    kinds: Sequence[str] | None = None,
     max_size_m: float = 30.0,
     dynamic: bool = False,
 ) -> dict[str, Any]:
     """Keyword arguments for ``generate``: kind, seed, size and a few parameters.
 
     Sizes run from the kind's minimum up to ``max_size_m`` (or the minimum, if larger)."""
-    kind = draw(st.sampled_from(list(kinds)))
-    cls = PARAMS_BY_KIND[kind]
+    kind = draw(st.sampled_from(list(kind_names() if kinds is None else kinds)))
+    cls = get_kind(kind).params
     low = float(cls.min_size_m)
     spec: dict[str, Any] = {
         "kind": kind,
@@ -66,7 +66,7 @@ def world_specs(
 @st.composite
 def worlds(
     draw: st.DrawFn,
-    kinds: Sequence[str] = KINDS,
+    kinds: Sequence[str] | None = None,
     max_size_m: float = 30.0,
     dynamic: bool = False,
 ) -> World:

@@ -15,6 +15,7 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
+from albot2d.compiled import kernels
 from albot2d.errors import InputError
 
 __all__ = ["build_parser", "main", "plain_text"]
@@ -78,6 +79,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     _import_from_cwd()
     try:
+        kernels()  # the environment is input too: a bad ALBOT2D_KERNELS fails before any work
         return int(args.handler(args) or 0)
     except InputError as exc:
         print(f"albot2d {args.command}: error: {exc}", file=sys.stderr)

@@ -12,29 +12,26 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
+import functools
 import os
 import sys
 import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from albot2d.atomic import atomic_paths
 from albot2d.cli.options import positive_int, positive_number, world_params
 from albot2d.errors import InputError
 
 __all__ = [
-    "ALBOT1_OPTION_KEYS",
-    "DEFAULT_KIND",
-    "DEFAULT_NOISE",
-    "LASER_NOISE_NAMES",
-    "NOISE_NAMES",
-    "PROFILE_NAMES",
-    "TOUR_KIND_NAMES",
-    "WORLD_KINDS",
+    "Choices",
     "add_json_option",
     "add_run_options",
     "add_scoring_options",
+    "choices",
+    "defaults_of",
     "differences",
     "finish",
     "prepare_out_dir",
@@ -47,33 +44,58 @@ __all__ = [
     "write_outputs",
 ]
 
-# RunSpec's defaults, named here only for --help (importing the evaluation layer to read
-# them would slow every command's start by over a second); tests/test_setup.py checks that
-# they match. An option not given is left to RunSpec.
-DEFAULT_KIND = "office"
-DEFAULT_PROFILE = "dataset1"
-DEFAULT_NOISE = "typical"
-DEFAULT_LASER_NOISE = "sick_lms200"
-DEFAULT_TOUR_KIND = "loop"
-DEFAULT_TOUR_LENGTH_M = 100.0
-# The valid names of each option, for --help likewise (tests/test_setup.py checks each
-# against the registry that defines it: worldgen.KINDS, PROFILES, NOISE_PRESETS, ...).
-WORLD_KINDS = ("corridors", "rooms", "open", "office", "fig6", "mixed")
-PROFILE_NAMES = ("dataset1", "dataset2", "dataset3", "start_stop", "start_stop_v1")
-NOISE_NAMES = ("none", "low", "typical", "high", "pioneer3dx")
-LASER_NOISE_NAMES = ("sick_lms200", "zero")
-TOUR_KIND_NAMES = ("loop", "out_and_back", "backtracking", "circuit")
-ALBOT1_OPTION_KEYS = ("preset", "deletion", "min_tracked", "position_endpoint", "match_candidates")
+
+class Choices(NamedTuple):
+    """The names each run option accepts, read from the registry that defines them."""
+
+    world_kinds: tuple[str, ...]
+    profiles: tuple[str, ...]
+    noises: tuple[str, ...]
+    laser_noises: tuple[str, ...]
+    tour_kinds: tuple[str, ...]
+    albot1_options: tuple[str, ...]
+
+
+@functools.cache
+def choices() -> Choices:
+    """Every registry's names, for --help and validation (read once per process)."""
+    from albot2d.mapping.registry import albot1_option_keys
+    from albot2d.sim.driving import PROFILES
+    from albot2d.sim.laser import LASER_NOISE_PRESETS
+    from albot2d.sim.odometry import NOISE_PRESETS
+    from worldgen.kinds import world_kinds
+    from worldgen.tours import TOUR_KINDS
+
+    return Choices(
+        world_kinds=tuple(world_kinds()),
+        profiles=tuple(PROFILES),
+        noises=tuple(NOISE_PRESETS),
+        laser_noises=tuple(LASER_NOISE_PRESETS),
+        tour_kinds=tuple(TOUR_KINDS),
+        albot1_options=albot1_option_keys(),
+    )
+
+
+def defaults_of(cls: type) -> dict[str, Any]:
+    """A dataclass's field defaults by name (what --help says an option not given means)."""
+    return {
+        f.name: f.default for f in dataclasses.fields(cls) if f.default is not dataclasses.MISSING
+    }
+
+
 # Fields two reports of the same run may differ in: file lists, the version, and a fuzzing
 # reproducer's own section (wall-clock timings are dropped by ``without_timings``).
-_NOT_COMPARED = ("figures", "exports", "albot2d_version", "reproducer")
+_NOT_COMPARED = ("figures", "exports", "albot2d_version", "kernels", "reproducer")
 
 
 def add_run_options(p: argparse.ArgumentParser) -> None:
     """World and driving options, shared by ``run`` and ``simulate`` (same defaults)."""
-    world = p.add_argument_group("world (default: --kind office --seed 0)")
+    from albot2d.evaluation.run.setup import RunSpec
+
+    names, default = choices(), defaults_of(RunSpec)
+    world = p.add_argument_group(f"world (default: --kind {default['kind']} --seed 0)")
     world.add_argument("--world", metavar="world.json", help="a world file (albot2d world)")
-    world.add_argument("--kind", help=f"generate a world: {', '.join(WORLD_KINDS)}")
+    world.add_argument("--kind", help=f"generate a world: {', '.join(names.world_kinds)}")
     world.add_argument("--seed", metavar="N", help="world and run seed (default 0)")
     world.add_argument("--width", metavar="W", help="generated world's width in metres")
     world.add_argument("--height", metavar="H", help="generated world's height in metres")
@@ -84,26 +106,29 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
         help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)",
     )
     drive = p.add_argument_group("driving")
-    drive.add_argument("--profile", help=f"{', '.join(PROFILE_NAMES)} (default {DEFAULT_PROFILE})")
     drive.add_argument(
-        "--noise",
-        help=f"odometry noise preset: {', '.join(NOISE_NAMES)} (default {DEFAULT_NOISE})",
+        "--profile", help=f"{', '.join(names.profiles)} (default {default['profile']})"
     )
     drive.add_argument(
-        "--laser-noise", help=f"{' or '.join(LASER_NOISE_NAMES)} (default {DEFAULT_LASER_NOISE})"
+        "--noise",
+        help=f"odometry noise preset: {', '.join(names.noises)} (default {default['noise']})",
+    )
+    drive.add_argument(
+        "--laser-noise",
+        help=f"{' or '.join(names.laser_noises)} (default {default['laser_noise']})",
     )
     drive.add_argument(
         "--tour-kind",
         "--tour",
         dest="tour_kind",
-        help=f"{', '.join(TOUR_KIND_NAMES)} (default {DEFAULT_TOUR_KIND}), or explore: a "
-        "frontier explorer drives until it has seen everything it can reach or for 30 "
+        help=f"{', '.join(names.tour_kinds)} (default {default['tour_kind']}), or explore: "
+        "a frontier explorer drives until it has seen everything it can reach or for 30 "
         "simulated minutes",
     )
     drive.add_argument(
         "--tour-length",
         metavar="METRES",
-        help=f"minimum tour length (default {DEFAULT_TOUR_LENGTH_M:g})",
+        help=f"minimum tour length (default {default['tour_length_m']:g})",
     )
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
 

@@ -18,7 +18,7 @@ while a campaign runs). Ctrl-C once: the running episodes finish and are kept; t
 stops at once. Exit status: 0 when every episode passed, 1 when any failed, 2 on bad
 input, 130 when interrupted.
 
-``albot2d run --reproduce REPRODUCER`` (``reproduce_failure`` here) re-runs a failing
+``albot2d run --reproduce REPRODUCER`` (``albot2d.cli.reproduce``) re-runs a failing
 episode with its invariant checks and exits 1 when it still fails.
 """
 
@@ -33,24 +33,18 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.atomic import atomic_write_bytes
-from albot2d.cli.common import add_json_option
+from albot2d.cli.common import add_json_option, choices, defaults_of
 from albot2d.cli.options import positive_int, positive_number, seed_value
 from albot2d.errors import InputError
 
-__all__ = ["register", "reproduce_failure", "reproducer_document", "run"]
-
-# CampaignParams' defaults, named here only for --help (tests/test_setup.py checks them).
-DEFAULTS = {
-    "profile": "dataset3",
-    "noise": "typical",
-    "laser_noise": "sick_lms200",
-    "mapper": "albot1",
-    "tour_kind": "loop",
-    "backend": "local",
-}
+__all__ = ["register", "run"]
 
 
 def register(subparsers: Any) -> None:
+    from albot2d.evaluation.fuzz.backends import BACKENDS
+    from albot2d.evaluation.fuzz.campaign import CampaignParams
+
+    names, default = choices(), defaults_of(CampaignParams)
     p = subparsers.add_parser(
         "fuzz", help="fuzzing campaign: many random episodes, invariants checked, reproducers",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -62,7 +56,8 @@ def register(subparsers: Any) -> None:
         nargs="+",
         action="extend",
         metavar="KIND",
-        help="world kinds to draw from (default: all: corridors rooms open office mixed)",
+        help=f"world kinds to draw from: {', '.join(names.world_kinds)} "
+        f"(default {' '.join(default['kinds'])})",
     )
     p.add_argument(
         "--world-size",
@@ -75,21 +70,33 @@ def register(subparsers: Any) -> None:
         "--tour-length",
         nargs=2,
         metavar=("MIN", "MAX"),
-        help="minimum tour length range in metres (default 30 60)",
+        help="minimum tour length range in metres "
+        f"(default {default['tour_length_min_m']:g} {default['tour_length_max_m']:g})",
     )
-    p.add_argument("--tour-kind", help="loop, out_and_back, backtracking (default loop)")
-    p.add_argument("--profile", help=f"driving profile (default {DEFAULTS['profile']})")
     p.add_argument(
-        "--noise", help=f"odometry noise: none, low, typical, high (default {DEFAULTS['noise']})"
+        "--tour-kind", help=f"{', '.join(names.tour_kinds)} (default {default['tour_kind']})"
     )
-    p.add_argument("--laser-noise", help="sick_lms200 or zero (default sick_lms200)")
+    p.add_argument("--profile", help=f"{', '.join(names.profiles)} (default {default['profile']})")
+    p.add_argument(
+        "--noise",
+        help=f"odometry noise: {', '.join(names.noises)} (default {default['noise']})",
+    )
+    p.add_argument(
+        "--laser-noise",
+        help=f"{' or '.join(names.laser_noises)} (default {default['laser_noise']})",
+    )
     p.add_argument(
         "--mapper",
         metavar="NAME",
-        help="mapper under test: albot1, naive, truth, … or module:Class (default albot1)",
+        help=f"mapper under test: albot1, naive, truth, … or module:Class "
+        f"(default {default['mapper']})",
     )
     p.add_argument("--workers", metavar="K", help="worker processes (default: every core)")
-    p.add_argument("--backend", help="local (process pool) or dask (default local)")
+    p.add_argument(
+        "--backend",
+        help=f"{' or '.join(BACKENDS)}: a local process pool or a dask cluster "
+        f"(default {BACKENDS[0]})",
+    )
     p.add_argument("--address", metavar="tcp://HOST:PORT", help="dask scheduler to use")
     p.add_argument(
         "--resume",
@@ -150,7 +157,7 @@ def _workers(text: str | None) -> int:
 def _check_backend(args: argparse.Namespace) -> str:
     from albot2d.evaluation.fuzz.backends import BACKENDS
 
-    name = args.backend or DEFAULTS["backend"]
+    name = args.backend or BACKENDS[0]
     if name not in BACKENDS:
         raise InputError(f"unknown backend {name!r}; valid: {', '.join(BACKENDS)}")
     if name == "local" and args.address is not None:
@@ -229,123 +236,3 @@ def run(args: argparse.Namespace) -> int:
         files.append(f"{failing} reproducer(s) in reproducers/")
     print(f"-> {out}: {', '.join(files)}")
     return 1 if failing else 0
-
-
-# -- albot2d run --reproduce of a fuzzing reproducer -------------------------------------
-def _failure_lines(record: dict[str, Any]) -> list[str]:
-    if record.get("status") == "crash":
-        error = record.get("error") or {}
-        return [f"crash: {error.get('type')}: {error.get('message')}"]
-    return [
-        f"{name} violated: {messages[0]}"
-        + (f" (+{len(messages) - 1} more)" if len(messages) > 1 else "")
-        for name, messages in (record.get("violations") or {}).items()
-    ] or ["?"]
-
-
-def _replay_isolated(doc: dict[str, Any], where: str) -> tuple[int | None, dict[str, Any] | None]:
-    """Run the episode in a child process (its worker died: it may kill this one too);
-    returns the child's exit code and, when it lived, the new record."""
-    import multiprocessing
-
-    context = multiprocessing.get_context("spawn")
-    receive, send = context.Pipe(duplex=False)
-    child = context.Process(target=_replay_child, args=(doc, where, send), daemon=True)
-    child.start()
-    send.close()
-    try:
-        record = receive.recv()
-    except EOFError:
-        record = None
-    child.join()
-    return child.exitcode, record
-
-
-def _replay_child(doc: dict[str, Any], where: str, send: Any) -> None:
-    from albot2d.evaluation.fuzz.reproducer import reproduce_episode
-
-    send.send(reproduce_episode(doc, where=where)[0].record)
-
-
-def reproducer_document(path: str) -> dict[str, Any] | None:
-    """The fuzzing reproducer at ``path``; ``None`` when it is anything else (a report,
-    or not readable: ``read_report`` then says what is wrong)."""
-    try:
-        with open(path, encoding="utf-8") as handle:
-            doc = json.load(handle)
-    except (OSError, ValueError, RecursionError):
-        return None
-    return doc if isinstance(doc, dict) and isinstance(doc.get("reproducer"), dict) else None
-
-
-def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
-    """``albot2d run --reproduce REPRODUCER``: run the failing episode again with every
-    invariant check, write its report and figures to ``--out`` (unless it crashes), say
-    whether the run and the failure came out the same; exit 1 when it still fails."""
-    from albot2d.cli import common
-    from albot2d.evaluation.fuzz.reproducer import reproduce_episode, reproducer_spec
-
-    where = args.reproduce
-    recorded = doc["reproducer"].get("episode")
-    if not isinstance(recorded, dict) or recorded.get("status") not in ("violation", "crash"):
-        raise InputError(f"{where}: not a fuzzing reproducer (no failing episode in it)")
-    try:
-        spec = reproducer_spec(doc, where=where)
-    except InputError:
-        raise
-    except Exception as exc:  # the episode cannot even be drawn: that is the failure
-        print(f"reproduce: crash: {type(exc).__name__}: {exc} (drawing the episode)")
-        return 1
-    # A mapper that cannot be imported here is bad input, not a reproduced crash.
-    from albot2d.evaluation.run.setup import check_spec
-
-    check_spec(spec.run_spec())
-    out, created = common.prepare_out_dir(args.out)
-    result = None
-    try:
-        if (recorded.get("error") or {}).get("type") == "WorkerDiedError":
-            code, record = _replay_isolated(doc, where)
-            if record is None:
-                print(
-                    f"reproduce: the episode killed its process again (exit code {code}); "
-                    f"recorded: {_failure_lines(recorded)[0]}"
-                )
-                common.remove_if_empty(out, created)
-                return 1
-        outcome, result = reproduce_episode(doc, where=where)
-        if result is not None:
-            common.finish(out, created, "run", lambda: result, args.no_figures)
-        else:
-            common.remove_if_empty(out, created)
-    except BaseException:
-        common.remove_if_empty(out, created)
-        raise
-    record = outcome.record
-    if result is not None:
-        common.print_tables(result, out)
-        diff = common.report_differences(doc, result.report)
-        if recorded["status"] != "crash":
-            verdict = "identical to" if not diff else f"differs at {', '.join(diff[:5])} from"
-            print(f"reproduce: run {verdict} {where} (apart from wall-clock timings)")
-    else:
-        print((record["error"] or {}).get("traceback", ""), file=sys.stderr, end="")
-    checked = len(record["checked"])
-    if record["status"] == "ok":
-        print(
-            f"reproduce: every invariant holds ({checked} checked); the recorded failure "
-            f"does not reproduce: {_failure_lines(recorded)[0]}"
-        )
-        return 0
-    for line in _failure_lines(record):
-        print(f"reproduce: {line}")
-    same = (
-        record["status"] == recorded["status"]
-        and sorted(record["violations"]) == sorted(recorded.get("violations") or {})
-        and (record["error"] or {}).get("type") == (recorded.get("error") or {}).get("type")
-    )
-    print(
-        "reproduce: the recorded failure reproduces"
-        if same
-        else f"reproduce: fails differently from the record ({_failure_lines(recorded)[0]})"
-    )
-    return 1

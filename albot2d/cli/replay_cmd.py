@@ -25,9 +25,9 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
-    ALBOT1_OPTION_KEYS,
     add_json_option,
     add_scoring_options,
+    choices,
     finish,
     prepare_out_dir,
     print_tables,
@@ -83,7 +83,7 @@ def register(subparsers: Any) -> None:
         action="extend",
         metavar="NAME",
         help="mappers: albot1, naive, slam and scan_odometry ([slam] extra), "
-        f"albot1[KEY=VALUE,...] (keys {', '.join(ALBOT1_OPTION_KEYS)}) or module:Class "
+        f"albot1[KEY=VALUE,...] (keys {', '.join(choices().albot1_options)}) or module:Class "
         "(default: albot1 naive; truth needs a simulated run)",
     )
     p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")

@@ -21,10 +21,10 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
-    ALBOT1_OPTION_KEYS,
     add_json_option,
     add_run_options,
     add_scoring_options,
+    choices,
     finish,
     prepare_out_dir,
     print_tables,
@@ -71,7 +71,7 @@ def register(subparsers: Any) -> None:
         action="extend",
         metavar="NAME",
         help="mappers: albot1, naive, truth, slam and scan_odometry ([slam] extra), "
-        f"albot1[KEY=VALUE,...] (keys {', '.join(ALBOT1_OPTION_KEYS)}) or "
+        f"albot1[KEY=VALUE,...] (keys {', '.join(choices().albot1_options)}) or "
         "module:Class (default: albot1 naive truth)",
     )
     add_scoring_options(p)
@@ -128,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
         if given:
             flags = ", ".join("--" + n.replace("_", "-") for n in given)
             raise InputError(f"--reproduce takes the run's settings from the report; drop {flags}")
-        from albot2d.cli.fuzz_cmd import reproduce_failure, reproducer_document
+        from albot2d.cli.reproduce import reproduce_failure, reproducer_document
 
         doc = reproducer_document(args.reproduce)
         if doc is not None:  # a fuzzing reproducer: its invariant checks run too

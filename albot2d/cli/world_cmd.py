@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.atomic import atomic_paths
-from albot2d.cli.common import WORLD_KINDS
+from albot2d.cli.common import choices
 from albot2d.cli.options import parse_param, positive_number, seed_value, world_params
 from albot2d.errors import InputError
 from worldgen.tours import TOUR_KINDS
@@ -30,7 +30,7 @@ def register(subparsers: Any) -> None:
         description=__doc__,
     )
     source = p.add_argument_group("what to build (give --kind or --from-houseexpo)")
-    source.add_argument("--kind", help=f"world kind: {', '.join(WORLD_KINDS)}")
+    source.add_argument("--kind", help=f"world kind: {', '.join(choices().world_kinds)}")
     source.add_argument("--from-houseexpo", metavar="PLAN.json", help="import a HouseExpo plan")
     p.add_argument(
         "--seed", metavar="N",

@@ -1,6 +1,6 @@
 """The optional compiled laser-hit transform (numba): ``hits_kernel``.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``); ``Frame.world_hits``
+Importing this module needs numba (a default dependency); ``Frame.world_hits``
 loads it on first use. A scan's hits cost the numpy path (``Scan.points`` then
 ``transform_points``) about ten small array calls; this kernel does the two rigid
 transforms in one pass with the same float operations in the same order (``x + c·u − s·v``,

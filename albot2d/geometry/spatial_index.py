@@ -24,6 +24,8 @@ from types import ModuleType
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.compiled import compiled_module
+
 __all__ = ["CompiledGridIndex", "SegmentGridIndex", "grid_index", "sorted_unique"]
 
 
@@ -107,11 +109,7 @@ class SegmentGridIndex:
 @functools.cache
 def _kernels() -> ModuleType | None:
     """``spatial_index_numba`` when numba imports, else None."""
-    try:
-        from albot2d.geometry import spatial_index_numba
-    except ImportError:
-        return None
-    return spatial_index_numba
+    return compiled_module("albot2d.geometry.spatial_index_numba")
 
 
 _EMPTY = np.iinfo(np.int64).min
@@ -127,7 +125,7 @@ class CompiledGridIndex:
             raise ValueError(f"cell_m must be > 0, got {cell_m!r}")
         kernels = _kernels()
         if kernels is None:
-            raise ImportError("CompiledGridIndex needs numba: pip install 'albot2d[fast]'")
+            raise ImportError("CompiledGridIndex needs numba (off under ALBOT2D_KERNELS=numpy)")
         self.cell_m = float(cell_m)
         self._keys = np.full(256, _EMPTY, np.int64)
         self._heads = np.full(256, -1, np.int64)

@@ -1,6 +1,6 @@
 """The optional compiled grid index (numba): the kernels of ``CompiledGridIndex``.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``). The index keeps the
+Importing this module needs numba (a default dependency). The index keeps the
 same cells as ``SegmentGridIndex`` (cell ``(floor(x / cell), floor(y / cell))`` for every
 cell a segment's bounding box covers) in flat arrays: an open-addressing table of cell keys
 whose entries head singly linked lists of ``(id, next)`` nodes in a pool. A query reads a

@@ -14,7 +14,13 @@ from collections.abc import Callable
 from albot2d.errors import InputError
 from albot2d.mapping.protocol import Mapper
 
-__all__ = ["BUILTIN_MAPPERS", "mapper_factory", "report_name", "resolve_mappers"]
+__all__ = [
+    "BUILTIN_MAPPERS",
+    "albot1_option_keys",
+    "mapper_factory",
+    "report_name",
+    "resolve_mappers",
+]
 
 
 def _albot1() -> Mapper:
@@ -65,6 +71,11 @@ _ALBOT1_OPTIONS = (
     "position_endpoint",
     "match_candidates",
 )
+
+
+def albot1_option_keys() -> tuple[str, ...]:
+    """The keys ``albot1[KEY=VALUE,...]`` accepts."""
+    return _ALBOT1_OPTIONS
 
 
 def _albot1_variant(spec: str) -> Callable[[], Mapper]:

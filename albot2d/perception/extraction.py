@@ -31,7 +31,7 @@ still lies on the surface's line is a wall thinning out at a grazing angle, not 
 it is occluded too. On the MIT CSAIL log this cuts the mean error of endpoints used for
 matching by about a third (0.095 → 0.067 m between views ≈ 0.4 s apart, ground-truth motion).
 
-Backends: with numba installed (the ``fast`` extra) a compiled kernel
+Backends: with numba (a default dependency) a compiled kernel
 (``extraction_numba``) runs the same pipeline as scalar loops in one call, about 20× faster
 than these ~100 small numpy calls, with the same surfaces; ``backend`` chooses ("auto"
 takes numba when it imports, like the raycaster).
@@ -40,13 +40,12 @@ takes numba when it imports, like the raycaster).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.compiled import compiled_kernel
 from albot2d.errors import InputError
 from albot2d.frames import Scan
 from albot2d.geometry import transform_segments
@@ -358,21 +357,9 @@ def _occlusion(
     return np.column_stack(flags)
 
 
-_numba_extract: Callable[..., tuple[Any, ...]] | None = None
-_numba_missing = False
-
-
 def numba_available() -> bool:
-    """Whether the compiled extraction can be used: numba (the ``fast`` extra) imports."""
-    global _numba_extract, _numba_missing
-    if _numba_extract is None and not _numba_missing:
-        try:
-            from albot2d.perception.extraction_numba import extract_kernel
-        except ImportError:
-            _numba_missing = True
-        else:
-            _numba_extract = extract_kernel
-    return _numba_extract is not None
+    """Whether the compiled extraction can be used (``albot2d.compiled.kernels``)."""
+    return compiled_kernel("albot2d.perception.extraction_numba", "extract_kernel") is not None
 
 
 def extract_surfaces(
@@ -383,7 +370,7 @@ def extract_surfaces(
     Surfaces come in scan order; endpoint 0 is the one from the lower beam index.
     ``beams`` holds each surface's first and last supporting beam (a split point is the
     last beam of one surface and the first of the next). ``backend``: "numpy", "numba"
-    (needs the ``fast`` extra) or "auto" (numba when it imports); both give the same
+    or "auto" (numba when it imports); both give the same
     surfaces.
     """
     params = ExtractionParams() if params is None else params
@@ -394,7 +381,7 @@ def extract_surfaces(
         if numba_available():
             return _extract_numba(scan, params)
         if backend == "numba":
-            raise InputError("backend='numba' needs numba: pip install 'albot2d[fast]'")
+            raise InputError("backend='numba' needs numba (off under ALBOT2D_KERNELS=numpy)")
     elif backend != "numpy":
         raise InputError(f"backend must be one of {EXTRACTION_BACKENDS}, got {backend!r}")
     hit, r = _hits(scan, params)
@@ -445,10 +432,11 @@ def extract_surfaces(
 
 
 def _extract_numba(scan: Scan, params: ExtractionParams) -> Surfaces:
-    assert _numba_extract is not None  # loaded by numba_available()
+    kernel = compiled_kernel("albot2d.perception.extraction_numba", "extract_kernel")
+    assert kernel is not None  # checked by numba_available()
     lam = math.radians(params.breakpoint_lambda_deg)
     mount = scan.laser_pose
-    max_dphi, segs, occluded, ab, uncertain = _numba_extract(
+    max_dphi, segs, occluded, ab, uncertain = kernel(
         np.ascontiguousarray(scan.ranges, dtype=np.float64),
         np.ascontiguousarray(scan.angles, dtype=np.float64),
         np.ascontiguousarray(scan.valid, dtype=np.bool_),

@@ -1,6 +1,6 @@
 """The optional compiled line extraction (numba): ``extract_kernel``, one scan in one call.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``); ``extract_surfaces``
+Importing this module needs numba (a default dependency); ``extract_surfaces``
 loads it only when that backend is selected. It runs the pipeline of
 ``albot2d.perception.extraction`` (breakpoints, split, drop, merge, grow, fit, occlusion,
 corner refinement, uncertain jump ends) as scalar loops over the beams, so a scan costs

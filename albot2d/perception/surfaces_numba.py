@@ -1,6 +1,6 @@
 """The optional compiled rigid transform of segments (numba): ``transform_kernel``.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``); ``Surfaces.transformed``
+Importing this module needs numba (a default dependency); ``Surfaces.transformed``
 and ``surfaces.transform_segments_fast`` load it on first use. A view's few segments cost
 ``geometry.transform_segments`` ~9 µs of small array calls and this kernel ~2; it repeats
 the same float operations in the same order (``x + c·u − s·v``, ``y + s·u + c·v`` with the

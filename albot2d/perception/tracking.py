@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from albot2d.arrays import readonly
+from albot2d.compiled import compiled_kernel
 from albot2d.errors import InputError
 from albot2d.geometry import (
     Pose,
@@ -300,21 +301,10 @@ def _endpoint_distances(
 #: and the settings are the ones it covers (``_compiled_settings``).
 MATCH_BACKENDS = ("auto", "numpy", "numba")
 
-_numba_match: Callable[..., tuple[Any, ...]] | None = None
-_numba_missing = False
-
 
 def _compiled_match() -> Callable[..., tuple[Any, ...]] | None:
-    """The compiled matching kernel, loaded on first use (None without numba)."""
-    global _numba_match, _numba_missing
-    if _numba_match is None and not _numba_missing:
-        try:
-            from albot2d.perception.tracking_numba import match_kernel
-        except ImportError:
-            _numba_missing = True
-        else:
-            _numba_match = match_kernel
-    return _numba_match
+    """The compiled matching kernel, loaded on first use (None when the kernels are off)."""
+    return compiled_kernel("albot2d.perception.tracking_numba", "match_kernel")
 
 
 def _directions(view: Surfaces) -> FloatArray:
@@ -364,7 +354,7 @@ def match_surfaces(
     Only ``view`` surfaces in ``candidates`` (bool mask; default all) may match. Returns
     ``(predicted_index, view_index, distance_m, angle_rad)`` sorted by predicted index.
     Ties in distance go to the lower predicted, then lower view index. ``backend``:
-    "numpy", "numba" (the ``fast`` extra; the paper's settings only) or "auto" (numba
+    "numpy", "numba" (the paper's settings only) or "auto" (numba
     when it imports and covers the settings); both give the same matches.
     """
     params = TrackingParams() if params is None else params
@@ -382,7 +372,7 @@ def match_surfaces(
             return _match_compiled(kernel, predicted, view, params, cand)
         if backend == "numba":
             raise ValueError(
-                "backend='numba' needs numba (the fast extra) and the paper's "
+                "backend='numba' needs numba (off under ALBOT2D_KERNELS=numpy) and the paper's "
                 "matching settings (corresponding, distance, no fallback/floor)"
             )
     angle = undirected_angle_difference(

@@ -1,6 +1,6 @@
 """The optional compiled RTSV matching (numba): ``match_kernel``, one view in one call.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``); ``match_surfaces``
+Importing this module needs numba (a default dependency); ``match_surfaces``
 loads it only for the settings it covers (the paper's: corresponding endpoints, no line
 fallback, greedy by distance, no fitness floor). A view has a few tracked and a few
 candidate surfaces, so the numpy path's cost is its ~40 small array calls, not arithmetic.

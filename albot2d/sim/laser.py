@@ -18,7 +18,7 @@ enabled (so a zero-noise laser consumes no randomness and returns exact ranges):
 
 Invalid beams report ``max_range_m`` (as CARMEN logs report no-return readings).
 
-Steps 2–6 run as one compiled call (``laser_numba``) when numba (the ``fast`` extra)
+Steps 2–6 run as one compiled call (``laser_numba``) when numba
 imports, on the same draws, with the same ranges bit for bit; ``noise_backend`` chooses.
 The default mount is the robot's rotation centre (``mount_x_m = 0``); a Pioneer-style
 front mount is ``mount_x_m = 0.16``.
@@ -197,7 +197,7 @@ class Laser:
         # The name, not the kernel: a Laser pickles small and loads numba where it runs.
         compiled = noise_backend != "numpy" and _noise_kernel() is not None
         if noise_backend == "numba" and not compiled:
-            raise InputError("noise_backend='numba' needs numba: pip install 'albot2d[fast]'")
+            raise InputError("noise_backend='numba' needs numba (off under ALBOT2D_KERNELS=numpy)")
         self.noise_backend = "numba" if compiled else "numpy"
 
     @classmethod

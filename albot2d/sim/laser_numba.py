@@ -1,6 +1,6 @@
 """The optional compiled laser noise model (numba): ``apply_noise``, one call per scan.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``); ``Laser.scan`` uses it
+Importing this module needs numba (a default dependency); ``Laser.scan`` uses it
 when numba imports. The random draws stay in numpy (``Laser.scan`` draws exactly what the
 numpy path draws, in the same order), so both paths consume the same stream; this kernel
 only replaces the ~25 small array operations on them, in the same float operations, so

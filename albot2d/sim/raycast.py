@@ -14,7 +14,7 @@ a fixed number of numpy calls (``raycast_kernel``):
 With long ranges in dense worlds an occlusion cut first casts against the pieces near the
 laser and looks further only along the beams that saw nothing (see ``RayCaster``).
 
-With numba installed (the ``fast`` extra) a compiled kernel (``raycast_numba``) walks each
+With numba (a default dependency) a compiled kernel (``raycast_numba``) walks each
 beam through the same grid instead, nearest cell first, for the same ranges (bit for bit
 except beams grazing a piece end, see below) several times faster; ``backend`` chooses.
 
@@ -44,6 +44,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from albot2d.compiled import compiled_kernel
 from albot2d.errors import InputError
 from albot2d.geometry import point_segment_distance
 from albot2d.sim.raycast_grid import (
@@ -81,33 +82,22 @@ BACKENDS = ("auto", "numpy", "numba")
 _NO_PIECES = np.zeros((3, 0), dtype=np.complex128)
 
 
-_numba_cast_beams: Callable[..., None] | None = None
-
-
-def _numba_kernel() -> Callable[..., None]:
-    """``raycast_numba.cast_beams``, imported on first use (numba takes a while to import)."""
-    global _numba_cast_beams
-    if _numba_cast_beams is None:
-        from albot2d.sim.raycast_numba import cast_beams
-
-        _numba_cast_beams = cast_beams
-    return _numba_cast_beams
+def _numba_kernel() -> Callable[..., None] | None:
+    """``raycast_numba.cast_beams``, imported on first use (numba takes a while to import);
+    None when the compiled kernels are off."""
+    return compiled_kernel("albot2d.sim.raycast_numba", "cast_beams")
 
 
 def numba_available() -> bool:
-    """Whether the compiled kernel can be used: numba (the ``fast`` extra) imports."""
-    try:
-        _numba_kernel()
-    except ImportError:
-        return False
-    return True
+    """Whether the compiled kernel can be used (``albot2d.compiled.kernels``)."""
+    return _numba_kernel() is not None
 
 
 def _resolve_backend(backend: str) -> str:
     if backend == "numpy" or (backend == "auto" and not numba_available()):
         return "numpy"
     if not numba_available():
-        raise InputError("backend='numba' needs numba: pip install 'albot2d[fast]'")
+        raise InputError("backend='numba' needs numba (off under ALBOT2D_KERNELS=numpy)")
     return "numba"
 
 
@@ -125,7 +115,7 @@ class RayCaster:
     the bounding boxes of their own rays.
 
     ``backend``: "numpy" is the vectorised kernel above; "numba" a compiled per-beam walk
-    through the same grid (``raycast_numba``; needs the ``fast`` extra), which gives the
+    through the same grid (``raycast_numba``; numba), which gives the
     same ranges (bit for bit, except beams grazing a piece end) several times faster and
     needs no occlusion cut; "auto" (default) takes numba when it is installed. The
     compiled kernel is built on first use and cached on disk.
@@ -225,7 +215,9 @@ class RayCaster:
             ranges = np.empty(fan.n_beams)
             scan = np.array([ox, oy, mid, r_max, tol, pad])
             grid = self.grid
-            (_numba_cast_beams or _numba_kernel())(
+            kernel = _numba_kernel()
+            assert kernel is not None  # the backend was resolved to numba
+            kernel(
                 grid.table,
                 grid.cell_start,
                 self._layout,

@@ -1,6 +1,6 @@
 """The optional compiled raycasting kernel (numba): ``cast_beams``, a per-beam grid walk.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``); ``RayCaster`` loads it
+Importing this module needs numba (a default dependency); ``RayCaster`` loads it
 only when that backend is selected. Each beam walks the cells of ``SegmentGrid`` along its
 ray, nearest first, and tests the pieces there; it stops at the first cell that ends
 beyond the nearest hit so far, so a scan costs what the beams pass, not what the fan's

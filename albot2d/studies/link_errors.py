@@ -43,18 +43,23 @@ from numpy.typing import NDArray
 
 from albot2d.frames import Frame
 from albot2d.geometry import Pose, compose_arrays, wrap_angle
-from albot2d.mapping.albot1.mapper import Albot1, Albot1Params
-from albot2d.mapping.albot1.route_map import Method
-from albot2d.mapping.albot1.triangulation import pose_affordances, triangulate
-from albot2d.perception import TrackedSurfaces
+from albot2d.mapping.albot1.mapper import Albot1, Albot1Params, Localisation
+from albot2d.mapping.albot1.triangulation import (
+    gate_limits,
+    outlier_kept,
+    pi_consistent,
+    pose_affordances,
+    triangulate,
+)
 
 __all__ = [
     "KINDS",
     "LinkError",
-    "RecordingAlbot1",
+    "LinkRecorder",
     "kind_summary",
     "link_errors",
     "record_run",
+    "recording_albot1",
     "window_budget",
 ]
 
@@ -85,27 +90,23 @@ class _Localisation:
     affordance_poses: FloatArray  # the gated affordances (K, 3)
 
 
-class RecordingAlbot1(Albot1):
-    """Albot1 that records, for each link it makes, how it was localised.
+class LinkRecorder:
+    """Records, for each link Albot1 makes, how it was localised: an ``on_localise`` hook.
 
-    Behaviour is Albot1's own (the parent's methods decide everything); the record is
-    computed beside them with the public triangulation functions.
+    Albot1 decides everything itself; the record is computed beside it with the public
+    triangulation functions (the same gate and outlier heuristic the mapper uses).
     """
 
-    def __init__(self, params: Albot1Params | None = None) -> None:
-        super().__init__(params)
-        self.localisations: list[_Localisation | None] = []
+    def __init__(self, params: Albot1Params, pi_gate: tuple[float, float]) -> None:
+        self.params = params
+        self.pi_gate = pi_gate
+        self.localisations: list[_Localisation] = []
 
-    def _triangulate_or_move_using_pi(
-        self, tracked: TrackedSurfaces, pi_pose: Pose, steps: int
-    ) -> tuple[Pose, Method]:
-        pose, method = super()._triangulate_or_move_using_pi(tracked, pi_pose, steps)
-        self.localisations.append(self._describe(tracked, pi_pose, steps, pose, method))
-        return pose, method
+    def __call__(self, event: Localisation) -> None:
+        self.localisations.append(self._describe(event))
 
-    def _describe(
-        self, tracked: TrackedSurfaces, pi_pose: Pose, steps: int, pose: Pose, method: Method
-    ) -> _Localisation:
+    def _describe(self, event: Localisation) -> _Localisation:
+        tracked, pi_pose, steps = event.tracked, event.path_integration, event.steps
         tparams = self.params.triangulation
         pi = pi_pose.as_array()
         if len(tracked) == 0:
@@ -113,27 +114,20 @@ class RecordingAlbot1(Albot1):
                 "pi_no_tracked", 0, 0, 0, 0, steps, pi, None, None, np.zeros((0, 3))
             )
         aff = pose_affordances(tracked.local, tracked.current, pi_pose.theta, tparams)
-        gate_m, gate_deg = self._pi_gate
-        if tparams.max_pi_deviation_m is not None:
-            gate_m = tparams.max_pi_deviation_m
-        if tparams.max_pi_deviation_deg is not None:
-            gate_deg = tparams.max_pi_deviation_deg
-        k = max(int(steps), 1)
-        ok = (np.hypot(aff.poses[:, 0] - pi[0], aff.poses[:, 1] - pi[1]) <= k * gate_m) & (
-            np.abs(wrap_angle(aff.poses[:, 2] - pi[2])) <= k * math.radians(gate_deg)
-        )
+        gate_m, gate_deg = gate_limits(tparams, self.pi_gate)
+        ok = pi_consistent(aff.poses, pi_pose, steps, gate_m, gate_deg)
         poses = aff.poses[ok]
         kept = len(poses)
         if tparams.use_outlier_heuristic and kept > 2:
-            d = np.hypot(*(poses[:, :2] - poses[:, :2].mean(axis=0)).T)
-            kept = max(int((d <= float(np.sqrt(np.mean(d**2)))).sum()), 1)
-        if method == "triangulation":
+            kept = int(outlier_kept(poses).sum())
+        if event.method == "triangulation":
             selected_params = _replace(tparams, heading="selected")
             sel = triangulate(
                 tracked.local, tracked.current, pi_pose, selected_params, steps=steps,
-                gate=self._pi_gate,
+                gate=self.pi_gate,
             )  # fmt: skip
-            assert sel is not None  # the same affordances gave ``pose``
+            if sel is None:  # the same affordances gave the mapper its pose
+                raise RuntimeError("triangulation with heading='selected' found no pose")
             sel_arr = sel.as_array()
             i = int(
                 np.argmin(
@@ -147,7 +141,7 @@ class RecordingAlbot1(Albot1):
                 "triangulation", len(tracked), len(aff.poses), int(ok.sum()), kept, steps, pi,
                 sel_arr, pair, poses,
             )  # fmt: skip
-        if abs(float(wrap_angle(pose.theta - pi_pose.theta))) > 0.0:
+        if abs(float(wrap_angle(event.pose.theta - pi_pose.theta))) > 0.0:
             kind = "pi_surface_heading"
         elif len(aff.poses) == 0:
             kind = "pi_no_endpoint"
@@ -156,6 +150,14 @@ class RecordingAlbot1(Albot1):
         return _Localisation(
             kind, len(tracked), len(aff.poses), int(ok.sum()), 0, steps, pi, None, None, poses
         )
+
+
+def recording_albot1(params: Albot1Params | None = None) -> tuple[Albot1, LinkRecorder]:
+    """An Albot1 and the ``LinkRecorder`` attached to its ``on_localise`` hook."""
+    mapper = Albot1(params)
+    recorder = LinkRecorder(mapper.params, mapper.pi_gate)
+    mapper.on_localise = recorder
+    return mapper, recorder
 
 
 def _replace(params: Any, **changes: Any) -> Any:
@@ -199,14 +201,14 @@ def _rel_error(est: FloatArray, true: FloatArray) -> tuple[float, float, float]:
 
 
 def link_errors(
-    mapper: RecordingAlbot1, true_poses: FloatArray, travelled_m: FloatArray
+    mapper: Albot1, recorder: LinkRecorder, true_poses: FloatArray, travelled_m: FloatArray
 ) -> list[LinkError]:
-    """Every link of ``mapper``'s route map against the truth; ``true_poses`` and
-    ``travelled_m`` are indexed by frame index."""
+    """Every link of ``mapper``'s route map against the truth, with how ``recorder`` saw it
+    made; ``true_poses`` and ``travelled_m`` are indexed by frame index."""
     maps = mapper.route.maps
-    if len(mapper.localisations) != len(maps) - 1:
+    if len(recorder.localisations) != len(maps) - 1:
         raise ValueError(
-            f"{len(mapper.localisations)} localisations recorded for {len(maps)} local maps"
+            f"{len(recorder.localisations)} localisations recorded for {len(maps)} local maps"
         )
     out: list[LinkError] = []
     nan = float("nan")
@@ -216,8 +218,7 @@ def link_errors(
                                  0, 0, 0, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, nan, nan,
                                  nan))  # fmt: skip
             continue
-        loc = mapper.localisations[i - 1]
-        assert loc is not None
+        loc = recorder.localisations[i - 1]
         prev = Pose.from_array(true_poses[maps[i - 1].frame_index])
         true_rel = prev.between(Pose.from_array(true_poses[lm.frame_index])).as_array()
         dx, dy, dth = _rel_error(lm.pose_in_previous.as_array(), true_rel)
@@ -360,13 +361,14 @@ def window_budget(
 
 def record_run(
     spec: Any, params: Albot1Params | None = None, *, max_frames: int | None = None
-) -> tuple[RecordingAlbot1, FloatArray, FloatArray]:
-    """Simulate ``spec`` (a ``RunSpec``) and feed its frames to a ``RecordingAlbot1``;
-    returns the mapper, the true poses and the odometer (metres) per frame index."""
+) -> tuple[Albot1, LinkRecorder, FloatArray, FloatArray]:
+    """Simulate ``spec`` (a ``RunSpec``) and feed its frames to a recording Albot1;
+    returns the mapper, its recorder, the true poses and the odometer (metres) per frame
+    index."""
     from albot2d.evaluation.run.setup import build_run
 
     setup = build_run(spec)
-    mapper = RecordingAlbot1(params)
+    mapper, recorder = recording_albot1(params)
     truth: list[FloatArray] = []
     travelled: list[float] = []
     odo = 0.0
@@ -380,7 +382,7 @@ def record_run(
         truth.append(frame.true_pose.as_array())
         travelled.append(odo)
         mapper.observe(frame)
-    return mapper, np.array(truth).reshape(-1, 3), np.array(travelled)
+    return mapper, recorder, np.array(truth).reshape(-1, 3), np.array(travelled)
 
 
 def _parse_value(text: str) -> Any:
@@ -467,8 +469,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     views = metres = 0.0
     budgets = []
     for i, spec in enumerate(specs):
-        mapper, truth, travelled = record_run(spec, params, max_frames=args.max_frames)
-        links = link_errors(mapper, truth, travelled)
+        mapper, recorder, truth, travelled = record_run(spec, params, max_frames=args.max_frames)
+        links = link_errors(mapper, recorder, truth, travelled)
         pooled += links
         views += len(truth)
         metres += float(travelled[-1])

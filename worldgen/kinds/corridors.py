@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from worldgen.kinds import WorldKind
 from worldgen.kinds._clutter import furnish_rects
 from worldgen.kinds._plan import (
     Layout,
@@ -189,3 +190,11 @@ def layout_corridors(rect: np.ndarray, p: CorridorsParams, rng: np.random.Genera
         corridor_loops=int(len(sel) - nodes_used + 1),
     )
     return layout
+
+
+KIND = WorldKind(
+    name="corridors",
+    params=CorridorsParams,
+    layout=layout_corridors,
+    summary="a corridor network on an irregular grid of junctions",
+)

@@ -37,6 +37,7 @@ import itertools
 import numpy as np
 import shapely
 
+from worldgen.kinds import WorldKind
 from worldgen.kinds._clutter import furnish_rects, furnish_region, pillar_grid
 from worldgen.kinds._plan import JAMB_M, Layout, boxes, partition_1d, shrink
 from worldgen.params import Fig6Params
@@ -268,3 +269,11 @@ def _room_visit(
                 return {"RD": rd, "R": (float(r[0]), cy)}
             depth -= _ROOM_DEPTH_STEP_M
     return None
+
+
+KIND = WorldKind(
+    name="fig6",
+    params=Fig6Params,
+    layout=layout_fig6,
+    summary="the paper's Fig. 6 building: a corridor ring with a cross corridor, rooms and a hall",
+)

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import shapely
 
+from worldgen.kinds import WorldKind
 from worldgen.kinds._doors import hall_links
 from worldgen.kinds._plan import (
     Layout,
@@ -312,3 +313,12 @@ def layout_mixed(rect: np.ndarray, p: MixedParams, rng: np.random.Generator) -> 
         wall_thickness_m=p.wall_thickness_m,
     )
     return out
+
+
+KIND = WorldKind(
+    name="mixed",
+    params=MixedParams,
+    layout=layout_mixed,
+    summary="regions of corridors, rooms and open halls joined by a corridor spine",
+    reports_doorways=True,
+)

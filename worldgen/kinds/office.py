@@ -14,6 +14,7 @@ import itertools
 import numpy as np
 import shapely
 
+from worldgen.kinds import WorldKind
 from worldgen.kinds._clutter import furnish_rects, furnish_region, pillar_grid
 from worldgen.kinds._doors import door_links, hall_links
 from worldgen.kinds._plan import (
@@ -261,3 +262,12 @@ def _hall_links(
     return hall_links(
         hall, clutter, entries, clearance_m=p.node_clearance_m, robot_radius_m=p.robot_radius_m
     )
+
+
+KIND = WorldKind(
+    name="office",
+    params=OfficeParams,
+    layout=layout_office,
+    summary="a corridor ring lined with rooms, cross corridors and an open area (Fig. 6)",
+    reports_doorways=True,
+)

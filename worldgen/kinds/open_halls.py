@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
+from worldgen.kinds import WorldKind
 from worldgen.kinds._clutter import furnish_region, pillar_grid
 from worldgen.kinds._plan import Layout, boxes
 from worldgen.params import OpenParams
@@ -155,3 +156,11 @@ def layout_open(rect: np.ndarray, p: OpenParams, rng: np.random.Generator) -> La
     layout = Layout(floor=[hall], clutter=[*pillars, *furniture], links=None)
     layout.features.update(open_features(hall, len(pillars), partitions))
     return layout
+
+
+KIND = WorldKind(
+    name="open",
+    params=OpenParams,
+    layout=layout_open,
+    summary="large halls with irregular outlines, pillars and furniture",
+)

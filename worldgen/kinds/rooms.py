@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from worldgen.kinds import WorldKind
 from worldgen.kinds._clutter import furnish_rects
 from worldgen.kinds._doors import DoorLinks, door_links
 from worldgen.kinds._plan import (
@@ -102,3 +103,12 @@ def layout_rooms(rect: np.ndarray, p: RoomsParams, rng: np.random.Generator) -> 
     half_t = 0.5 * p.wall_thickness_m
     inner = np.asarray(rect, float) + np.array([half_t, half_t, -half_t, -half_t])
     return plan_rooms(inner, p, rng)[0]
+
+
+KIND = WorldKind(
+    name="rooms",
+    params=RoomsParams,
+    layout=layout_rooms,
+    summary="rooms of varied sizes joined by doorways",
+    reports_doorways=True,
+)

@@ -7,13 +7,13 @@
 - ``simulator``: the simulator's own invariants (the robot keeps clear of obstacles,
   laser hits lie on them), measured with ``hit_geometry``, geometry independent of the
   simulator's ray caster (``simulator_numba``: its compiled query);
-- ``violation``: ``InvariantError``, what every check raises.
+Every check raises ``albot2d.errors.InvariantError``.
 
 May import: everything below evaluation. Nothing here may import the run pipeline: a
 check must not share code with what it checks beyond the plain geometry.
 """
 
+from albot2d.errors import InvariantError
 from albot2d.evaluation.checks.invariants import INVARIANTS, InvariantParams
-from albot2d.evaluation.checks.violation import InvariantError
 
 __all__ = ["INVARIANTS", "InvariantError", "InvariantParams"]

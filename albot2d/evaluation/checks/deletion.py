@@ -8,8 +8,8 @@ A surface's verdict is a conjunction of per-surface tests, asked cheapest first.
 shapely is asked whether a sample point is seen, plain geometry proves most points unseen
 with a micrometre / micro-radian margin (beyond the view's reach, outside every view
 surface's fan, or crossing a view surface more than ``enlarge_m`` short of the point);
-those tests are compiled when numba imports (``deletion_invariant_numba``, the ``fast``
-extra), with the numpy path kept. P is built only for a surface still in question. The
+those tests are compiled when numba imports (``deletion_numba``), with the numpy path
+kept. P is built only for a surface still in question. The
 verdicts equal the definition asked in full (``tests/test_deletion_invariant.py``)."""
 
 from __future__ import annotations
@@ -22,7 +22,8 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from albot2d.evaluation.checks.violation import InvariantError, fail
+from albot2d.compiled import compiled_module
+from albot2d.errors import InvariantError, fail
 from albot2d.geometry import Pose
 from albot2d.mapping.albot1.deletion import GlobalMapParams
 from albot2d.mapping.albot1.global_map import UpdateReport
@@ -258,7 +259,7 @@ def _visible(
     need = int(enough[0])
     kernels = _kernels() if backend != "numpy" else None
     if kernels is None and backend == "numba":
-        raise ValueError("backend='numba' needs numba (the fast extra)")
+        raise ValueError("backend='numba' needs numba (off under ALBOT2D_KERNELS=numpy)")
     sight = None
     if kernels is not None:
         possible = kernels.possible_points(
@@ -323,11 +324,7 @@ def _possible_points(sight: _SightLines, need: int) -> NDArray[np.bool_]:
 def _kernels() -> ModuleType | None:
     """The compiled prefilter (``deletion_invariant_numba``), imported on first use; None
     without numba."""
-    try:
-        from albot2d.evaluation.checks import deletion_numba as deletion_invariant_numba
-    except ImportError:
-        return None
-    return deletion_invariant_numba
+    return compiled_module("albot2d.evaluation.checks.deletion_numba")
 
 
 def _touching(

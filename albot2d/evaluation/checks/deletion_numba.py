@@ -1,6 +1,6 @@
 """The deletion invariant's optional compiled prefilter (numba): ``possible_points``.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``);
+Importing this module needs numba (a default dependency);
 ``albot2d.evaluation.checks.deletion`` loads it on first use and keeps its numpy path
 otherwise. An update asks a few hundred sample points of the older surfaces against a
 dozen view surfaces, so the numpy path's cost is its array calls, not arithmetic.

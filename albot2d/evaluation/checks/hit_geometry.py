@@ -1,7 +1,7 @@
-"""The plain geometry the laser-hit check (``sim_invariants.FrameChecker``) measures with,
+"""The plain geometry the laser-hit check (``checks.simulator.FrameChecker``) measures with,
 independently of the simulator's ray caster: ``SegmentGrid`` (which points lie within a
 distance of any segment) and ``ray_ranges`` (the exact range along rays to the nearest
-segment). Each has a numpy path and, with numba (the ``fast`` extra), a compiled kernel
+segment). Each has a numpy path and, with numba, a compiled kernel
 (``albot2d.evaluation.checks.simulator_numba``) doing the same float operations."""
 
 from __future__ import annotations
@@ -12,6 +12,8 @@ from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
+
+from albot2d.compiled import compiled_module
 
 __all__ = ["SegmentGrid", "ray_ranges"]
 
@@ -83,11 +85,7 @@ class SegmentGrid:
 @functools.cache
 def _kernels() -> ModuleType | None:
     """The compiled grid query (``sim_invariants_numba``) on first use; None without numba."""
-    try:
-        from albot2d.evaluation.checks import simulator_numba as sim_invariants_numba
-    except ImportError:
-        return None
-    return sim_invariants_numba
+    return compiled_module("albot2d.evaluation.checks.simulator_numba")
 
 
 def _pair_distance(points: FloatArray, segments: FloatArray) -> FloatArray:

@@ -27,11 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.errors import InvariantError, fail
 from albot2d.evaluation.checks.deletion import (
     UpdateRecorder,
     check_update_deleted_facing_overlap,
 )
-from albot2d.evaluation.checks.violation import InvariantError, fail
 from albot2d.geometry import Pose, between_arrays, wrap_angle
 from albot2d.mapping.albot1.mapper import Albot1
 from albot2d.mapping.albot1.route_map import RouteMap

@@ -1,6 +1,6 @@
 """The laser-hit check's optional compiled grid query (numba): ``within_kernel``.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``);
+Importing this module needs numba (a default dependency);
 ``albot2d.evaluation.sim_invariants.SegmentGrid.within`` loads it on first use and keeps its
 numpy path otherwise. A batch of 64 frames asks ~11,000 hits, each against the few
 segments its grid cell lists: the numpy path's cost is its ragged (hit, segment) pair

@@ -47,6 +47,7 @@ __all__ = [
     "make_backend",
 ]
 
+# The first is the default.
 BACKENDS = ("local", "dask")
 # Tasks kept in flight per worker: enough to keep every worker busy between results.
 _IN_FLIGHT_PER_WORKER = 2

@@ -104,7 +104,7 @@ class CampaignParams:
         from albot2d.sim.driving import get_profile
         from albot2d.sim.laser import laser_noise_preset
         from albot2d.sim.odometry import noise_preset
-        from worldgen.generate import KINDS
+        from worldgen.kinds import get_kind
         from worldgen.tours import TOUR_KINDS
 
         for name in ("episodes", "seed"):
@@ -117,8 +117,7 @@ class CampaignParams:
         if not kinds:
             raise InputError("give at least one world kind")
         for kind in kinds:
-            if kind not in KINDS:
-                raise InputError(f"unknown world kind {kind!r}; valid kinds: {', '.join(KINDS)}")
+            get_kind(kind)
         object.__setattr__(self, "kinds", kinds)
         get_profile(self.profile)
         noise_preset(self.noise)

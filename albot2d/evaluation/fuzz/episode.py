@@ -101,11 +101,11 @@ class EpisodeSpec:
     @classmethod
     def draw(cls, campaign: Any, index: int) -> EpisodeSpec:
         """Episode ``index`` of ``campaign`` (a ``CampaignParams``)."""
-        from worldgen.params import PARAMS_BY_KIND
+        from worldgen.kinds import get_kind
 
         rng = np.random.Generator(np.random.PCG64(episode_seed(campaign.seed, index)))
         kind = campaign.kinds[int(rng.integers(len(campaign.kinds)))]
-        low = max(float(PARAMS_BY_KIND[kind].min_size_m), campaign.world_size_min_m)
+        low = max(float(get_kind(kind).params.min_size_m), campaign.world_size_min_m)
         high = max(low, campaign.world_size_max_m)
         size = {"width_m": _decimetres(rng, low, high), "height_m": _decimetres(rng, low, high)}
         tour = _decimetres(rng, campaign.tour_length_min_m, campaign.tour_length_max_m)

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from albot2d import __version__
 from albot2d.atomic import atomic_write_text
+from albot2d.compiled import kernels
 from albot2d.errors import InputError
 from albot2d.plainjson import to_plain
 from albot2d.validation import parse_json
@@ -58,6 +59,7 @@ def make_report(command: str, **sections: Any) -> dict[str, Any]:
         "format": REPORT_FORMAT,
         "format_version": REPORT_FORMAT_VERSION,
         "albot2d_version": __version__,
+        "kernels": kernels(),
         "command": command,
     }
     return plain(head | sections)

@@ -54,6 +54,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from albot2d.compiled import compiled_module
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, as_segments
 from albot2d.validation import check_non_negative, check_positive, check_positive_int
@@ -344,11 +345,7 @@ _QUICK_IN = 0.997  # x r: within this of Q (in front of the axis), inside P
 @functools.cache
 def _kernels() -> ModuleType | None:
     """The compiled kernels (``deletion_numba``), imported on first use; None without numba."""
-    try:
-        from albot2d.mapping.albot1 import deletion_numba
-    except ImportError:
-        return None
-    return deletion_numba
+    return compiled_module("albot2d.mapping.albot1.deletion_numba")
 
 
 def quick_touch_ring(
@@ -466,7 +463,7 @@ def visible_share(
     same frame): the ray from the viewpoint to the point crosses at least one view surface,
     and the point lies at most ``beyond_m`` beyond the nearest crossing (the view's fan,
     enlarged radially; a point in a gap between view surfaces or hidden behind one is not
-    visible). ``backend``: "numpy", "numba" (the ``fast`` extra) or "auto" (numba when it
+    visible). ``backend``: "numpy", "numba" or "auto" (numba when it
     imports); both give the same shares bit for bit."""
     if backend not in SHARE_BACKENDS:
         raise ValueError(f"backend must be one of {SHARE_BACKENDS}, got {backend!r}")
@@ -482,7 +479,7 @@ def visible_share(
                 float(robot.x), float(robot.y), float(beyond_m), int(samples),
             )  # fmt: skip
         if backend == "numba":
-            raise ValueError("backend='numba' needs numba (the fast extra)")
+            raise ValueError("backend='numba' needs numba (off under ALBOT2D_KERNELS=numpy)")
     frac = (np.arange(samples) + 0.5) / samples
     pts = segs[:, None, :2] + frac[None, :, None] * (segs[:, None, 2:] - segs[:, None, :2])
     v = pts.reshape(-1, 2) - np.array([robot.x, robot.y])  # rays to the points (K, 2)

@@ -1,7 +1,7 @@
 """The optional compiled sight-line test of the deletion rule (numba): ``visible_share_kernel``,
 and the facing / seen-side tests in one pass (``facing_seen_kernel``).
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``);
+Importing this module needs numba (a default dependency);
 ``albot2d.mapping.albot1.deletion.visible_share`` loads it on first use and keeps its numpy path
 otherwise. An update tests a few dozen sample points against a dozen view surfaces, so the
 numpy path's cost is its ~30 array calls and ``(K, M)`` temporaries, not arithmetic.

@@ -53,7 +53,7 @@ from albot2d.perception import (
 from albot2d.perception.surfaces import Surfaces, transform_segments_fast
 from albot2d.validation import check_positive, check_positive_int
 
-__all__ = ["Albot1", "Albot1Params", "StepRecord", "UpdateSummary"]
+__all__ = ["Albot1", "Albot1Params", "Localisation", "StepRecord", "UpdateSummary"]
 
 
 class StepRecord(NamedTuple):
@@ -70,6 +70,21 @@ class StepRecord(NamedTuple):
     use_vc: bool
     remembered: tuple[int, ...]
     methods: tuple[Method, ...]
+
+
+class Localisation(NamedTuple):
+    """One view localised in the current local map, as ``Albot1.on_localise`` sees it.
+
+    ``tracked`` are the surfaces tracked into the view, ``path_integration`` the pose
+    odometry gives since the local map's origin (after ``steps`` odometry steps), ``pose``
+    and ``method`` what the mapper decided (algorithm #2 line 6 or algorithm #4 line 1).
+    """
+
+    tracked: TrackedSurfaces
+    path_integration: Pose
+    steps: int
+    pose: Pose
+    method: Method
 
 
 class UpdateSummary(NamedTuple):
@@ -181,9 +196,11 @@ class _ViewState(NamedTuple):
 class Albot1:
     """Albot1 (the paper's robot) as a mapper; see the module docstring.
 
+    Hooks, for checks and studies that watch the mapper without changing it:
     ``on_update`` is called with each global-map ``UpdateReport`` (e.g. to check invariants);
     ``on_view`` with each view as given, before it is processed (frame index, surfaces,
-    odometry increment), so a check can recount tracking from the views themselves.
+    odometry increment), so a check can recount tracking from the views themselves;
+    ``on_localise`` with each ``Localisation`` of a view that becomes a local map.
     """
 
     name = "albot1"
@@ -194,6 +211,7 @@ class Albot1:
         *,
         on_update: Callable[[UpdateReport, LocalMap], None] | None = None,
         on_view: Callable[[int, Surfaces, Pose], None] | None = None,
+        on_localise: Callable[[Localisation], None] | None = None,
     ) -> None:
         self.params = params or Albot1Params()
         self.route = RouteMap()
@@ -201,6 +219,7 @@ class Albot1:
         self.timer = StageTimer()
         self.on_update = on_update
         self.on_view = on_view
+        self.on_localise = on_localise
         self.last_update: UpdateReport | None = None
         self._tracked: TrackedSurfaces | None = None
         self._prev: _ViewState | None = None
@@ -311,9 +330,7 @@ class Albot1:
             # Lines 6–7 with Use-V(c) false: triangulate V(c-1) from the surfaces tracked
             # at c-1 (there were >= 4) and remember it.
             with self.timer.stage("localization"):
-                pose_prev, method = self._triangulate_or_move_using_pi(
-                    prev.tracked, prev.pose_in_map, prev.steps_in_map
-                )
+                pose_prev, method = self.localise(prev.tracked, prev.pose_in_map, prev.steps_in_map)
             self._update_maps(
                 prev.frame_index,
                 prev.timestamp,
@@ -337,7 +354,7 @@ class Albot1:
         # V(c) itself, triangulated from its 1–3 tracked surfaces, or, with none left, by
         # path integration (line 9: algorithm #4).
         with self.timer.stage("localization"):
-            pose_c, method = self._triangulate_or_move_using_pi(tracked, pi_pose, steps)
+            pose_c, method = self.localise(tracked, pi_pose, steps)
         self._update_maps(frame_index, timestamp, view, pose_c, method, tracked=len(tracked))
         return tracked_after
 
@@ -363,7 +380,7 @@ class Albot1:
         odometric pose when the result is farther from it than the fallback thresholds."""
         pose = triangulate(
             tracked.local, tracked.current, odometric, self.params.triangulation, steps=steps,
-            gate=self._pi_gate,
+            gate=self.pi_gate,
         )  # fmt: skip
         if pose is None:
             return odometric
@@ -375,22 +392,29 @@ class Albot1:
             return odometric
         return pose
 
+    def localise(self, tracked: TrackedSurfaces, pi_pose: Pose, steps: int) -> tuple[Pose, Method]:
+        """Algorithm #2 line 6 (triangulate from the tracked surfaces) or, when none affords
+        a pose, algorithm #4 line 1 (the pose reached by path integration); tells
+        ``on_localise``."""
+        pose, method = self._triangulate_or_move_using_pi(tracked, pi_pose, steps)
+        if self.on_localise is not None:
+            self.on_localise(Localisation(tracked, pi_pose, steps, pose, method))
+        return pose, method
+
     def _triangulate_or_move_using_pi(
         self, tracked: TrackedSurfaces, pi_pose: Pose, steps: int
     ) -> tuple[Pose, Method]:
-        """Algorithm #2 line 6 (triangulate from the tracked surfaces) or, when none affords
-        a pose, algorithm #4 line 1 (the pose reached by path integration)."""
         if len(tracked):
             pose = triangulate(
                 tracked.local, tracked.current, pi_pose, self.params.triangulation,
-                steps=steps, gate=self._pi_gate,
+                steps=steps, gate=self.pi_gate,
             )  # fmt: skip
             if pose is not None:
                 return pose, "triangulation"
             if self.params.heading_fallback_surfaces > 0:
                 heading = heading_from_directions(
                     tracked.local, tracked.current, pi_pose, self.params.triangulation,
-                    steps=steps, gate=self._pi_gate,
+                    steps=steps, gate=self.pi_gate,
                     min_agreeing=self.params.heading_fallback_surfaces,
                 )  # fmt: skip
                 if heading is not None:
@@ -399,7 +423,7 @@ class Albot1:
         return pi_pose, "path_integration"
 
     @property
-    def _pi_gate(self) -> tuple[float, float]:
+    def pi_gate(self) -> tuple[float, float]:
         """Affordances farther from path integration than RTSV's own recognition thresholds
         per step are dropped (``TriangulationParams.max_pi_deviation_*``; ``None`` there
         means these)."""

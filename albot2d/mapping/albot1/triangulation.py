@@ -38,15 +38,17 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.compiled import compiled_kernel
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, segment_angles, wrap_angle
-from albot2d.mapping.albot1.triangulation_scalar import triangulate_small
 from albot2d.perception.surfaces import Surfaces
 from albot2d.perception.tracking import TrackingParams, key_endpoints
 from albot2d.validation import check_non_negative
@@ -54,7 +56,10 @@ from albot2d.validation import check_non_negative
 __all__ = [
     "Affordances",
     "TriangulationParams",
+    "gate_limits",
     "heading_from_directions",
+    "outlier_kept",
+    "pi_consistent",
     "pose_affordances",
     "triangulate",
 ]
@@ -259,7 +264,7 @@ def _pi_fitness(aff: Affordances, current: Surfaces, path_integration: Pose) -> 
     )
 
 
-def _gate_limits(
+def gate_limits(
     params: TriangulationParams, gate: tuple[float, float] | None
 ) -> tuple[float, float]:
     """The per-step (metres, degrees) an affordance may deviate from path integration:
@@ -270,6 +275,26 @@ def _gate_limits(
     gate_m = params.max_pi_deviation_m if params.max_pi_deviation_m is not None else gate[0]
     gate_deg = params.max_pi_deviation_deg if params.max_pi_deviation_deg is not None else gate[1]
     return gate_m, gate_deg
+
+
+def pi_consistent(
+    poses: NDArray[np.float64], path_integration: Pose, steps: int, gate_m: float, gate_deg: float
+) -> NDArray[np.bool_]:
+    """Which affordances ``(K, 3)`` lie within ``steps`` times the per-step gate (metres,
+    degrees) of the path-integration pose: the gate every affordance must pass."""
+    k = max(int(steps), 1)
+    return (
+        np.hypot(poses[:, 0] - path_integration.x, poses[:, 1] - path_integration.y) <= k * gate_m
+    ) & (np.abs(wrap_angle(poses[:, 2] - path_integration.theta)) <= k * np.radians(gate_deg))
+
+
+def outlier_kept(poses: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """The paper's heuristic 1: keep the affordances whose position lies within one RMS
+    distance of their mean (the nearest to it when none does)."""
+    mean = poses[:, :2].mean(axis=0)
+    d = np.hypot(*(poses[:, :2] - mean).T)
+    keep = d <= float(np.sqrt(np.mean(d**2)))
+    return keep if keep.any() else d == d.min()
 
 
 def triangulate(
@@ -287,28 +312,24 @@ def triangulate(
     ``gate``: the per-step (metres, degrees) used where ``max_pi_deviation_*`` is ``None``;
     by default RTSV's recognition thresholds (``TrackingParams`` defaults).
     """
-    gate_m, gate_deg = _gate_limits(params, gate)
+    gate_m, gate_deg = gate_limits(params, gate)
     k = max(int(steps), 1)
-    if len(local) < _SMALL and len(local) == len(current) and _small_path_covers(params):
-        return triangulate_small(local, current, path_integration, params, k, gate_m, gate_deg)
+    if 0 < len(local) < _SMALL and len(local) == len(current) and _small_path_covers(params):
+        kernel = compiled_kernel("albot2d.mapping.albot1.triangulation_numba", "triangulate_kernel")
+        if kernel is not None:
+            return _triangulate_compiled(
+                kernel, local, current, path_integration, params, k, gate_m, gate_deg
+            )
     aff = pose_affordances(local, current, path_integration.theta, params)
-    consistent = (
-        np.hypot(aff.poses[:, 0] - path_integration.x, aff.poses[:, 1] - path_integration.y)
-        <= k * gate_m
-    ) & (np.abs(wrap_angle(aff.poses[:, 2] - path_integration.theta)) <= k * np.radians(gate_deg))
+    consistent = pi_consistent(aff.poses, path_integration, k, gate_m, gate_deg)
     if not consistent.all():
-        aff = Affordances(*(field[consistent] for field in aff))
+        aff = Affordances._make(field[consistent] for field in aff)
     poses = aff.poses
     if len(poses) == 0:
         return None
     keep = np.ones(len(poses), bool)
     if params.use_outlier_heuristic and len(poses) > 2:
-        mean = poses[:, :2].mean(axis=0)
-        d = np.hypot(*(poses[:, :2] - mean).T)
-        sigma = float(np.sqrt(np.mean(d**2)))
-        keep = d <= sigma
-        if not keep.any():
-            keep = d == d.min()
+        keep = outlier_kept(poses)
     kept = np.flatnonzero(keep)
     if params.choose == "fitness":
         best = int(kept[np.argmax(_pi_fitness(aff, current, path_integration)[kept])])
@@ -360,7 +381,7 @@ def heading_from_directions(
         raise ValueError(f"local has {len(local)} surfaces but current has {len(current)}")
     if len(local) == 0:
         return None
-    _, gate_deg = _gate_limits(params, gate)
+    _, gate_deg = gate_limits(params, gate)
     k = max(int(steps), 1)
     fused = _weighted_heading_offset(
         local,
@@ -375,16 +396,43 @@ def heading_from_directions(
     return float(wrap_angle(path_integration.theta + fused[0]))
 
 
-# -- a few surfaces: the same triangulation in scalars (``triangulation_scalar``) --------
-# Its sums run left to right, which is what numpy's pairwise summation does below 8 terms,
-# hence ``_SMALL``; ``tests/test_triangulation_small.py`` checks the two paths equal.
+# -- a few surfaces: one compiled call (``triangulation_numba``) -------------------------
+# For fewer than ``_SMALL`` surfaces numpy's small-array overhead costs more than the work,
+# so with numba the default heuristics run in one compiled call: the array path's float
+# operations in its order (sums left to right, which is what numpy's pairwise summation
+# does below 8 terms), hence the same pose bit for bit (tests/test_triangulation_small.py).
+# The kernel takes numpy's direction differences: numpy's vectorised arctan2 differs from
+# numba's in the last bit on some CPUs.
 _SMALL = 8
 
 
 @functools.lru_cache(maxsize=16)
 def _small_path_covers(params: TriangulationParams) -> bool:
-    """The scalar path implements the default heuristics (any gate and consensus)."""
+    """The compiled path implements the default heuristics (any gate and consensus)."""
     general = dataclasses.replace(
         params, max_pi_deviation_m=None, max_pi_deviation_deg=None, heading_consensus_deg=1.0
     )
     return general == TriangulationParams()
+
+
+def _triangulate_compiled(
+    kernel: Callable[..., tuple[bool, float, float, float]],
+    local: Surfaces,
+    current: Surfaces,
+    pi: Pose,
+    params: TriangulationParams,
+    k: int,
+    gate_m: float,
+    gate_deg: float,
+) -> Pose | None:
+    """``triangulate``'s array path for a few surfaces in one compiled call."""
+    ls, cs = local.segments, current.segments
+    ang_l = np.arctan2(ls[:, 3] - ls[:, 1], ls[:, 2] - ls[:, 0]) - np.arctan2(
+        cs[:, 3] - cs[:, 1], cs[:, 2] - cs[:, 0]
+    )
+    found, x, y, heading = kernel(
+        ang_l, ls, cs, local.localisable, current.localisable, local.beams, current.beams,
+        float(pi.x), float(pi.y), float(pi.theta), k * gate_m, k * math.radians(gate_deg),
+        math.radians(params.heading_consensus_deg), bool(params.use_outlier_heuristic),
+    )  # fmt: skip
+    return Pose(float(x), float(y), float(heading)) if found else None

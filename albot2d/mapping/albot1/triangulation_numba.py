@@ -1,14 +1,14 @@
 """The optional compiled triangulation for a few tracked surfaces (numba):
-``triangulate_kernel``, ``triangulation_scalar.triangulate_small`` in one call.
+``triangulate_kernel``, ``triangulation.triangulate``'s array path in one call.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``); ``triangulate_small``
-loads it on first use. The scalar path's cost is Python's per-operation overhead (~40 list
-operations and a dozen small numpy calls per view); this kernel repeats its float
-operations in its order. Its only transcendental that numba would compute differently from
-numpy on this kind of CPU is ``arctan2`` (numpy's vectorised one differs from libm's in
-the last bit), so the caller passes the directions' differences computed by numpy;
-numba's ``cos``, ``sin`` and ``hypot`` are numpy's, and its float ``%`` is Python's. The
-two paths are held equal bit for bit by ``tests/test_triangulation_small.py``.
+Importing this module needs numba (a default dependency; without it ``triangulate`` runs
+its numpy path for every size). For fewer than eight surfaces the array path's cost is
+numpy's per-call overhead (a few dozen small-array operations per view); this kernel
+repeats its float operations in its order. Its only transcendental that numba would
+compute differently from numpy on some CPUs is ``arctan2`` (numpy's vectorised one
+differs from libm's in the last bit), so the caller passes the directions' differences
+computed by numpy; numba's ``cos``, ``sin`` and ``hypot`` are numpy's, and its float ``%``
+is Python's. ``tests/test_triangulation_small.py`` holds the two paths equal bit for bit.
 """
 
 from __future__ import annotations
