@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +15,8 @@ from albot2d.sim.laser import LaserNoise
 from albot2d.sim.odometry import NOISE_PRESETS
 from albot2d.sim.robot import RobotParams
 from tests.test_simulator import MOVERS, room_world
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _run(
@@ -151,3 +154,47 @@ def test_step_before_reset_and_bad_command_type() -> None:
     assert obs.command == VelocityCommand(0.2, 0.0)
     with pytest.raises(InputError, match="nan"):
         sim.step(np.array([np.nan, 0.0]), 0.1)  # type: ignore[arg-type]
+
+
+def test_the_driving_yourself_snippet_is_a_short_loop_that_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """docs/simulator.md "Driving albot2d yourself": a ten-line reset/step loop (the README
+    copies it); it runs and the robot gets somewhere without touching a wall."""
+    text = (ROOT / "docs" / "simulator.md").read_text(encoding="utf-8")
+    section = text.split("## Driving albot2d yourself", 1)[1].split("\n## ", 1)[0]
+    code = section.split("```python\n", 1)[1].split("```", 1)[0]
+    lines = [line for line in code.splitlines() if line.strip()]
+    assert len(lines) <= 10 and "sim.reset(" in code and "sim.step(" in code
+    monkeypatch.chdir(tmp_path)
+    namespace: dict[str, object] = {}
+    exec(compile(code, "docs/simulator.md", "exec"), namespace)
+    obs = namespace["obs"]
+    assert isinstance(obs, Observation) and obs.time_s == pytest.approx(60.0)
+    assert obs.true_pose.distance_to(namespace["sim"].world.start) > 1.0  # type: ignore[attr-defined]
+    assert "60 s: true Pose(" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("command", "fine", "coarse"),
+    [
+        (VelocityCommand(0.3, 0.0), (300, 1.0 / 30.0), (1, 10.0)),  # 3 m in 1 cm or one step
+        (VelocityCommand(0.0, math.radians(30.0)), (90, 1.0 / 30.0), (1, 3.0)),  # 90° in 1°
+    ],
+)
+def test_odometry_does_not_depend_on_the_step_length(
+    command: VelocityCommand, fine: tuple[int, float], coarse: tuple[int, float]
+) -> None:
+    """The same motion stepped finely or in one step: the same true pose and, with the
+    same seed, the same odometry pose (its error arises along the path, not per step)."""
+    ends = []
+    for n, dt in (fine, coarse):
+        sim = Simulator(room_world(), seed=9, odometry=NOISE_PRESETS["high"])
+        sim.reset(start=Pose(2.0, 4.0, 0.0))
+        for _ in range(n):
+            obs = sim.step(command, dt)
+        ends.append(obs)
+    assert ends[0].true_pose.distance_to(ends[1].true_pose) < 1e-9
+    assert ends[0].odom_pose.distance_to(ends[1].odom_pose) < 1e-9
+    assert abs(ends[0].odom_pose.theta - ends[1].odom_pose.theta) < 1e-9
+    assert ends[0].odom_pose.distance_to(ends[0].true_pose) > 1e-3  # there is an error

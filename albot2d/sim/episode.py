@@ -20,19 +20,17 @@ runs its own. ``advance(command, dt_s)`` is the whole physics of a step:
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 from albot2d.frames import Scan
 from albot2d.geometry import Pose
 from albot2d.seeding import SeedLike, make_rng, stream_seed
 from albot2d.sim.commands import Observation, Twist, VelocityCommand
-from albot2d.sim.dynamics import Dynamics
+from albot2d.sim.dynamics import Dynamics, PhysicsParams, SubstepObserver
+from albot2d.sim.laser import Laser
 from albot2d.sim.odometry import Odometry, OdometryNoise
-from albot2d.sim.robot import KinematicRobot
+from albot2d.sim.robot import KinematicRobot, RobotParams
 from worldgen.space import build_space
-
-if TYPE_CHECKING:
-    from albot2d.sim.simulator import Simulator
+from worldgen.world import World
 
 __all__ = ["STREAMS", "Episode"]
 
@@ -44,38 +42,43 @@ _CLOCK_SLACK_S = 1e-9
 
 
 class Episode:
-    """The state of one run of ``sim`` from ``start`` with random streams from ``seed``
+    """The state of one run in ``world`` from ``start`` with random streams from ``seed``
     (its children named in ``STREAMS``, built without advancing ``seed``'s spawn counter,
-    so the same seed object gives the same episode every time)."""
+    so the same seed object gives the same episode every time). ``Simulator`` passes its
+    parameters and its ``laser``."""
 
     def __init__(
         self,
-        sim: Simulator,
+        world: World,
         seed: SeedLike,
         start: Pose,
-        odometry_noise: OdometryNoise,
         *,
+        robot: RobotParams,
+        laser: Laser,
+        odometry_noise: OdometryNoise,
+        physics: PhysicsParams,
+        physics_observer: SubstepObserver | None,
         laser_rate_hz: float | None,
     ) -> None:
         seeds = {name: stream_seed(seed, STREAMS, name) for name in STREAMS}
-        self.sim = sim
+        self.laser = laser
         self.laser_rng = make_rng(seeds["laser"])
-        self.space = build_space(sim.world)
-        self.robot = KinematicRobot(self.space, sim.robot_params, start)
+        self.space = build_space(world)
+        self.robot = KinematicRobot(self.space, robot, start)
         self.dynamics = Dynamics(
-            sim.world,
+            world,
             self.space,
             make_rng(seeds["dynamic_obstacles"]),
-            sim.physics,
-            observer=sim.physics_observer,
+            physics,
+            observer=physics_observer,
         )
         self.odometry = Odometry(odometry_noise, make_rng(seeds["odometry"]), start=start)
         self.time_s = 0.0
         self.steps = 0
         self._laser_period_s = None if laser_rate_hz is None else 1.0 / laser_rate_hz
         self._scans_due = 0  # laser firings so far: the next is at _scans_due · period
-        self._max_speed = sim.robot_params.max_speed_m_s
-        self._max_turn = math.radians(sim.robot_params.max_turn_rate_deg_s)
+        self._max_speed = robot.max_speed_m_s
+        self._max_turn = math.radians(robot.max_turn_rate_deg_s)
 
     def limit(self, command: VelocityCommand) -> VelocityCommand:
         """``command`` within the robot's speed and turn-rate limits."""
@@ -127,7 +130,7 @@ class Episode:
         """A laser sweep now, from the true pose, seeing the obstacles where they are."""
         dynamics = self.dynamics
         extra = dynamics.outlines() if dynamics.active else None
-        return self.sim.laser.scan(
+        return self.laser.scan(
             self.robot.pose, self.laser_rng, timestamp=self.time_s, extra_segments=extra
         )
 

@@ -341,6 +341,8 @@ class OdometryReading(NamedTuple):
 _CELL_SLACK = 1e-9
 # Standard normals drawn from the rng at a time (the order of use is the order of draws).
 _NORMALS_BLOCK = 256
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
 
 
 class Odometry:
@@ -434,37 +436,52 @@ class Odometry:
         return self._normals[k], self._normals[k + 1]
 
     def _move(self, pose: Pose, trans: float) -> Pose:
+        # Cell by cell in plain floats, the same arithmetic as ``pose.compose(Pose(distance,
+        # 0, heading))`` per piece (wrap included): one Pose at the end, as this loop runs
+        # once per centimetre driven.
+        x, y, theta = pose.x, pose.y, pose.theta
         sign = 1.0 if trans > 0.0 else -1.0
         remaining = abs(trans)
-        slack = _CELL_SLACK * self._res_m
+        res, slack = self._res_m, _CELL_SLACK * self._res_m
+        scale, drift = self._dist_scale, self._drift_per_m
+        dist_per_m, head_per_m = self._dist_per_m, self._head_per_m
+        left, (z_head, z_dist) = self._move_left, self._move_z
         while remaining > 0.0:
-            if self._move_left <= slack:
-                self._move_left = self._res_m
-                self._move_z = self._normal_pair()
-            piece = remaining if remaining <= self._move_left + slack else self._move_left
-            z_head, z_dist = self._move_z
-            distance = piece * (self._dist_scale + self._dist_per_m * z_dist)
-            heading = piece * (self._drift_per_m + self._head_per_m * z_head)
-            pose = pose.compose(Pose(sign * distance, 0.0, heading))
-            self._move_left -= piece
+            if left <= slack:
+                left = res
+                z_head, z_dist = self._normal_pair()
+            piece = remaining if remaining <= left + slack else left
+            distance = sign * piece * (scale + dist_per_m * z_dist)
+            x += math.cos(theta) * distance
+            y += math.sin(theta) * distance
+            theta = (theta + piece * (drift + head_per_m * z_head) + _PI) % _TWO_PI - _PI
+            left -= piece
             remaining -= piece
-        return pose
+        self._move_left, self._move_z = left, (z_head, z_dist)
+        return Pose(x, y, theta)
 
     def _turn(self, pose: Pose, angle: float) -> Pose:
-        remaining = abs(angle)
+        x, y, theta = pose.x, pose.y, pose.theta
         sign = 1.0 if angle > 0.0 else -1.0
-        slack = _CELL_SLACK * self._res_rad
+        remaining = abs(angle)
+        res, slack = self._res_rad, _CELL_SLACK * self._res_rad
+        scale, head_per_rad, dist_per_rad = self._turn_scale, self._head_per_rad, self._dist_per_rad
+        left, (z_head, z_dist) = self._turn_left, self._turn_z
         while remaining > 0.0:
-            if self._turn_left <= slack:
-                self._turn_left = self._res_rad
-                self._turn_z = self._normal_pair()
-            piece = remaining if remaining <= self._turn_left + slack else self._turn_left
-            z_head, z_dist = self._turn_z
-            turned = sign * piece * self._turn_scale + piece * self._head_per_rad * z_head
-            pose = pose.compose(Pose(piece * self._dist_per_rad * z_dist, 0.0, turned))
-            self._turn_left -= piece
+            if left <= slack:
+                left = res
+                z_head, z_dist = self._normal_pair()
+            piece = remaining if remaining <= left + slack else left
+            slip = piece * dist_per_rad * z_dist  # forward error while turning (alpha4)
+            if slip:
+                x += math.cos(theta) * slip
+                y += math.sin(theta) * slip
+            turned = sign * piece * scale + piece * head_per_rad * z_head
+            theta = (theta + turned + _PI) % _TWO_PI - _PI
+            left -= piece
             remaining -= piece
-        return pose
+        self._turn_left, self._turn_z = left, (z_head, z_dist)
+        return Pose(x, y, theta)
 
 
 def heading_variance_rad2(

@@ -111,12 +111,11 @@ class Simulator:
             raise InputError(f"reset start must be a Pose, got {start!r}")
         if start is not None and not all(math.isfinite(v) for v in (start.x, start.y, start.theta)):
             raise InputError(f"reset start must be finite, got {start!r}")
-        episode = Episode(
-            self,
+        episode = self._episode_at(
             self.seed if seed is None else seed,
             start if start is not None else self.world.start,
             self.odometry_noise,
-            laser_rate_hz=self.laser_rate_hz,
+            self.laser_rate_hz,
         )
         self._episode = episode
         return episode.observe(Pose(), False, VelocityCommand(), 0.0)
@@ -183,6 +182,21 @@ class Simulator:
         frames = self._run(controller, prof, start if start is not None else self.world.start)
         return frames if lookahead == 1 else _in_batches(frames, lookahead)
 
+    def _episode_at(
+        self, seed: SeedLike, start: Pose, noise: OdometryNoise, laser_rate_hz: float | None
+    ) -> Episode:
+        return Episode(
+            self.world,
+            seed,
+            start,
+            robot=self.robot_params,
+            laser=self.laser,
+            odometry_noise=noise,
+            physics=self.physics,
+            physics_observer=self.physics_observer,
+            laser_rate_hz=laser_rate_hz,
+        )
+
     def _check_profile_speeds(self, profile: DrivingProfile) -> None:
         r = self.robot_params
         if profile.speed_m_s > r.max_speed_m_s:
@@ -207,7 +221,7 @@ class Simulator:
                 self.odometry_noise.induced_along_motion or profile.induced_along_motion
             ),
         )
-        episode = Episode(self, self.seed, start, noise, laser_rate_hz=None)
+        episode = self._episode_at(self.seed, start, noise, None)
         robot, odometry, dynamics = episode.robot, episode.odometry, episode.dynamics
         induced = bool(noise.induced_step_m or noise.induced_step_deg)
         pause = VelocityCommand()

@@ -38,7 +38,7 @@ from albot2d.mapping.albot1.route_map import RouteMap
 from albot2d.perception.surfaces import Surfaces
 from albot2d.perception.tracking import TrackingParams, recognise, trackable_mask
 from albot2d.sim.driving import DrivingProfile
-from albot2d.sim.odometry import OdometryNoise
+from albot2d.sim.odometry import OdometryNoise, heading_variance_rad2
 from albot2d.validation import check_non_negative, check_positive
 
 __all__ = [
@@ -322,13 +322,13 @@ def heading_error_bound(
     mapper fed odometry with ``noise`` and driven with ``profile``.
 
     Odometry's own error envelope over the true motion so far — ``heading_sigmas`` standard
-    deviations of its random error (α1 per radian turned, α2 per metre, as in
-    ``perturb_increment``), plus the systematic part at full strength (turn scale error ×
-    radians turned, drift × metres, the induced error × turn steps) — widened by a random
-    walk of ``triangulation_heading_deg`` per local map remembered (the laser-based
-    localisation's own error) and a floor of ``heading_floor_deg``. A mapper that places
-    views by the laser should stay well inside it; one that breaks (a flipped triangulation,
-    a lost local map) leaves it.
+    deviations of its random error (a random walk: variance α1² per radian turned plus α2²
+    per metre driven, ``albot2d.sim.odometry.heading_variance_rad2``), plus the systematic
+    part at full strength (turn scale error × radians turned, drift × metres, the induced
+    error × turn steps) — widened by a random walk of ``triangulation_heading_deg`` per
+    local map remembered (the laser-based localisation's own error) and a floor of
+    ``heading_floor_deg``. A mapper that places views by the laser should stay well inside
+    it; one that breaks (a flipped triangulation, a lost local map) leaves it.
     """
     p = params or InvariantParams()
     poses = np.asarray(true_poses, dtype=np.float64)
@@ -336,7 +336,7 @@ def heading_error_bound(
     dist = np.hypot(inc[:, 0], inc[:, 1])
     turn = np.abs(np.asarray(wrap_angle(inc[:, 2])))
     turn_steps = np.ceil(turn / math.radians(profile.turn_step_deg) - 1e-9)
-    var = (noise.alpha1 * turn + noise.alpha2 * dist) ** 2 + (noise.alpha2 * dist) ** 2
+    var = heading_variance_rad2(noise, dist, turn)
     induced_rad = math.radians(abs(noise.induced_step_deg) + abs(profile.induced_step_deg))
     systematic = (
         abs(noise.turn_scale_error) * turn
