@@ -55,6 +55,10 @@ def test_grid_search_finds_the_nearest_goal_around_a_wall() -> None:
     assert length > 10.0  # longer than the straight line through the wall
     # the compiled and the plain search agree cell for cell
     plain = dijkstra_to_goal(cost.reshape(-1), goal.reshape(-1), seeds, np.zeros(1), 20)
+    chain = [int(plain[0])]
+    while plain[1][chain[-1]] >= 0:
+        chain.append(int(plain[1][chain[-1]]))
+    assert np.array_equal(np.array(chain[::-1]), cells[:, 0] * 20 + cells[:, 1])
     cost[:, 10] = np.inf  # now the goal is cut off
     assert nearest_goal_path(cost, goal, seeds, np.zeros(1)) is None
     assert plain[0] == 10 * 20 + 15

@@ -4,11 +4,12 @@
 impassable; a diagonal step costs √2 × the mean of its two cells, and never cuts the
 corner of an impassable cell) from one or more seed cells, stopping at the first goal cell
 it settles: the nearest goal by path cost and the path to it. The search is one compiled
-call when numba imports (``grid_search_numba``, the same function compiled), else the same
-Python function runs as it is (same path, ~50x slower).
+call (``grid_search_numba``, the same function compiled) unless the compiled kernels are off
+(``albot2d.compiled``), when the same Python function runs as it is (same path, slower).
 
 ``dilate`` grows a mask by a disc (vectorised: one shifted OR per offset in the disc);
-``simplify_path`` keeps only the cells a straight line of passable cells cannot skip.
+``simplify_path`` drops the cells a straight line over passable cells can skip (greedy:
+from each kept cell, a far later cell in sight, found by backing off from the last).
 """
 
 from __future__ import annotations

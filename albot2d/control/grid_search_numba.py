@@ -1,7 +1,7 @@
 """The compiled grid search (numba): ``grid_search.dijkstra_to_goal`` compiled as it is.
 
-Importing this module needs numba (``pip install 'albot2d[fast]'``); ``nearest_goal_path``
-uses it when numba imports. The source is the Python function itself, so both paths
+Loaded through ``albot2d.compiled`` (off with ``ALBOT2D_KERNELS=numpy``);
+``nearest_goal_path`` uses it when the compiled kernels are on. The source is the Python function itself, so both paths
 settle cells in the same order and return the same path.
 """
 
