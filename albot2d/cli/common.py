@@ -358,6 +358,10 @@ def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
     print(f"{result.title}  ({report['wall_time_s']:.1f} s)")
     print(format_summary_table(result.scores))
     print(format_homing_table(result.scores))
+    if "exploration" in report:  # albot2d run --tour explore
+        from albot2d.control.exploration import format_coverage_table
+
+        print(format_coverage_table(report["exploration"]))
     files = report["figures"] + report.get("exports", [])
     print(
         f"-> {out / REPORT_NAME} + {len(files)} files ({', '.join(files)})"

@@ -45,6 +45,7 @@ __all__ = [
     "ExploreDrive",
     "explore",
     "explorer_grid",
+    "format_coverage_table",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -269,3 +270,27 @@ def explore(
 ) -> ExplorationResult:
     """Explore ``simulator``'s world from its start; coverage against time."""
     return ExploreDrive(simulator, params=params, max_time_s=max_time_s, dt_s=dt_s).run()
+
+
+def format_coverage_table(exploration: dict[str, Any], every_s: float = 300.0) -> str:
+    """report.json's ``exploration`` section as a text table: coverage every ``every_s``
+    simulated seconds, the times the milestones were reached, how the run ended."""
+    rows = [
+        r for r in exploration["coverage_every_60s"]
+        if r["time_s"] % every_s < 1e-6 or r is exploration["coverage_every_60s"][-1]
+    ]  # fmt: skip
+    lines = [
+        f"exploration: {exploration['reachable_floor_m2']:.0f} m² of reachable floor; "
+        f"ended: {exploration['ended']} after {exploration['duration_s']:.0f} s, "
+        f"{exploration['travelled_m']:.0f} m, {exploration['collisions']} collision steps",
+        "  time (min)  " + "  ".join(f"{r['time_s'] / 60.0:5.1f}" for r in rows),
+        "  coverage    " + "  ".join(f"{100.0 * r['coverage']:4.0f}%" for r in rows),
+    ]
+    reached = [
+        f"{float(level):.0%} at {t / 60.0:.1f} min"
+        if t is not None
+        else f"{float(level):.0%} never"
+        for level, t in exploration["time_to_coverage_s"].items()
+    ]
+    lines.append("  reached     " + ", ".join(reached))
+    return "\n".join(lines)
