@@ -71,7 +71,17 @@ CLI_CASES = [
     (
         "world-tour-1e300",
         ["world", "--kind", "rooms", "--tour-length", "1e300"],
+        ("length_m", "1e+300"),
+    ),
+    (
+        "world-min-tour-1e300",
+        ["world", "--kind", "rooms", "--min-tour-length", "1e300"],
         ("min_length_m", "1e+300"),
+    ),
+    (
+        "run-both-tour-lengths",
+        ["run", "--tour-length", "50", "--min-tour-length", "50"],
+        ("--tour-length or --min-tour-length",),
     ),
     ("world-kind-unknown", ["world", "--kind", "castle"], ("'castle'",)),
     ("run-max-frames-0", ["run", "--kind", "rooms", "--max-frames", "0"], ("--max-frames", "'0'")),

@@ -433,11 +433,14 @@ def test_an_episode_runs_with_the_heap_frozen_and_hands_it_back() -> None:
         del cycle
         assert gc.collect() >= 1
     assert frozen > 1000 and gc.get_freeze_count() == 0
-    gc.freeze()  # someone else's freeze is left alone
+    gc.freeze()  # someone else's freeze is left alone: neither thawed nor frozen again
     try:
         held = gc.get_freeze_count()
+        # (a frozen object freed meanwhile, e.g. by another thread of the test process,
+        # leaves the permanent generation: the count may drop by a few, never rise or
+        # fall to the episode's own)
         with _heap_frozen():
-            assert gc.get_freeze_count() == held
-        assert gc.get_freeze_count() == held
+            assert held - 100 <= gc.get_freeze_count() <= held
+        assert held - 100 <= gc.get_freeze_count() <= held
     finally:
         gc.unfreeze()

@@ -53,21 +53,20 @@ def test_step_times_table_fills_missing_stages_and_round_trips_through_csv(
     assert "albot1.remembered" not in summary and "view" not in summary
 
 
-def test_plot_step_times_draws_every_time_line_and_the_remembered_marks() -> None:
-    from matplotlib.figure import Figure
+def test_plot_step_times_stacks_every_stage_and_marks_the_remembered_views() -> None:
+    from matplotlib.collections import PolyCollection
 
     from albot2d.viz.steps import plot_step_times, render_step_times_png
 
-    ax = Figure().subplots()
-    assert plot_step_times(some_steps(), ax=ax) is ax
-    labels = [line.get_label() for line in ax.get_lines()]
-    assert {"simulation", "extraction", "albot1.total"} <= set(labels)
-    marks = [line for line in ax.get_lines() if line.get_marker() == "|"]
-    assert len(marks) == 1 and len(marks[0].get_xdata()) == len(range(0, 50, 7))
-    assert ax.get_yscale() == "log"
-    # A long run is drawn per bin: the median and (faint) the slowest view of each bin.
-    binned = plot_step_times(some_steps(), ax=Figure().subplots(), bins=10)
-    total = next(ln for ln in binned.get_lines() if ln.get_label() == "albot1.total")
-    assert len(total.get_xdata()) == 10
-    assert max(ln.get_ydata().max() for ln in binned.get_lines() if ln.get_marker() != "|") >= 2.5
+    fig = plot_step_times(some_steps(), bins=10)
+    stacked, percentiles = fig.axes[:2]
+    bands = [c for c in stacked.collections if isinstance(c, PolyCollection)]
+    labels = [c.get_label() for c in bands]
+    assert {"simulation", "extraction", "albot1 (mapper)"} <= set(labels)
+    marks = [line for line in stacked.get_lines() if line.get_marker() == "|"]
+    # views 7, 14, ... (view 0, start-up, is left out of the stacked areas)
+    assert len(marks) == 1 and len(marks[0].get_xdata()) == len(range(7, 50, 7))
+    assert percentiles.get_xscale() == "log"
+    ticks = [t.get_text() for t in percentiles.get_yticklabels()]
+    assert "albot1 (mapper)" in ticks and "simulation" in ticks
     assert render_step_times_png(some_steps()).startswith(PNG_MAGIC)

@@ -152,10 +152,55 @@ def test_zero_length_edge_at_the_start_is_refused(kind):
 
 def test_plan_tour_is_the_cli_tour_and_int_seeds_work():
     world = generate("rooms", seed=3, width_m=25.0, height_m=20.0)
-    cli = make_tour(world, spawn_rngs(3, 2)[1], kind="loop", min_length_m=60.0)
+    cli = make_tour(world, spawn_rngs(3, 2)[1], kind="loop", length_m=60.0)
     public = plan_tour(world, kind="loop", length_m=60.0)
     assert np.array_equal(public.waypoints, cli.waypoints)
     assert np.array_equal(plan_tour(world, length_m=60.0, seed=3).waypoints, cli.waypoints)
+    at_least = make_tour(world, spawn_rngs(3, 2)[1], kind="loop", min_length_m=60.0)
+    assert np.array_equal(plan_tour(world, "loop", 60.0, at_least=True).waypoints,
+                          at_least.waypoints)  # fmt: skip
     by_int = make_tour(world, 1, kind="loop", min_length_m=60.0)
     by_rng = make_tour(world, make_rng(1), min_length_m=60.0)
     assert np.array_equal(by_int.waypoints, by_rng.waypoints)
+
+
+@given(
+    world=worlds(max_size_m=35.0),
+    kind=st.sampled_from(TOUR_KINDS),
+    length=st.sampled_from([5.0, 30.0, 120.0]),
+    seed=st.integers(0, 1000),
+)
+def test_a_tour_length_is_met_within_the_tolerance(world, kind, length, seed):
+    from worldgen.tours import TOUR_LENGTH_TOLERANCE
+
+    tour = make_tour(world, make_rng(seed), kind=kind, length_m=length)
+    assert length - 1e-9 <= tour.length_m <= (1.0 + TOUR_LENGTH_TOLERANCE) * length + 1e-9
+    assert np.array_equal(tour.waypoints[0], [world.start.x, world.start.y])
+    assert (np.hypot(*np.diff(tour.waypoints, axis=0).T) > 0).all()
+    assert_legs_safe(world, tour)
+    if kind in ("loop", "out_and_back", "circuit"):
+        assert np.array_equal(tour.waypoints[-1], tour.waypoints[0])
+
+
+@pytest.mark.parametrize("kind", TOUR_KINDS)
+@pytest.mark.parametrize("world_kind", ["office", "mixed", "corridors"])
+def test_the_command_lines_tour_length_is_the_length(kind, world_kind):
+    world = generate(world_kind, seed=0)
+    for length in (20.0, 100.0, 250.0):
+        tour = plan_tour(world, kind, length)
+        assert length <= tour.length_m <= 1.3 * length, (length, tour.length_m)
+        assert plan_tour(world, kind, length, at_least=True).length_m >= length
+
+
+def test_the_default_run_drives_about_100_m_not_three_times_that():
+    world = generate("office", seed=0)
+    assert 100.0 <= plan_tour(world).length_m <= 130.0
+    assert plan_tour(world, at_least=True).length_m > 200.0  # the minimum's old meaning
+
+
+def test_length_and_minimum_are_exclusive():
+    world = generate("rooms", seed=1, width_m=10.0, height_m=10.0)
+    with pytest.raises(InputError, match="not both"):
+        make_tour(world, make_rng(0), length_m=10.0, min_length_m=10.0)
+    with pytest.raises(InputError, match="length_m must be positive"):
+        make_tour(world, make_rng(0), length_m=0.0)

@@ -26,6 +26,17 @@
 (``albot2d world/simulate/run``): the world's seed (or ``seed``) spawns two streams and
 the second plans the tour, so the tour never shifts the world's random numbers.
 
+Length. ``length_m`` is the tour's length within ``TOUR_LENGTH_TOLERANCE``: the planned
+tour is between ``length_m`` and ``(1 + TOUR_LENGTH_TOLERANCE) * length_m`` long (100 m →
+100-130 m). Loops and circuits are first planned through places within a smaller radius
+until one fits; when none does (a coarse roadmap, a long corridor), the tour is cut short
+(``_fit_length``): a closed tour turns home along the shortest way at the first point
+where going on and coming back reaches the length (turning round part-way along a leg if
+a whole leg would overshoot), an open one (``backtracking``) ends part-way along a leg.
+``min_length_m`` (``make_tour``; ``plan_tour(..., at_least=True)``; ``--min-tour-length``
+on the command line) keeps the older meaning: at least that long, however much longer
+the places and repeats make it.
+
 Every leg is a roadmap edge, so every leg is collision-free for the robot's disc. When the
 places run out before ``min_length_m`` the tour is repeated (loops and out-and-backs both
 end where they started, so repeating them is still a valid tour).
@@ -50,7 +61,7 @@ from worldgen.world import Tour, TourKind
 if TYPE_CHECKING:
     from worldgen.world import World
 
-__all__ = ["TOUR_KINDS", "make_tour", "plan_tour"]
+__all__ = ["TOUR_KINDS", "TOUR_LENGTH_TOLERANCE", "make_tour", "plan_tour"]
 
 TOUR_KINDS: tuple[str, ...] = get_args(TourKind)  # the one list: world.TourKind
 _MIN_ROADMAP_M = 2.0  # less roadmap than this cannot make a tour
@@ -69,6 +80,11 @@ _MAX_PLAN_STEPS = 100_000  # backtracking: planning steps before giving up (neve
 # on a roadmap that can make a tour; bounds the planning of one that cannot)
 _STRAIGHTEN_OFFSET_M = 0.5  # circuit: a skipped waypoint lies at most this far off a leg
 _STRAIGHTEN_CLEARANCE_M = 0.25  # circuit: straightened legs keep radius + this from walls
+TOUR_LENGTH_TOLERANCE = 0.3
+"""A tour planned for ``length_m`` is ``length_m`` to ``(1 + this) * length_m`` long."""
+# loop/circuit: place radii tried (fractions of the length), largest first, for a tour
+# that fits the tolerance without being cut short
+_FIT_RADIUS_FRACTIONS = (0.5, 0.4, 0.32, 0.25, 0.2, 0.16, 0.12, 0.09, 0.06)
 
 
 def _walk_length(nodes: np.ndarray, walk: list[int]) -> float:
@@ -132,13 +148,18 @@ _TourBuilder = Callable[[nx.Graph, np.ndarray, int, np.random.Generator, float],
 
 
 def _loop(
-    graph: nx.Graph, nodes: np.ndarray, s: int, rng: np.random.Generator, min_length_m: float
+    graph: nx.Graph,
+    nodes: np.ndarray,
+    s: int,
+    rng: np.random.Generator,
+    min_length_m: float,
+    radius_fraction: float = _LOOP_RADIUS_FRACTION,
 ) -> list[int]:
     """Visit far-apart places in turn around their centre, then return to the start."""
     dist = nx.single_source_dijkstra_path_length(graph, s, weight="weight")
     ids = np.array(sorted(dist), dtype=np.int64)
     reach = np.array([dist[v] for v in ids])
-    radius = max(_LOOP_RADIUS_FRACTION * min_length_m, _LOOP_RADIUS_MIN_M)
+    radius = _place_radius(radius_fraction, min_length_m)
     candidates = ids[reach <= radius]
     places = _spread_places(nodes, candidates, s, _LOOP_PLACES, rng)
     walk = [s]
@@ -158,6 +179,14 @@ def _loop(
             break
         walk = _splice_excursion(walk, found[1])
     return _repeat_until(nodes, walk, min_length_m)
+
+
+def _place_radius(fraction: float, length_m: float) -> float:
+    """How far (by road) a loop's places may lie: ``fraction`` of the length; at least
+    ``_LOOP_RADIUS_MIN_M`` when planning for the default fraction (a minimum length),
+    less when fitting a length (small radii are how a short loop is found)."""
+    floor = _LOOP_RADIUS_MIN_M if fraction >= _LOOP_RADIUS_FRACTION else 1.0
+    return max(fraction * length_m, floor)
 
 
 def _path(graph: nx.Graph, a: int, b: int) -> list[int]:
@@ -271,6 +300,7 @@ def _circuit(
     min_length_m: float,
     straighten: Callable[[list[int]], list[int]] = lambda walk: walk,
     rooms: frozenset[int] = frozenset(),
+    radius_fraction: float = _LOOP_RADIUS_FRACTION,
 ) -> list[int]:
     """A loop through far-apart places on the roadmap's cycles; see the module docstring."""
     core_nodes = set(nx.k_core(graph.subgraph(set(graph) - rooms), 2).nodes)
@@ -291,7 +321,7 @@ def _circuit(
     core_dist = nx.single_source_dijkstra_path_length(core, entry, weight="weight")
     ids = np.array(sorted(core_dist), dtype=np.int64)
     reach = np.array([core_dist[v] for v in ids])
-    radius = max(_LOOP_RADIUS_FRACTION * min_length_m, _LOOP_RADIUS_MIN_M)
+    radius = _place_radius(radius_fraction, min_length_m)
     candidates = ids[reach <= radius]
     places = _spread_places(nodes, candidates, entry, _LOOP_PLACES, rng)
     lap = [entry]
@@ -366,9 +396,12 @@ def make_tour(
     rng: np.random.Generator | SeedLike,
     *,
     kind: str = "loop",
-    min_length_m: float = 50.0,
+    min_length_m: float | None = None,
+    length_m: float | None = None,
 ) -> Tour:
-    """A tour of ``kind`` (see the module docstring) at least ``min_length_m`` long.
+    """A tour of ``kind`` (see the module docstring): ``length_m`` long (within
+    ``TOUR_LENGTH_TOLERANCE``), or at least ``min_length_m`` long (give one; neither:
+    at least 50 m).
 
     ``rng`` is a Generator (used as it is) or an int seed / SeedSequence (``make_rng``).
     The CLI's tour for a world is ``plan_tour``, not ``make_tour(world, seed)``.
@@ -376,8 +409,20 @@ def make_tour(
     rng = make_rng(rng)
     if kind not in TOUR_KINDS:
         raise InputError(f"unknown tour kind {kind!r}; valid kinds: {', '.join(TOUR_KINDS)}")
-    if not (isinstance(min_length_m, int | float) and 0.0 <= min_length_m <= _MAX_TOUR_M):
-        raise InputError(f"min_length_m must be in [0, {_MAX_TOUR_M:g}], got {min_length_m!r}")
+    if min_length_m is not None and length_m is not None:
+        raise InputError("give a tour length or a minimum tour length, not both")
+    fit = length_m is not None
+    name = "length_m" if fit else "min_length_m"
+    wanted = length_m if fit else (50.0 if min_length_m is None else min_length_m)
+    if not (
+        isinstance(wanted, int | float)
+        and not isinstance(wanted, bool)
+        and 0.0 <= wanted <= _MAX_TOUR_M
+    ):
+        raise InputError(f"{name} must be in [0, {_MAX_TOUR_M:g}], got {wanted!r}")
+    if fit and wanted <= 0.0:
+        raise InputError(f"length_m must be positive, got {wanted!r}")
+    min_length_m = float(wanted)
     roadmap = world.roadmap
     nodes = roadmap.nodes
     total = float(np.hypot(*(nodes[roadmap.edges[:, 0]] - nodes[roadmap.edges[:, 1]]).T).sum())
@@ -403,17 +448,12 @@ def make_tour(
         "circuit": functools.partial(_circuit, straighten=_straightener(world),
                                      rooms=_room_nodes(world)),
     }  # fmt: skip
-    walk = builders[kind](graph, nodes, s, rng, float(min_length_m))
-    walk = [v for k, v in enumerate(walk) if k == 0 or v != walk[k - 1]]
-    waypoints = nodes[walk]
-    if not np.array_equal(waypoints[0], start_xy):
-        waypoints = np.vstack([start_xy, waypoints])
-    # Zero-length legs (coincident roadmap nodes) are dropped: they would be no motion.
-    keep = np.r_[True, np.hypot(*np.diff(waypoints, axis=0).T) > 0.0]
-    if not keep.all():
-        offset = len(waypoints) - len(walk)  # 1 when the start was put in front
-        walk = [v for v, k in zip(walk, keep[offset:], strict=True) if k]
-        waypoints = waypoints[keep]
+    if not fit:
+        walk = builders[kind](graph, nodes, s, rng, min_length_m)
+        waypoints = nodes[walk]
+    else:
+        walk, waypoints = _fitted_walk(builders[kind], kind, graph, nodes, s, rng, min_length_m)
+    walk, waypoints = _tidy(walk, waypoints, start_xy)
     tour = Tour(waypoints=waypoints, kind=kind, node_ids=tuple(walk))
     if tour.length_m <= 0.0:
         raise InputError(
@@ -428,8 +468,11 @@ def plan_tour(
     kind: str = "loop",
     length_m: float = 100.0,
     seed: SeedLike | None = None,
+    *,
+    at_least: bool = False,
 ) -> Tour:
-    """The tour the command line plans for ``world``: ``kind``, at least ``length_m`` long.
+    """The tour the command line plans for ``world``: ``kind``, ``length_m`` long within
+    ``TOUR_LENGTH_TOLERANCE`` (``at_least``: at least ``length_m`` long).
 
     ``seed`` defaults to the world's seed (0 if it has none); its ``"tour"`` stream
     (``albot2d.seeding.WORLD_STREAMS``) plans it, as ``albot2d world``, ``simulate`` and
@@ -438,4 +481,105 @@ def plan_tour(
     if seed is None:
         seed = world.seed or 0
     rng = stream_rng(seed, WORLD_STREAMS, "tour")
-    return make_tour(world, rng, kind=kind, min_length_m=length_m)
+    if at_least:
+        return make_tour(world, rng, kind=kind, min_length_m=length_m)
+    return make_tour(world, rng, kind=kind, length_m=length_m)
+
+
+# -- fitting a tour to a length -------------------------------------------------------------
+NOT_A_NODE = -1
+"""``Tour.node_ids`` entry of a waypoint part-way along a roadmap edge (a cut tour's end
+or turning point)."""
+
+
+def _tidy(
+    walk: list[int], waypoints: np.ndarray, start_xy: np.ndarray
+) -> tuple[list[int], np.ndarray]:
+    """The start put in front when the walk does not begin on it; repeated nodes and
+    zero-length legs (coincident roadmap nodes) dropped: they would be no motion."""
+    waypoints = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
+    if not np.array_equal(waypoints[0], start_xy):
+        waypoints = np.vstack([start_xy, waypoints])  # node_ids stay the roadmap walk
+    keep = np.r_[True, np.hypot(*np.diff(waypoints, axis=0).T) > 0.0]
+    if not keep.all():
+        offset = len(waypoints) - len(walk)  # 1 when the start was put in front
+        walk = [v for v, k in zip(walk, keep[offset:], strict=True) if k]
+        waypoints = waypoints[keep]
+    return walk, waypoints
+
+
+def _fitted_walk(
+    builder: _TourBuilder,
+    kind: str,
+    graph: nx.Graph,
+    nodes: np.ndarray,
+    s: int,
+    rng: np.random.Generator,
+    length_m: float,
+) -> tuple[list[int], np.ndarray]:
+    """A walk (node ids, ``NOT_A_NODE`` for a point along an edge) and its waypoints,
+    ``length_m`` to ``(1 + TOUR_LENGTH_TOLERANCE) * length_m`` long where the roadmap
+    allows it (see the module docstring)."""
+    hi = (1.0 + TOUR_LENGTH_TOLERANCE) * length_m
+    state = rng.bit_generator.state
+    shortest: list[int] | None = None
+    fractions = _FIT_RADIUS_FRACTIONS if kind in ("loop", "circuit") else (None,)
+    for fraction in fractions:
+        rng.bit_generator.state = state  # every candidate from the same draws
+        sized: Callable[..., list[int]] = builder
+        if fraction is not None:  # loop and circuit take the radius of their places
+            sized = functools.partial(sized, radius_fraction=fraction)
+        walk = sized(graph, nodes, s, rng, length_m)
+        got = _walk_length(nodes, walk)
+        if length_m <= got <= hi:
+            return walk, nodes[walk]
+        if got >= length_m and (shortest is None or got < _walk_length(nodes, shortest)):
+            shortest = walk
+    if shortest is None:  # the roadmap cannot make it long enough: the longest there is
+        return walk, nodes[walk]
+    return _fit_length(graph, nodes, shortest, s, length_m, closed=kind != "backtracking")
+
+
+def _fit_length(
+    graph: nx.Graph,
+    nodes: np.ndarray,
+    walk: list[int],
+    s: int,
+    length_m: float,
+    *,
+    closed: bool,
+) -> tuple[list[int], np.ndarray]:
+    """``walk`` (at least ``length_m`` long) cut to ``length_m``-ish: see the module
+    docstring. Closed: going on to node ``i`` and then home by the shortest way costs
+    ``f(i) = along(i) + home(i)``, which never decreases along the walk (triangle
+    inequality) and ends at the walk's length; the first ``i`` with ``f(i)`` in the
+    tolerance is where it turns home, or, if a whole leg overshoots, a point on that leg
+    where turning round gives exactly ``length_m``."""
+    hi = (1.0 + TOUR_LENGTH_TOLERANCE) * length_m
+    pts = nodes[walk]
+    legs = np.hypot(*np.diff(pts, axis=0).T)
+    along = np.r_[0.0, np.cumsum(legs)]
+    if not closed:
+        i = int(np.searchsorted(along, length_m))  # along[i - 1] < length_m <= along[i]
+        if along[i] <= hi:
+            return walk[: i + 1], pts[: i + 1]
+        t = (length_m - along[i - 1]) / legs[i - 1]
+        end = pts[i - 1] + t * (pts[i] - pts[i - 1])
+        return [*walk[:i], NOT_A_NODE], np.vstack([pts[:i], end])
+    home, paths = nx.single_source_dijkstra(graph, s, weight="weight")
+    assert isinstance(home, dict) and isinstance(paths, dict)  # no target: per-node results
+    f = along + np.array([home.get(v, np.inf) for v in walk])
+    for i in range(1, len(walk)):
+        if length_m <= f[i] <= hi:
+            back = [int(v) for v in paths[walk[i]]][::-1]
+            ids = walk[: i + 1] + back[1:]
+            return ids, nodes[ids]
+        if f[i] > hi and f[i - 1] < length_m:
+            # turn round on the leg (i-1, i) and go home by the shortest way from i-1
+            t = (length_m - f[i - 1]) / (2.0 * legs[i - 1])
+            if 0.0 < t <= 1.0:
+                turn = pts[i - 1] + t * (pts[i] - pts[i - 1])
+                back = [int(v) for v in paths[walk[i - 1]]][::-1]
+                ids = [*walk[:i], NOT_A_NODE, *back]
+                return ids, np.vstack([pts[:i], turn, nodes[back]])
+    return walk, pts

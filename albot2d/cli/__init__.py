@@ -1,9 +1,10 @@
 """The ``albot2d`` command line: one module per subcommand, each with ``register(subparsers)``.
 
 User errors (``InputError``, missing or unwritable files) print one line and exit 2,
-with no traceback and no partial output file. ``albot2d`` alone prints the help;
-``albot2d --version`` the version. Help texts are the modules' docstrings without their
-reStructuredText markup.
+with no traceback and no partial output file. Output piped into a reader that stops early
+(``albot2d run --out D | head -1``) ends quietly with exit 0, as Unix tools do.
+``albot2d`` alone prints the help; ``albot2d --version`` the version. Help texts are the
+modules' docstrings without their reStructuredText markup.
 """
 
 from __future__ import annotations
@@ -80,7 +81,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     _import_from_cwd()
     try:
         kernels()  # the environment is input too: a bad ALBOT2D_KERNELS fails before any work
-        return int(args.handler(args) or 0)
+        status = int(args.handler(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not at exit after main returned
+        return status
+    except BrokenPipeError:
+        _quiet_closed_stdout()
+        return 0
     except InputError as exc:
         print(f"albot2d {args.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -91,6 +97,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"albot2d {args.command}: interrupted", file=sys.stderr)
         return 130
+
+
+def _quiet_closed_stdout() -> None:
+    """The reader of stdout went away: the output it wanted has been read, so stop as
+    ``head`` expects (exit 0, nothing on stderr). Python flushes stdout once more at exit,
+    which would fail again on the closed pipe; stdout is pointed at /dev/null first (the
+    recipe of Python's signal documentation)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # stdout without a file descriptor (a test's capture)
+        pass
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -27,6 +27,7 @@ from albot2d.errors import InputError
 
 __all__ = [
     "Choices",
+    "add_export_option",
     "add_json_option",
     "add_run_options",
     "add_scoring_options",
@@ -91,6 +92,7 @@ _NOT_COMPARED = ("figures", "exports", "albot2d_version", "kernels", "reproducer
 def add_run_options(p: argparse.ArgumentParser) -> None:
     """World and driving options, shared by ``run`` and ``simulate`` (same defaults)."""
     from albot2d.evaluation.run.setup import RunSpec
+    from worldgen.tours import TOUR_LENGTH_TOLERANCE
 
     names, default = choices(), defaults_of(RunSpec)
     world = p.add_argument_group(f"world (default: --kind {default['kind']} --seed 0)")
@@ -128,7 +130,14 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     drive.add_argument(
         "--tour-length",
         metavar="METRES",
-        help=f"minimum tour length (default {default['tour_length_m']:g})",
+        help=f"tour length: the tour is METRES to {1 + TOUR_LENGTH_TOLERANCE:g}×METRES long "
+        f"(default {default['tour_length_m']:g})",
+    )
+    drive.add_argument(
+        "--min-tour-length",
+        metavar="METRES",
+        help="plan the tour through far-apart places and repeat it until it is at least "
+        "METRES long (it may be several times longer); instead of --tour-length",
     )
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
 
@@ -149,15 +158,42 @@ def spec_from_args(args: argparse.Namespace) -> Any:
         "laser_noise": args.laser_noise or None,
         "tour_kind": args.tour_kind or None,
         "tour_length_m": positive_number(args.tour_length, "--tour-length"),
+        "tour_length_is_minimum": None,
         "mappers": tuple(getattr(args, "mapper", None) or ()) or None,
         "max_frames": positive_int(args.max_frames, "--max-frames"),
     }
+    minimum = positive_number(getattr(args, "min_tour_length", None), "--min-tour-length")
+    if minimum is not None:
+        if given["tour_length_m"] is not None:
+            raise InputError("give --tour-length or --min-tour-length, not both")
+        given |= {"tour_length_m": minimum, "tour_length_is_minimum": True}
     if args.world is not None:
         given |= {"kind": None, "world_file": args.world}
     elif args.kind:
         given["kind"] = args.kind
     # "kind": None (a world file) is kept; every other option not given is left out
     return RunSpec(**{k: v for k, v in given.items() if v is not None or k == "kind"})
+
+
+def add_export_option(p: argparse.ArgumentParser) -> None:
+    """``--export FORMAT ...`` (the registry of ``albot2d.cli.exporters``) and its options."""
+    from albot2d.cli.exporters import EXPORTERS
+
+    g = p.add_argument_group("export")
+    g.add_argument(
+        "--export",
+        nargs="+",
+        action="extend",
+        choices=list(EXPORTERS),
+        metavar="FORMAT",
+        help="also write the run as: "
+        + "; ".join(f"{e.name} ({e.help})" for e in EXPORTERS.values()),
+    )
+    g.add_argument(
+        "--bag-storage",
+        choices=("mcap", "sqlite3"),
+        help="storage of the ROS 2 bag (default mcap)",
+    )
 
 
 def add_json_option(
@@ -300,10 +336,12 @@ def finish(
     no_figures: bool,
     stage: Callable[[str], None] | None = None,
     animate: bool = False,
+    extra_exports: Callable[[Any], list[str]] | None = None,
 ) -> Any:
     """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
     maps, write everything; on any failure remove the output directory again if this
-    command created it."""
+    command created it. ``extra_exports(result)`` writes the ``--export`` files itself
+    (before report.json) and returns their names."""
     from albot2d.evaluation.run.export import export_files
 
     try:
@@ -313,8 +351,9 @@ def finish(
         figures = _render(result, no_figures, command, animate)
         figures.update(_step_figure(result, no_figures))
         exports = export_files(result)
+        extra = extra_exports(result) if extra_exports is not None else []
         result.report["figures"] = sorted(figures)
-        result.report["exports"] = sorted(exports)
+        result.report["exports"] = sorted([*exports, *extra])
         # steps.csv: one row per view (stage times, counters), for profiling a run.
         files = {
             **figures,

@@ -24,6 +24,7 @@ from albot2d.errors import InputError
 
 __all__ = ["parse_seeds", "register", "run"]
 
+SMOKE_RUN = "smoke run"  # the words --quick output is marked with, everywhere it shows
 FULL_SEEDS = "0-19"
 QUICK_SEEDS = "0-1"
 _MAX_SEEDS = 10_000
@@ -110,6 +111,10 @@ def run(args: argparse.Namespace) -> int:
                 "figures need matplotlib: pip install 'albot2d[viz]' (or pass --no-figures)"
             ) from None
     backend = make_backend(args.backend, workers=workers, address=args.address)
+    if args.quick:  # said first, before anything else is printed
+        print(f"albot2d experiments --quick: {SMOKE_RUN} (seeds {', '.join(map(str, seeds))}, "
+              "long runs cut short): its numbers and verdicts are not comparable to the "
+              "paper's", flush=True)  # fmt: skip
     bar = _progress(len(jobs))
     try:
         outcome = run_experiments(names, seeds, quick=args.quick, backend=backend,
@@ -149,7 +154,8 @@ def _write(out: Path, outcome: Any, *, figures: bool) -> None:
         for name, specs in outcome.figures.items():
             for spec in specs:
                 save_figure(spec, out / spec["file"])
-            written[name] = [{"file": s["file"], "caption": s["caption"]} for s in specs]
+            written[name] = [{"file": s["file"], "caption": s["caption"], "plot": s["plot"]}
+                             for s in specs]  # fmt: skip
     else:
         for result in outcome.data["experiments"].values():
             result["figures"] = []
@@ -161,6 +167,8 @@ def _write(out: Path, outcome: Any, *, figures: bool) -> None:
 
 def _print_summary(data: dict[str, Any], out: Path) -> None:
     width = max(len(n) for n in data["verdicts"])
+    vwidth = max(len(v) for v in data["verdicts"].values())
+    smoke = f"  ({SMOKE_RUN})" if data.get("quick") else ""
     for name, verdict in data["verdicts"].items():
-        print(f"{name:<{width}}  {verdict}")
+        print(f"{name:<{width}}  {verdict:<{vwidth}}{smoke}".rstrip())
     print(f"{len(data['seeds'])} seeds, {data['wall_time_s']:.0f} s -> {out}/index.html")

@@ -1,10 +1,13 @@
-"""``albot2d replay``: the mappers on a recorded CARMEN log, scored against its relations.
+"""``albot2d replay``: the mappers on a recorded log or bag, scored against its relations.
 
 Reads ``LOG.clf`` or ``LOG.clf.gz`` (FLASER or ROBOTLASER1 lines; see the shared data's
-SOURCES.md), runs every mapper (default albot1 and naive; ``truth`` needs ground truth and
-is refused) and writes ``DIR/report.json`` with each mapper's and raw odometry's relative
-pose error (overall, short < 2 s, long ≥ 2 s), process counts, timings and homing
-estimates (true values null), plus the map figures. The relations file is ``--relations``
+SOURCES.md) or a ROS 1 bag (``.bag``) or ROS 2 bag (a directory, ``.mcap`` or ``.db3``):
+its LaserScan topic (--scan-topic, default /scan) with odometry from --odom-topic (default
+/odom) or else /tf (odom -> base_link); see docs/ros.md. It runs every mapper (default
+albot1 and naive; ``truth`` needs ground truth and is refused) and writes
+``DIR/report.json`` with each mapper's and raw odometry's relative pose error (overall,
+short < 2 s, long ≥ 2 s), process counts, timings and homing estimates (true values
+null), plus the map figures. The relations file is ``--relations``
 or, if not given, ``LOG.relations`` beside the log or ``../relations/LOG.relations``.
 A malformed log line stops the replay with its file and line; nothing is written then.
 
@@ -45,14 +48,14 @@ DATA_ENV = "ALBOT2D_DATA"
 def find_log(text: str, data: str | None) -> Path:
     """``LOG`` as given, else in the data folder (``data`` or ``$ALBOT2D_DATA``)."""
     log = Path(text).expanduser()
-    if log.is_file():
+    if log.is_file() or log.is_dir():  # a directory: a ROS 2 bag
         return log
     folder = data if data is not None else os.environ.get(DATA_ENV)
     tried = [str(log)]
     if folder and not log.is_absolute():
         root = Path(folder).expanduser()
         for candidate in (root / log, root / "raw" / log):
-            if candidate.is_file():
+            if candidate.is_file() or candidate.is_dir():
                 return candidate
             tried.append(str(candidate))
     hint = "" if folder else f" (set {DATA_ENV} or --data to look it up in a data folder)"
@@ -61,13 +64,25 @@ def find_log(text: str, data: str | None) -> Path:
 
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser(
-        "replay", help="run the mappers on a CARMEN log and score them against its relations",
+        "replay", help="run the mappers on a CARMEN log or ROS bag and score them against its "
+        "relations",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
     p.add_argument(
         "log",
-        metavar="LOG.clf[.gz]",
-        help="a CARMEN log (plain or gzip), as a path or in the data folder",
+        metavar="LOG",
+        help="a CARMEN log (.clf, plain or gzip) or a ROS bag (.bag, .mcap, .db3 or a ROS 2 "
+        "bag directory), as a path or in the data folder",
+    )
+    p.add_argument(
+        "--scan-topic",
+        metavar="TOPIC",
+        help="a bag's sensor_msgs/LaserScan topic (default /scan)",
+    )
+    p.add_argument(
+        "--odom-topic",
+        metavar="TOPIC",
+        help="a bag's nav_msgs/Odometry topic (default /odom; without it, /tf odom->base_link)",
     )
     p.add_argument(
         "--data", metavar="DIR", help=f"data folder where LOG is looked up (default: ${DATA_ENV})"
@@ -128,7 +143,8 @@ def run(args: argparse.Namespace) -> int:
             out, created, "replay",
             lambda: replay_log(log, relations_path=relations, mappers=mappers, params=params,
                                max_frames=max_frames, on_frame=frame, on_stage=bar.set_description,
-                               strict=args.strict),
+                               strict=args.strict, scan_topic=args.scan_topic,
+                               odom_topic=args.odom_topic),
             args.no_figures, bar.set_description,
         )  # fmt: skip
     finally:

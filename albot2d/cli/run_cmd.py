@@ -8,7 +8,7 @@ mapper's map, Albot1's map history and route map, and homing. ``--reproduce repo
 re-runs a recorded run and says whether the new report matches it.
 
 Defaults (``albot2d run --out DIR``): office world seed 0, profile dataset1, odometry noise
-``typical``, a loop tour of at least 100 m, mappers albot1 naive truth. Every input is
+``typical``, a loop tour of 100-130 m, mappers albot1 naive truth. Every input is
 checked before the run; the figures are drawn in memory and report.json is written last,
 so a failure leaves no report and no figures.
 """
@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
+    add_export_option,
     add_json_option,
     add_run_options,
     add_scoring_options,
@@ -51,6 +52,7 @@ _RUN_OPTIONS = (
     "laser_noise",
     "tour_kind",
     "tour_length",
+    "min_tour_length",
     "max_frames",
     "stop_every",
     "min_start_distance",
@@ -87,9 +89,10 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--animate",
         action="store_true",
-        help="also write albot1_map.gif (and .mp4 with ffmpeg): the global map "
+        help="also write albot1_map.mp4 (albot1_map.gif where ffmpeg is missing): the global map "
         "over time beside the truth",
     )
+    add_export_option(p)
     p.add_argument(
         "--cprofile",
         metavar="FILE",
@@ -116,6 +119,34 @@ def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]
     return profiled
 
 
+def _keeps_frames(names: list[str]) -> bool:
+    from albot2d.cli.exporters import EXPORTERS
+
+    return any(EXPORTERS[name].needs_frames for name in names)
+
+
+def _exporting(
+    args: argparse.Namespace, frames: list[Any]
+) -> Callable[[Path], Callable[[Any], list[str]]] | None:
+    """``finish``'s hook writing the ``--export`` files of a finished run (its options
+    checked now), given the output directory; None without ``--export``."""
+    from albot2d.cli.exporters import ExportSource, export_options, write_exports
+
+    options = export_options(args)
+    names = list(args.export or [])
+    if not names:
+        return None
+
+    def hook(out: Path) -> Callable[[Any], list[str]]:
+        def write(result: Any) -> list[str]:
+            source = ExportSource(frames, result.world, result, options)
+            return write_exports(out, names, source)
+
+        return write
+
+    return hook
+
+
 def run(args: argparse.Namespace) -> int:
     from albot2d.control.exploration import DEFAULT_MAX_TIME_S
     from albot2d.evaluation import RunSpec, evaluation_params_from_report, run_experiment
@@ -140,10 +171,13 @@ def run(args: argparse.Namespace) -> int:
         spec = spec_from_args(args)
         params = scoring_params(args)
     check_spec(spec)
+    kept: list[Any] = []  # the run's frames, for the exports that need them
+    extra = _exporting(args, kept)
     if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():
         raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
     out, created = prepare_out_dir(args.out)
     bar = None
+    keep = _keeps_frames(list(args.export or []))
 
     def start(world: Any, tour: Any) -> None:
         # With --max-frames the run ends after that many views, not at the tour's end.
@@ -156,6 +190,8 @@ def run(args: argparse.Namespace) -> int:
             bar = progress_bar(round(tour.length_m, 1), "m", "run")
 
     def frame(f: Any, travelled: float) -> None:
+        if keep:
+            kept.append(f)
         if bar is None:
             return
         if spec.max_frames is None and spec.tour_kind == "explore":
@@ -179,6 +215,7 @@ def run(args: argparse.Namespace) -> int:
             _profiled(args.cprofile, lambda: run_experiment(
                 spec, params, on_start=start, on_frame=frame, on_stage=stage)),
             args.no_figures, stage, animate=args.animate,
+            extra_exports=extra(out) if extra is not None else None,
         )  # fmt: skip
     finally:
         if bar is not None:

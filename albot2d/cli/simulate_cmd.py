@@ -4,7 +4,9 @@ Takes the world and driving options of ``albot2d run``, with the same defaults (
 office world, seed 0, profile dataset1, odometry noise typical, a loop tour of at least
 100 m) and the same seeds, so ``albot2d simulate`` logs exactly the frames that
 ``albot2d run`` with the same options maps. Writes ``DIR/log.clf`` (CARMEN), ``truth.txt``,
-``log.relations``, ``run.json`` and ``paths.png`` (world, true path, odometry path). Every
+``log.relations``, ``run.json`` and ``paths.png`` (world, true path, odometry path), and with
+``--export rosbag2 rosbag1`` the run as ROS bags (``log_ros2/``, ``log.bag``: /scan, /odom,
+/tf, /tf_static, /ground_truth; see docs/ros.md) that ``albot2d replay`` reads too. Every
 input is checked before anything is written; a failure leaves no partial output files.
 Prints a one-line summary.
 """
@@ -14,6 +16,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import itertools
+import shutil
 import sys
 from pathlib import Path
 from typing import Any
@@ -29,7 +32,7 @@ PNG_NAME = "paths.png"
 
 
 def register(subparsers: Any) -> None:
-    from albot2d.cli.common import add_run_options
+    from albot2d.cli.common import add_export_option, add_run_options
 
     p = subparsers.add_parser(
         "simulate",
@@ -41,6 +44,7 @@ def register(subparsers: Any) -> None:
         "--out", metavar="DIR", required=True, help="output directory (created if missing)"
     )
     p.add_argument("--no-png", action="store_true", help=f"do not draw {PNG_NAME}")
+    add_export_option(p)
     p.set_defaults(handler=run)
 
 
@@ -85,11 +89,13 @@ def _render_png(world: Any, frames: list[Any], title: str) -> bytes | None:
 
 def run(args: argparse.Namespace) -> int:
     from albot2d.cli.common import spec_from_args
+    from albot2d.cli.exporters import export_options
     from albot2d.evaluation.run.setup import build_run
     from albot2d.logs import write_run
     from albot2d.logs.run_files import LOG_NAME, MANIFEST_NAME, RELATIONS_NAME, TRUTH_NAME
 
     out = _out_dir(args.out)
+    options = export_options(args)
     spec = spec_from_args(args)
     setup = build_run(spec)
     world, tour, profile, sim = setup.world, setup.tour, setup.profile, setup.simulator
@@ -109,7 +115,8 @@ def run(args: argparse.Namespace) -> int:
         "laser_noise_preset": spec.laser_noise,
         "tour": {
             "kind": tour.kind,
-            "min_length_m": spec.tour_length_m,
+            "requested_length_m": spec.tour_length_m,
+            "requested_as": "minimum" if spec.tour_length_is_minimum else "length",
             "length_m": tour.length_m,
             "waypoints": len(tour.waypoints),
         },
@@ -117,17 +124,25 @@ def run(args: argparse.Namespace) -> int:
         **sim.params(),
     }
     manifest = write_run(out, frames, params=params)
-    if png is not None:
-        try:
+    exported: list[str] = []
+    try:
+        if args.export:
+            from albot2d.cli.exporters import ExportSource, write_exports
+
+            source = ExportSource(frames, world, None, options)
+            exported = write_exports(out, args.export, source)
+        if png is not None:
             atomic_write_bytes(out / PNG_NAME, png)
-        except OSError:
-            for name in (LOG_NAME, TRUTH_NAME, RELATIONS_NAME, MANIFEST_NAME):
-                with contextlib.suppress(OSError):
-                    (out / name).unlink()
-            raise
+    except BaseException:
+        for name in (LOG_NAME, TRUTH_NAME, RELATIONS_NAME, MANIFEST_NAME, *exported):
+            with contextlib.suppress(OSError):
+                path = out / name
+                shutil.rmtree(path) if path.is_dir() else path.unlink()
+        raise
     counts = manifest["counts"]
     print(
         f"{profile.name}: {counts['frames']} frames, {tour.kind} tour {tour.length_m:.1f} m, "
         f"{frames[-1].timestamp:.0f} s, {counts['collided_frames']} collided -> {out}"
+        + (f" (+ {', '.join(exported)})" if exported else "")
     )
     return 0

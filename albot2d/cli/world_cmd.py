@@ -15,7 +15,7 @@ from albot2d.atomic import atomic_paths
 from albot2d.cli.common import choices
 from albot2d.cli.options import parse_param, positive_number, seed_value, world_params
 from albot2d.errors import InputError
-from worldgen.tours import TOUR_KINDS
+from worldgen.tours import TOUR_KINDS, TOUR_LENGTH_TOLERANCE
 
 __all__ = ["parse_param", "register", "run", "summary"]
 
@@ -46,8 +46,13 @@ def register(subparsers: Any) -> None:
     p.add_argument("--png", metavar="world.png", help="also draw the world to this PNG")
     p.add_argument("--tour-kind", default="loop", help=f"tour to plan: {', '.join(TOUR_KINDS)}")
     p.add_argument(
-        "--tour-length", default=str(DEFAULT_TOUR_LENGTH_M), metavar="METRES",
-        help=f"minimum tour length in metres (default {DEFAULT_TOUR_LENGTH_M:g})",
+        "--tour-length", metavar="METRES",
+        help=f"tour length in metres: the tour is METRES to {1 + TOUR_LENGTH_TOLERANCE:g}×METRES "
+        f"long (default {DEFAULT_TOUR_LENGTH_M:g})",
+    )  # fmt: skip
+    p.add_argument(
+        "--min-tour-length", metavar="METRES",
+        help="plan a tour at least METRES long (it may be several times longer) instead",
     )  # fmt: skip
     p.add_argument("--no-tour", action="store_true", help="do not plan a tour")
     p.set_defaults(handler=run)
@@ -77,24 +82,30 @@ def _build_world(args: argparse.Namespace, seed: int | None, params: dict[str, A
     )
 
 
-def _tour_options(args: argparse.Namespace) -> tuple[str, float] | None:
-    """Checked (kind, minimum length) of the tour to plan, or None for ``--no-tour``."""
+def _tour_options(args: argparse.Namespace) -> tuple[str, float, bool] | None:
+    """Checked (kind, length, whether the length is a minimum) of the tour to plan, or
+    None for ``--no-tour``."""
     if args.tour_kind not in TOUR_KINDS:
         raise InputError(f"unknown --tour-kind {args.tour_kind!r}; valid: {', '.join(TOUR_KINDS)}")
     length = positive_number(args.tour_length, "--tour-length")
+    minimum = positive_number(args.min_tour_length, "--min-tour-length")
+    if length is not None and minimum is not None:
+        raise InputError("give --tour-length or --min-tour-length, not both")
     if args.no_tour:
         return None
-    return args.tour_kind, float(length or DEFAULT_TOUR_LENGTH_M)
+    if minimum is not None:
+        return args.tour_kind, float(minimum), True
+    return args.tour_kind, float(length or DEFAULT_TOUR_LENGTH_M), False
 
 
-def _plan_tour(world: Any, options: tuple[str, float] | None) -> Any:
+def _plan_tour(world: Any, options: tuple[str, float, bool] | None) -> Any:
     if options is None:
         return None
     from worldgen.tours import plan_tour
 
-    kind, length = options
+    kind, length, at_least = options
     # the tour of ``albot2d simulate``/``run`` (the world seed's "tour" stream)
-    return plan_tour(world, kind=kind, length_m=length)
+    return plan_tour(world, kind=kind, length_m=length, at_least=at_least)
 
 
 def _write_together(outputs: dict[Path, bytes]) -> None:

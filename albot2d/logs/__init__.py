@@ -3,7 +3,8 @@
 - ``carmen``: record types and the streaming reader (plain/gzip); ``carmen_writer``: the writer;
 - ``frames``: CARMEN records ↔ albot2d ``Frame`` streams (``read_frames``, ``write_carmen``);
 - ``relations``: relations files and relations from a truth trajectory;
-- ``run_files``: a simulated run directory (log, truth, relations, manifest).
+- ``run_files``: a simulated run directory (log, truth, relations, manifest);
+- ``rosbag``: ROS 1 / ROS 2 bags → frames (``read_bag``); ``rosbag_writer``: frames → bags.
 """
 
 from albot2d.logs.carmen import (
@@ -42,6 +43,8 @@ from albot2d.logs.relations import (
     relations_from_truth,
     write_relations,
 )
+from albot2d.logs.rosbag import BagFrames, is_bag, read_bag
+from albot2d.logs.rosbag_writer import write_bag
 from albot2d.logs.run_files import Run, read_run, read_truth, write_run, write_truth
 
 __all__ = [
@@ -50,6 +53,7 @@ __all__ = [
     "DEFAULT_NO_RETURN_THRESHOLD_M",
     "EXACT",
     "LOG_PRECISION",
+    "BagFrames",
     "CarmenReader",
     "CarmenStats",
     "CommentRecord",
@@ -65,7 +69,9 @@ __all__ = [
     "Run",
     "format_record",
     "frames_to_records",
+    "is_bag",
     "match_timestamps",
+    "read_bag",
     "read_carmen",
     "read_frames",
     "read_relations",
@@ -73,6 +79,7 @@ __all__ = [
     "read_truth",
     "records_to_frames",
     "relations_from_truth",
+    "write_bag",
     "write_carmen",
     "write_records",
     "write_relations",

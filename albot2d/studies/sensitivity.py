@@ -122,7 +122,7 @@ def run_one(
     spec = RunSpec(
         seed=seed, kind=setup.kind, world_params=setup.world_params, profile=setup.profile,
         noise=preset, tour_kind=setup.tour_kind, tour_length_m=setup.tour_length_m,
-        mappers=setup.mappers,
+        tour_length_is_minimum=True, mappers=setup.mappers,
     )  # fmt: skip
     factories = resolve_mappers(list(spec.mappers))
     world = build_world(spec)
@@ -132,7 +132,8 @@ def run_one(
         tour = route_tour(world, direction)
         world = dataclasses.replace(world, start=route_start(world, direction))
     else:
-        tour = plan_tour(world, kind=spec.tour_kind, length_m=spec.tour_length_m)
+        tour = plan_tour(world, kind=spec.tour_kind, length_m=spec.tour_length_m,
+                          at_least=spec.tour_length_is_minimum)  # fmt: skip
     if direction == "reverse":
         # A circuit starts and ends at the start: driven backwards it is the other way round.
         tour = dataclasses.replace(tour, waypoints=tour.waypoints[::-1].copy())

@@ -98,8 +98,11 @@ def colour_buckets(
 def png_bytes(fig: Figure, dpi: float, *, release: bool = True) -> bytes:
     """``fig`` saved as PNG, in memory; then (``release``, the default) emptied with
     ``release_figure``, as every figure here is drawn once."""
+    from albot2d.viz.furniture import png_metadata
+
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
+    fig.savefig(buf, format="png", dpi=dpi, metadata=png_metadata(fig), bbox_inches="tight",
+                pad_inches=0.08)  # fmt: skip
     if release:
         release_figure(fig)
         if _batches:

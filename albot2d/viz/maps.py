@@ -264,13 +264,19 @@ def plot_route(
                 )
     if len(poses):
         ax.plot(*poses[0, :2], "*", color=START_COLOR, ms=12, zorder=5)
-    handles.append(Line2D([], [], color=VIEW_COLOR, lw=1, label="remembered views' surfaces"))
-    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.8)
+    handles.append(Line2D([], [], color=VIEW_COLOR, lw=1, label="local maps' surfaces"))
+    handles.append(Line2D([], [], color=START_COLOR, marker="*", ls="", ms=10, label="start"))
     parts = [segs.reshape(-1, 2), poses[:, :2]]
     if world is not None:
         b = world.bounds
         parts.append(np.array([[b[0], b[1]], [b[2], b[3]]]))
     set_extent(ax, extent_of(parts))
+    from albot2d.viz.furniture import LEGEND_PT, TITLE_PT, draw_map_furniture
+
+    draw_map_furniture(ax, np.vstack([segs.reshape(-1, 2), poses[:, :2]]))
+    # below the axes, off the map (upper center of the box under it)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.09),
+              ncols=min(len(handles), 5), fontsize=LEGEND_PT, frameon=False)  # fmt: skip
     if title:
-        ax.set_title(title, fontsize=10)
+        ax.set_title(title, fontsize=TITLE_PT)
     return ax

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from albot2d.viz._figure import line_segments, new_figure
+from albot2d.viz.furniture import LABEL_PT, LEGEND_PT, TICK_PT, TITLE_PT
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -40,7 +41,7 @@ _METHOD_COLOURS = {"triangulation": "tab:blue", "path_integration": "tab:red", "
 
 def _panels(
     fig: Figure | None, n: int, ncols: int | None = None, size: float = 4.5
-) -> tuple[Figure, list[Axes]]:
+) -> tuple[Figure, list[Axes]]:  # (the map panels make their own compressed figure)
     """``n`` panels on ``fig`` (a new figure of ``size``-inch panels when None)."""
     ncols = ncols or n
     nrows = int(np.ceil(n / ncols))
@@ -69,13 +70,29 @@ def _segments(ax: Axes, segs: Any, **kw: Any) -> None:
 
 def plot_maps(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
     """Map panels: faint true walls, the map (black), deleted surfaces (red), the true path
-    so far (blue) and the named waypoints."""
+    so far (blue) and the named waypoints; a scale bar and the frame's axes on each, one
+    legend below them all. Each panel's surface count is stored with the figure."""
+    from matplotlib.lines import Line2D
+
+    from albot2d.viz.furniture import (
+        TITLE_PT,
+        draw_map_furniture,
+        legend_below,
+        set_figure_counts,
+    )
+
     panels = data["panels"]
-    fig, axes = _panels(fig, max(1, len(panels)), data.get("ncols"))
+    ncols = data.get("ncols") or max(1, len(panels))
+    nrows = int(np.ceil(max(1, len(panels)) / ncols))
+    if fig is None:
+        fig = new_figure(4.6 * ncols, 3.7 * nrows + 0.5, layout="compressed")
+    fig, axes = _panels(fig, max(1, len(panels)), ncols)
+    deleted_any = False
     for a, p in zip(axes, panels, strict=False):
         _segments(a, p["walls"], colors="0.8", linewidths=0.6)
         if p.get("deleted") is not None:
             _segments(a, p["deleted"], colors="tab:red", linewidths=1.2)
+            deleted_any = deleted_any or bool(np.size(p["deleted"]))
         _segments(a, p["segments"], colors="k", linewidths=0.8)
         path = np.asarray(p["path"], float).reshape(-1, 2)
         if len(path):
@@ -87,12 +104,21 @@ def plot_maps(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
         walls = np.asarray(p["walls"], float).reshape(-1, 2)
         a.set_xlim(walls[:, 0].min() - 1, walls[:, 0].max() + 1)
         a.set_ylim(walls[:, 1].min() - 1, walls[:, 1].max() + 1)
-        a.set_aspect("equal")
-        a.set_title(p["title"], fontsize=9)
-        a.tick_params(labelsize=7)
+        a.set_title(p["title"], fontsize=TITLE_PT - 1)
+        segs = np.asarray(p["segments"], float).reshape(-1, 4)
+        set_figure_counts(fig, p["title"], {"surfaces": len(segs)})
+        walls = np.asarray(p["walls"], float).reshape(-1, 2)
+        draw_map_furniture(a, np.vstack([segs.reshape(-1, 2), path, walls]))
     for a in axes[len(panels) :]:
         a.axis("off")
-    fig.tight_layout()
+    handles = [
+        Line2D([], [], color="0.8", lw=1.0, label="true walls"),
+        Line2D([], [], color="k", lw=1.0, label="map surfaces (anchored at the true start)"),
+        Line2D([], [], color="tab:blue", lw=1.0, marker="o", ms=4, label="true path, robot"),
+    ]
+    if deleted_any:
+        handles.append(Line2D([], [], color="tab:red", lw=1.2, label="deleted surfaces"))
+    legend_below(fig, handles)
     return fig
 
 
@@ -106,9 +132,14 @@ def plot_bars(data: dict[str, Any], *, ax: Axes | None = None) -> Axes:
     paper = [b["paper"] if b["paper"] is not None else np.nan for b in bars]
     a.bar(x - 0.2, ours, 0.4, yerr=sd, label="albot2d", color="tab:blue", capsize=3)
     a.bar(x + 0.2, paper, 0.4, label="paper", color="white", edgecolor="k", hatch="//")
-    a.set_xticks(x, [b["label"] for b in bars], fontsize=8)
-    a.set_ylabel(data.get("ylabel", ""))
-    a.legend(fontsize=8)
+    a.set_xticks(x, [str(b["label"]).replace("_", " ") for b in bars], fontsize=TICK_PT)
+    a.tick_params(axis="y", labelsize=TICK_PT)
+    a.set_ylabel(data.get("ylabel", ""), fontsize=LABEL_PT)
+    a.grid(True, axis="y", alpha=0.3)
+    a.set_axisbelow(True)
+    a.legend(handles=a.get_legend_handles_labels()[0],
+             labels=["albot2d (mean, ± sd)", "paper"], fontsize=LEGEND_PT,
+             loc="upper left", framealpha=0.9)  # fmt: skip
     _tight(a)
     return a
 
@@ -132,15 +163,24 @@ def plot_homing(data: dict[str, Any], *, ax: Axes | None = None) -> Axes:
     lim_b = max(b_max * 1.5, float(np.abs(b).max(initial=0.0)) * 1.1)
     a.set_xlim(-lim_d, lim_d)
     a.set_ylim(-lim_b, lim_b)
-    a.set_xlabel("distance error (m)")
-    a.set_ylabel("bearing error (deg)")
-    a.legend(fontsize=8)
+    a.axhline(0.0, color="0.6", lw=0.6, zorder=0)
+    a.axvline(0.0, color="0.6", lw=0.6, zorder=0)
+    a.set_xlabel("distance error to S (m, + = too far)", fontsize=LABEL_PT)
+    a.set_ylabel("bearing error to S (°, + = too far left)", fontsize=LABEL_PT)
+    a.tick_params(labelsize=TICK_PT)
+    a.set_title(f"{len(d)} stops; the box is the paper's bound", fontsize=TITLE_PT)
+    a.legend(fontsize=LEGEND_PT, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=3,
+             frameon=False)  # fmt: skip
     _tight(a)
     return a
 
 
 def plot_updates(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
     """The route with every view, updates coloured by region kind, and moves per update."""
+    from albot2d.viz.furniture import draw_map_furniture
+
+    if fig is None:
+        fig = new_figure(12.0, 4.8, layout="constrained")
     fig, axes = _panels(fig, 2, size=6.0)
     a, h = axes[0], axes[1]
     _segments(a, data["walls"], colors="0.8", linewidths=0.6)
@@ -152,9 +192,14 @@ def plot_updates(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
         sel = flags & (regions == kind)
         if sel.any():
             a.plot(xy[sel, 0], xy[sel, 1], "o", color=colour, ms=5, label=f"update in {kind}")
-    a.set_aspect("equal")
-    a.legend(fontsize=7)
-    a.set_title("views (dots) and map updates", fontsize=9)
+    a.plot([], [], ".", color="0.5", ms=3, label="view, no update")
+    walls = np.asarray(data["walls"], float).reshape(-1, 2)
+    a.set_xlim(walls[:, 0].min() - 1, walls[:, 0].max() + 1)
+    a.set_ylim(walls[:, 1].min() - 1, walls[:, 1].max() + 1)
+    draw_map_furniture(a, np.vstack([xy, walls]))
+    a.legend(fontsize=LEGEND_PT, loc="upper center", bbox_to_anchor=(0.5, -0.14),
+             ncols=4, frameon=False)  # fmt: skip
+    a.set_title("every view (dot) and every global-map update, by region", fontsize=TITLE_PT)
     moved = np.r_[False, np.hypot(*np.diff(xy, axis=0).T) > 1e-6]
     last = 0
     per_kind: dict[str, list[int]] = {}
@@ -167,10 +212,16 @@ def plot_updates(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
     bins = (np.arange(0, max((max(v) for v in per_kind.values()), default=1) + 2) - 0.5).tolist()
     h.hist([per_kind[k] for k in kinds], bins=bins, label=kinds,
            color=[_REGION_COLOURS.get(k, "k") for k in kinds])  # fmt: skip
-    h.set_xlabel("moves since the previous update")
-    h.set_ylabel("updates")
-    h.legend(fontsize=8)
-    fig.tight_layout()
+    h.set_xlabel("moves (move or turn steps) since the previous update", fontsize=LABEL_PT)
+    h.set_ylabel("updates", fontsize=LABEL_PT)
+    from matplotlib.ticker import MaxNLocator
+
+    h.xaxis.set_major_locator(MaxNLocator(integer=True))
+    h.tick_params(labelsize=TICK_PT)
+    h.set_title("moves per update, by region", fontsize=TITLE_PT)
+    h.grid(True, axis="y", alpha=0.3)
+    h.set_axisbelow(True)
+    h.legend(fontsize=LEGEND_PT, loc="best")
     return fig
 
 
@@ -182,6 +233,8 @@ def plot_sequence(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
     poses = np.asarray(data["poses"], float)
     n = len(poses)
     two_rows = data.get("views") is not None and data.get("maps") is not None
+    if fig is None:
+        fig = new_figure(2.6 * n + 0.6, (5.6 if two_rows else 3.0), layout="constrained")
     fig, panels = _panels(fig, 2 * n if two_rows else n, ncols=n, size=3.2)
     top, bottom = panels[:n], panels[n:]
     for k, (a, pose, row, method, tracked) in enumerate(zip(
@@ -201,8 +254,13 @@ def plot_sequence(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
             a.set_xlim(pose[0] - 6, pose[0] + 6)
             a.set_ylim(pose[1] - 6, pose[1] + 6)
         a.set_aspect("equal")
-        a.set_title(f"view {row}: {label}\n{tracked} tracked", fontsize=8, color=colour)
-        a.tick_params(labelsize=6)
+        a.set_title(f"view {row}: {label}\n{tracked} tracked surfaces", fontsize=TITLE_PT - 1,
+                    color=colour)  # fmt: skip
+        a.tick_params(labelsize=TICK_PT - 1)
+        if k == 0:
+            a.set_ylabel("the view, robot frame:\ny (m)" if two_rows else "y (m)",
+                         fontsize=LABEL_PT)  # fmt: skip
+        a.set_xlabel("x (m)", fontsize=LABEL_PT - 1)
     for k, a in enumerate(bottom):
         segs = np.asarray(data["maps"][k], float).reshape(-1, 4)
         mp = np.asarray(data["map_poses"][k], float)
@@ -212,9 +270,11 @@ def plot_sequence(data: dict[str, Any], *, fig: Figure | None = None) -> Figure:
         a.set_xlim(mp[0] - 8, mp[0] + 8)
         a.set_ylim(mp[1] - 8, mp[1] + 8)
         a.set_aspect("equal")
-        a.set_title(f"global map after view {data['rows'][k]}", fontsize=8)
-        a.tick_params(labelsize=6)
-    fig.tight_layout()
+        a.set_title(f"global map after view {data['rows'][k]}", fontsize=TITLE_PT - 1)
+        a.tick_params(labelsize=TICK_PT - 1)
+        if k == 0:
+            a.set_ylabel("Albot₁'s global map,\nmap frame: y (m)", fontsize=LABEL_PT)
+        a.set_xlabel("x (m)", fontsize=LABEL_PT - 1)
     return fig
 
 
@@ -224,11 +284,14 @@ PLOTS: dict[str, Callable[[dict[str, Any]], Axes | Figure]] = {
 }  # fmt: skip
 
 
-def save_figure(spec: dict[str, Any], path: Path) -> None:
+def save_figure(spec: dict[str, Any], path: Path, *, dpi: float = 110) -> None:
     """Draw the figure ``spec`` (``{"plot", "data"}``) to the PNG ``path``."""
     from matplotlib.figure import Figure
 
     drawn = PLOTS[spec["plot"]](spec["data"])
     fig = drawn if isinstance(drawn, Figure) else drawn.get_figure(root=True)
     assert fig is not None  # the axes were made on a new figure above
-    fig.savefig(path, dpi=110)
+    from albot2d.viz.furniture import png_metadata
+
+    fig.savefig(path, dpi=dpi, metadata=png_metadata(fig), bbox_inches="tight",
+                pad_inches=0.08)  # fmt: skip

@@ -27,6 +27,15 @@ from numpy.typing import NDArray
 from albot2d.geometry import transform_segments
 from albot2d.mapping.protocol import ViewBasedMapper
 from albot2d.viz._figure import figure_batch, new_figure, png_bytes
+from albot2d.viz.furniture import (
+    LABEL_PT,
+    TITLE_PT,
+    axes_colorbar,
+    count_text,
+    draw_map_furniture,
+    legend_below,
+    set_figure_counts,
+)
 from albot2d.viz.maps import (
     PANEL_IN,
     START_COLOR,
@@ -192,8 +201,16 @@ def _map_panel(
     est = np.asarray(mapper.trajectory(), np.float64).reshape(-1, 3)[:end]
     start = None if trace.true_poses is None else trace.true_poses[0]
     true_path = None if trace.true_poses is None else trace.true_poses[:end]
-    n_maps = len(np.unique(snap.map_ids))
-    default = f"{name}: {len(snap.segments)} surfaces from {n_maps} views"
+    counts = {
+        "views": end,
+        "local_maps": int(mapper.counts().local_maps if update is None else update),
+        "surfaces": len(snap.segments),
+        "local_maps_in_map": len(np.unique(snap.map_ids)),
+    }
+    fig = ax.get_figure(root=True)
+    if fig is not None:
+        set_figure_counts(fig, name if update is None else f"{name}@{end - 1}", counts)
+    default = f"{name}: " + map_count_text(counts)
     plot_map(
         snap.segments,
         map_ids=snap.map_ids,
@@ -206,7 +223,28 @@ def _map_panel(
         title=title or default,
         id_range=id_range,
     )
+    ax.set_title(ax.get_title(), fontsize=TITLE_PT)
+    draw_map_furniture(ax, _drawn_points(ax))
     return map_surfaces(ax)
+
+
+def map_count_text(counts: dict[str, int]) -> str:
+    """A map's counts in words (the terms of ``albot2d.viz.furniture``), two lines."""
+    return (
+        f"{count_text(counts['views'], 'views')} → "
+        f"{count_text(counts['local_maps'], 'local_maps')}\n"
+        f"global map: {count_text(counts['surfaces'], 'surfaces')} from "
+        f"{counts['local_maps_in_map']} of its local maps"
+    )
+
+
+def _drawn_points(ax: Axes) -> FloatArray:
+    """Vertices of the lines drawn on ``ax`` (to find an empty corner)."""
+    parts = [np.asarray(line.get_xydata(), np.float64).reshape(-1, 2) for line in ax.lines]
+    for coll in ax.collections:
+        for path in coll.get_paths()[:2000]:
+            parts.append(np.asarray(path.vertices, np.float64)[::4])
+    return np.vstack(parts) if parts else np.zeros((0, 2))
 
 
 def _paths_panel(ax: Axes, result: ExperimentResult, extent: Extent | None) -> None:
@@ -231,9 +269,12 @@ def _paths_panel(ax: Axes, result: ExperimentResult, extent: Extent | None) -> N
             in ("walls", "true path (→ direction, ● end)", "odometry", "collision", "start")
         ]
         legend.remove()
-        ax.legend(handles=keep, loc="upper right", fontsize=7, framealpha=0.8)
-        ax.set_title("world, true path and odometry", fontsize=10)
+        ax.set_title("world, true path and odometry", fontsize=TITLE_PT)
         set_extent(ax, extent)
+        for artist in list(ax.artists):  # plot_world's scale bar: drawn again below
+            artist.remove()
+        draw_map_furniture(ax, _drawn_points(ax))
+        ax.__dict__["_albot2d_legend"] = keep
     else:
         plot_estimated_paths(result, ax=ax)
         ax.set_title("odometry and estimated paths (first pose's frame)", fontsize=10)
@@ -265,9 +306,30 @@ def mapper_extent(result: ExperimentResult, name: str) -> Extent | None:
     return extent_of(parts)
 
 
+COLOUR_LABEL = "local map it came from (old → new)"
+
+
 def _colorbar(fig: Figure, lines: LineCollection, ax: Axes) -> None:
     if lines.get_array() is not None:
-        fig.colorbar(lines, ax=ax, shrink=0.8, label="local map / view id (old → new)")
+        axes_colorbar(fig, lines, ax, COLOUR_LABEL)
+
+
+def _legend_handles(*axes: Axes) -> list[Any]:
+    """The legend entries of ``axes`` (and the paths panel's kept ones), one per label."""
+    seen: dict[str, Any] = {}
+    for ax in axes:
+        handles = ax.__dict__.get("_albot2d_legend") or ax.get_legend_handles_labels()[0]
+        for h in handles:
+            label = str(h.get_label())
+            if label and not label.startswith("_"):
+                seen.setdefault(label, h)
+    return list(seen.values())
+
+
+def _stored(fig: Figure, name: str, row: int) -> dict[str, Any]:
+    from albot2d.viz.furniture import figure_counts
+
+    return dict(figure_counts(fig).get(f"{name}@{row}", {}))
 
 
 def error_curves(result: ExperimentResult) -> dict[str, tuple[FloatArray, FloatArray]]:
@@ -362,15 +424,15 @@ def _render_all(result: ExperimentResult, dpi: int) -> dict[str, bytes]:
     extents = [mapper_extent(result, n) for n in names]
     extent = extent_of([np.array([[e[0], e[1]], [e[2], e[3]]]) for e in extents if e])
     pw, ph = _panel_size(result, extent)
-    fig = new_figure(pw * cols, ph * rows + 0.5)
+    fig = new_figure(pw * cols, ph * rows + 0.5, layout="compressed")
     axes = np.atleast_1d(fig.subplots(rows, cols)).ravel()
     _paths_panel(axes[0], result, extent)
     for ax, name in zip(axes[1:], names, strict=False):
         _colorbar(fig, _map_panel(ax, result, name, extent=extent), ax)
-        ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
     for ax in axes[len(names) + 1 :]:
         ax.set_visible(False)
-    fig.suptitle(result.title)
+    legend_below(fig, _legend_handles(*axes[: len(names) + 1]))
+    fig.suptitle(result.title, fontsize=TITLE_PT + 1)
     out["maps.png"] = png_bytes(fig, dpi)
     if trace.true_poses is not None:
         fig = plot_errors_vs_distance(result, fig=new_figure(11.0, 7.5))
@@ -380,31 +442,42 @@ def _render_all(result: ExperimentResult, dpi: int) -> dict[str, bytes]:
         fig = new_figure(pw * 1.6, ph * 1.6)
         ax = fig.subplots()
         _colorbar(fig, _map_panel(ax, result, name, extent=ext), ax)
-        ax.legend(loc="upper right", fontsize=8, framealpha=0.8)
-        fig.suptitle(result.title, fontsize=9)
+        legend_below(fig, _legend_handles(ax))
+        fig.suptitle(result.title, fontsize=TITLE_PT)
         out[f"{name}_map.png"] = png_bytes(fig, dpi)
         route = route_of(trace.mappers[name])
         if route is None:
             continue
         snaps = result.scores.mappers[name].snapshots or ()
         rows, cols = _grid(len(snaps))
-        fig = new_figure(pw * cols, ph * rows + 0.5)
+        fig = new_figure(pw * cols, ph * rows + 0.5, layout="compressed")
         axes = np.atleast_1d(fig.subplots(rows, cols)).ravel()
         id_range = (0, max(len(route) - 1, 1))
+        lines = None
         for ax, snap in zip(axes, snaps, strict=False):
+            counts = {"views": snap.row + 1, "local_maps": snap.update,
+                      "surfaces": snap.surfaces}  # fmt: skip
             title = (
-                f"view {snap.view} ({snap.travelled_m:.0f} m): {snap.surfaces} "
-                f"surfaces, {snap.update} views remembered"
+                f"view {snap.view}, {snap.travelled_m:.0f} m driven\n"
+                f"{count_text(snap.update, 'local_maps')}, "
+                f"{count_text(snap.surfaces, 'surfaces')} in the map"
             )
             lines = _map_panel(
                 ax, result, name, row=snap.row, update=snap.update, extent=ext, title=title,
                 id_range=id_range,
             )  # fmt: skip
-            _colorbar(fig, lines, ax)
-            ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
+            set_figure_counts(fig, f"{name}@{snap.row}", counts | _stored(fig, name, snap.row))
         for ax in axes[len(snaps) :]:
             ax.set_visible(False)
-        fig.suptitle(f"{name}'s global map as it evolves (transient: old parts are deleted)")
+        if lines is not None and lines.get_array() is not None:
+            bar = fig.colorbar(lines, ax=list(axes[: len(snaps)]), location="right",
+                               shrink=0.6, aspect=30)  # fmt: skip
+            bar.set_label(COLOUR_LABEL, fontsize=LABEL_PT)
+        legend_below(fig, _legend_handles(*axes[: len(snaps)]))
+        fig.suptitle(
+            f"{name}'s global map as it evolves (transient: surfaces of old local maps are "
+            "deleted)", fontsize=TITLE_PT + 1,
+        )  # fmt: skip
         out[f"{name}_history.png"] = png_bytes(fig, dpi)
         fig = new_figure(pw * 1.6, ph * 1.6)
         start = None if trace.true_poses is None else trace.true_poses[0]
@@ -414,8 +487,10 @@ def _render_all(result: ExperimentResult, dpi: int) -> dict[str, bytes]:
             world=result.world,
             start_pose=start,
             true_path=trace.true_poses,
-            title=f"{name}'s route map: {len(route)} remembered views of {trace.n_frames}",
+            title=f"{name}'s route map: {count_text(len(route), 'local_maps')} "
+            f"(remembered views) of {count_text(trace.n_frames, 'views')}",
         )
+        set_figure_counts(fig, name, {"views": trace.n_frames, "local_maps": len(route)})
         out[f"{name}_route.png"] = png_bytes(fig, dpi)
     homing = {name: scores.homing for name, scores in result.scores.mappers.items()}
     fig = plot_homing(homing, fig=new_figure(11.0, 4.5))

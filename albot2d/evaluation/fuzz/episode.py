@@ -140,6 +140,7 @@ class EpisodeSpec:
             seed=self.run_seed, kind=self.kind, world_params=dict(self.world_params),
             profile=self.profile, noise=self.noise, laser_noise=self.laser_noise,
             tour_kind=self.tour_kind, tour_length_m=self.tour_length_m, mappers=(self.mapper,),
+            tour_length_is_minimum=True,
         )  # fmt: skip
 
     def describe(self) -> dict[str, Any]:

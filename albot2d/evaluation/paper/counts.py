@@ -212,7 +212,8 @@ def figures(fig: dict[str, Any], result: dict[str, Any]) -> list[dict[str, Any]]
         {
             "file": "counts.png",
             "plot": "bars",
-            "caption": "Local maps remembered per view, per dataset (ours: mean ± sd over seeds; "
+            "caption": "Local maps remembered per view, per dataset (ours: bar the mean "
+            "over the seeds, whisker ± sd; "
             "paper: hatched).",
             "data": {"bars": bars, "ylabel": "local maps per view"},
         }

@@ -24,12 +24,30 @@ LABELS = {
 
 
 def map_panel(
-    fig: dict[str, Any], mark: str, mapper: str, title: str, deleted: np.ndarray | None = None
+    fig: dict[str, Any],
+    mark: str,
+    mapper: str,
+    title: str,
+    deleted: np.ndarray | None = None,
+    place: str | None = None,
 ) -> dict[str, Any] | None:
-    """The map of ``mapper`` at ``mark`` of a run kept for figures (None if not taken)."""
+    """The map of ``mapper`` at ``mark`` of a run kept for figures (None if not taken).
+
+    ``title`` may hold ``{at}``: it becomes ``place`` (e.g. "at E5") when the run got
+    there, and where a run cut short (``--quick``) actually stopped otherwise, so no
+    title claims a place the run never reached."""
     snap = fig["snaps"].get(mark)
     if snap is None or mapper not in snap["maps"]:
         return None
+    where = place or ("at the end" if mark == "end" else f"at {mark}")
+    if snap.get("reached", True):
+        title = title.replace("{at}", where)
+    else:  # one clause a line, so side-by-side panel titles never run into each other
+        cut = (f"run cut short at view {int(snap['frame'])}, "
+               f"{float(snap['true_travelled_m']):.0f} m (not {where})")  # fmt: skip
+        before, _, after = title.partition("{at}")
+        lines = [before.strip().rstrip(","), cut, after.strip().lstrip(",").strip()]
+        title = "\n".join(line for line in lines if line)
     start = fig["true_poses"][0]
     row = min(int(snap["frame"]), len(fig["true_poses"]) - 1)  # simulated: frame = row
     segs = transform_segments(start, snap["maps"][mapper]["segments"])

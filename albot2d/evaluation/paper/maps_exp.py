@@ -79,16 +79,16 @@ class FIG7:
         f = fig["fig6_dataset1"]
         x = ALBOT_X if ALBOT_X in f["snaps"].get("E5", {"maps": {}})["maps"] else "naive"
         panels = [
-            map_panel(f, "E5", x, f"(a) {LABELS[x]} at E5"),
-            map_panel(f, "E5", "albot1", "(b) Albot₁ at E5"),
+            map_panel(f, "E5", x, f"(a) {LABELS[x]} {{at}}", place="at E5"),
+            map_panel(f, "E5", "albot1", "(b) Albot₁ {at}", place="at E5"),
         ]
         return [
             {
                 "file": "fig7.png",
                 "plot": "maps",
-                "caption": "Maps at E5 after ~100 m of dataset 1, anchored at the true "
-                "start; grey: "
-                "true walls; black line: the true path so far.",
+                "caption": "Albot_x's and Albot₁'s maps when the robot reaches E5 (~100 m of "
+                "dataset 1), anchored at the true start; grey: true walls; black: the map; "
+                "blue: the true path so far, the dot where the robot is.",
                 "data": {"panels": [p for p in panels if p is not None]},
             }
         ]
@@ -133,8 +133,15 @@ class FIG10:
             return []
         gone = deleted_surfaces(f["snaps"]["E1#2"], f["snaps"]["E7"])
         panels = [
-            map_panel(f, "E1#2", "albot1", "(a) back at E1, before passing S"),
-            map_panel(f, "E7", "albot1", "(b) at E7, past S: deleted in red", deleted=gone),
+            map_panel(f, "E1#2", "albot1", "(a) Albot₁ {at}, before passing S", place="back at E1"),
+            map_panel(
+                f,
+                "E7",
+                "albot1",
+                "(b) Albot₁ {at}, past S: deleted in red",
+                deleted=gone,
+                place="at E7",
+            ),
         ]
         return [
             {
@@ -192,9 +199,9 @@ class FIG11_12:  # noqa: N801
         f = fig["fig11_open"]
         x = ALBOT_X if ALBOT_X in f["snaps"].get("end", {"maps": {}})["maps"] else "naive"
         panels = [
-            map_panel(f, "half", "albot1", "(b) Albot₁ at X"),
-            map_panel(f, "end", "albot1", "(c) Albot₁ at E"),
-            map_panel(f, "end", x, f"(12c) {LABELS[x]} at E"),
+            map_panel(f, "half", "albot1", "(b) Albot₁ {at}", place="at X (half way)"),
+            map_panel(f, "end", "albot1", "(c) Albot₁ {at}", place="at E (the end)"),
+            map_panel(f, "end", x, f"(12c) {LABELS[x]} {{at}}", place="at E (the end)"),
         ]
         return [
             {
@@ -263,8 +270,12 @@ class FIG13:
         f = fig["fig6_dataset3"]
         x = ALBOT_X if ALBOT_X in f["snaps"].get("end", {"maps": {}})["maps"] else "naive"
         panels = [
-            map_panel(f, "end", x, f"(a) {LABELS[x]}, dataset 3"),
-            map_panel(f, "end", "albot1", "(b) Albot₁, dataset 3"),
+            map_panel(
+                f, "end", x, f"(a) {LABELS[x]}, dataset 3, {{at}}", place="at the route's end"
+            ),
+            map_panel(
+                f, "end", "albot1", "(b) Albot₁, dataset 3, {at}", place="at the route's end"
+            ),
         ]
         return [
             {

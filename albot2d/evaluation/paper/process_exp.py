@@ -308,10 +308,10 @@ class FIG16:
     def figures(fig: dict[str, dict[str, Any]], result: dict[str, Any]) -> list[dict[str, Any]]:
         f1, f2 = fig["fig6_dataset1"], fig["fig6_dataset2"]
         panels = [
-            map_panel(f1, "E7", "naive", "(a) naive, dataset 1"),
-            map_panel(f2, "E7", "naive", "(b) naive, dataset 2"),
-            map_panel(f1, "E7", "albot1", "(c) Albot₁, dataset 1"),
-            map_panel(f2, "E7", "albot1", "(d) Albot₁, dataset 2"),
+            map_panel(f1, "E7", "naive", "(a) naive, dataset 1, {at}"),
+            map_panel(f2, "E7", "naive", "(b) naive, dataset 2, {at}"),
+            map_panel(f1, "E7", "albot1", "(c) Albot₁, dataset 1, {at}"),
+            map_panel(f2, "E7", "albot1", "(d) Albot₁, dataset 2, {at}"),
         ]
         return [
             {

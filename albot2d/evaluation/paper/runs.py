@@ -228,13 +228,16 @@ def run_job(
     assert truth is not None and world is not None  # the paper's runs are all simulated
     end = _snapshot(state["mappers"], truth[-1], state["travelled"], int(trace.frame_indices[-1]))
     last_waypoint = _last_waypoint(world, run)
+    cut = spec.max_frames is not None and trace.n_frames >= spec.max_frames
     for mark in run.marks:
         # The end; a --quick run cut short: the marks it never reached are taken at its
-        # end; a route ending at the mark's waypoint may stop a few cm short of it.
+        # end (marked not reached, so figures say where it stopped); a route ending at
+        # the mark's waypoint may stop a few cm short of it.
         if mark not in state["snaps"] and (
             mark == "end" or (quick and spec.max_frames) or mark == last_waypoint
         ):
-            state["snaps"][mark] = end
+            reached = not cut and (mark == "end" or mark == last_waypoint)
+            state["snaps"][mark] = end | {"reached": reached}
     report = result.report
     made = state["mappers"]
     albot1 = made["albot1"]

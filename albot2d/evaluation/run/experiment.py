@@ -171,7 +171,8 @@ def run_experiment(
             "spec": spec.to_dict(),
             "tour": {
                 "kind": tour.kind,
-                "min_length_m": spec.tour_length_m,
+                "requested_length_m": spec.tour_length_m,
+                "requested_as": "minimum" if spec.tour_length_is_minimum else "length",
                 "length_m": tour.length_m,
                 "waypoints": len(tour.waypoints),
             },

@@ -1,4 +1,8 @@
-"""Replay a recorded CARMEN log (real or simulated) through the mappers and score them.
+"""Replay a recorded CARMEN log or ROS bag (real or simulated) through the mappers; score them.
+
+A bag (``.bag``, ``.mcap``, ``.db3`` or a ROS 2 bag directory) is read by
+``albot2d.logs.rosbag`` from its scan and odometry topics; everything after reading is the
+same as for a CARMEN log.
 
 Real logs carry no ground truth, so only what the relations file (Kümmerle et al. 2009) can
 judge is measured: relative pose error of every mapper and of raw odometry, overall and
@@ -7,7 +11,8 @@ values ``null``; map quality is ``null``. The ``truth`` mapper cannot run on a l
 
 Without an explicit relations file one is looked for beside the log: ``NAME.relations``
 next to ``NAME.clf[.gz]`` (this is where ``albot2d simulate`` puts it, as ``log.relations``)
-or in a sibling ``relations/`` folder (the layout of the shared MIT CSAIL data).
+or in a sibling ``relations/`` folder (the layout of the shared MIT CSAIL data); a bag in
+a simulated run directory (beside its ``run.json``) uses the run's ``log.relations``.
 
 The log's frames are put in time order first (``albot2d.logs.anomalies``: sorted by
 timestamp, repeated timestamps dropped) and its anomalies (non-finite and negative ranges,
@@ -33,12 +38,14 @@ from albot2d.frames import Frame
 from albot2d.logs.anomalies import ordered_frames
 from albot2d.logs.log_frames import read_frames
 from albot2d.logs.relations import Relations, read_relations
+from albot2d.logs.rosbag import DEFAULT_ODOM_TOPIC, DEFAULT_SCAN_TOPIC, is_bag, read_bag
+from albot2d.logs.run_files import MANIFEST_NAME, RELATIONS_NAME
 from albot2d.mapping.registry import resolve_mappers
 
 __all__ = ["DEFAULT_REPLAY_MAPPERS", "find_relations", "log_stem", "replay_log"]
 
 DEFAULT_REPLAY_MAPPERS = ("albot1", "naive")
-_LOG_SUFFIXES = (".clf.gz", ".log.gz", ".gz", ".clf", ".log")
+_LOG_SUFFIXES = (".clf.gz", ".log.gz", ".gz", ".clf", ".log", ".bag", ".mcap", ".db3")
 _NEEDS_TRUTH = ("truth",)
 
 
@@ -61,6 +68,9 @@ def find_relations(log: str | os.PathLike[str]) -> Path | None:
     ):
         if candidate.is_file():
             return candidate
+    run_relations = path.parent / RELATIONS_NAME
+    if (path.parent / MANIFEST_NAME).is_file() and run_relations.is_file():
+        return run_relations  # a bag exported into a simulated run directory
     return None
 
 
@@ -99,18 +109,24 @@ def replay_log(
     on_frame: Callable[[Frame, float], None] | None = None,
     on_stage: Callable[[str], None] | None = None,
     strict: bool = False,
+    scan_topic: str | None = None,
+    odom_topic: str | None = None,
 ) -> ExperimentResult:
     """Map ``log`` with every mapper and score against ``relations_path`` (found if None).
 
     ``on_frame(frame, travelled_m)`` is called after each frame and ``on_stage("scoring")``
     after the last one (progress display). ``strict`` turns any log anomaly into an
-    ``InputError`` (see the module docstring).
+    ``InputError`` (see the module docstring). ``scan_topic`` and ``odom_topic`` (default
+    ``/scan``, ``/odom``) choose a bag's topics.
     """
     params = params or EvaluationParams()
     t0 = time.perf_counter()
     log_path = Path(log)
-    if not log_path.is_file():
+    bag = is_bag(log_path) and log_path.exists()
+    if not (log_path.is_file() or bag):
         raise InputError(f"{log_path}: no such log file")
+    if not bag and (scan_topic is not None or odom_topic is not None):
+        raise InputError(f"{log_path}: scan and odometry topics apply to ROS bags only")
     check_replay_mappers(mappers)
     factories = resolve_mappers(list(mappers))
     rel_path = Path(relations_path) if relations_path is not None else find_relations(log_path)
@@ -121,7 +137,16 @@ def replay_log(
         relations = read_relations(rel_path)
     if max_frames is not None and (isinstance(max_frames, bool) or max_frames <= 0):
         raise InputError(f"max_frames must be a positive integer, got {max_frames!r}")
-    frames, anomalies = ordered_frames(read_frames(log_path))
+    bag_info = None
+    if bag:
+        bag_frames = read_bag(
+            log_path, scan_topic=scan_topic or DEFAULT_SCAN_TOPIC,
+            odom_topic=odom_topic or DEFAULT_ODOM_TOPIC,
+        )  # fmt: skip
+        bag_info = bag_frames.as_dict()
+        frames, anomalies = ordered_frames(bag_frames.frames)
+    else:
+        frames, anomalies = ordered_frames(read_frames(log_path))
     if strict and anomalies.total:
         raise InputError(f"{log_path}: log anomalies (strict): {anomalies.summary()}")
     if frames and any(":" not in spec for spec in mappers):  # built-ins extract surfaces
@@ -160,7 +185,11 @@ def replay_log(
             **{k: v for k, v in evaluation_params_dict(params).items() if k != "relations"},
         },
         run=log_info,
-        log={"path": os.fspath(log_path), "anomalies": anomalies.as_dict()},
+        log={
+            "path": os.fspath(log_path),
+            "anomalies": anomalies.as_dict(),
+            **({"bag": bag_info} if bag_info is not None else {}),
+        },
         odometry=scores.odometry.to_dict(),
         mappers=scores.mappers_dict(),
         timing_ms=trace.step_times.summary_ms(),  # per-view stage times (steps.csv)

@@ -65,6 +65,9 @@ class RunSpec:
     laser_noise: str = "sick_lms200"
     tour_kind: str = "loop"
     tour_length_m: float = 100.0
+    # True: tour_length_m is a minimum (the tour may be much longer: ``--min-tour-length``);
+    # False: the tour is tour_length_m long within worldgen's TOUR_LENGTH_TOLERANCE
+    tour_length_is_minimum: bool = False
     # a route named by the world (``worldgen.routes``, e.g. the fig6 kind's "fig6"): the
     # tour drives its waypoints from its first one; tour_kind/tour_length_m are then unused
     route: str | None = None
@@ -119,6 +122,8 @@ class RunSpec:
             raise InputError(f"{where}: params.spec is missing; cannot reproduce the run")
         values = dict(spec)
         values["mappers"] = tuple(values.get("mappers", DEFAULT_MAPPERS))
+        # reports written before the field existed planned their tour length as a minimum
+        values.setdefault("tour_length_is_minimum", True)
         fields = set(cls.__dataclass_fields__)
         unknown = sorted(set(values) - fields)
         if unknown:
@@ -174,7 +179,12 @@ def plan_run_tour(spec: RunSpec, world: World) -> tuple[World, Tour]:
         # Nothing is planned: the explorer decides as it goes (the run's tour becomes the
         # path it drove, ``albot2d.control.exploration``).
         return world, Tour(waypoints=world.start.position[None, :], kind=EXPLORE_TOUR)
-    return world, plan_tour(world, kind=spec.tour_kind, length_m=spec.tour_length_m)
+    return world, plan_tour(
+        world,
+        kind=spec.tour_kind,
+        length_m=spec.tour_length_m,
+        at_least=spec.tour_length_is_minimum,
+    )
 
 
 def make_simulator(world: World, spec: RunSpec) -> Simulator:

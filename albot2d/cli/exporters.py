@@ -1,0 +1,135 @@
+"""The ``--export`` formats of ``albot2d simulate`` and ``albot2d run``: a registry.
+
+Each :class:`Exporter` writes some files for a finished run (its frames, world and, for
+``run``, the mappers' result) into a staging directory; :func:`write_exports` runs the ones
+asked for and moves what they wrote into the output directory, so nothing appears unless
+every export succeeded. Add a format by adding an entry to :data:`EXPORTERS`.
+
+``rosbag2`` writes ``log_ros2/`` (a ROS 2 bag, MCAP unless ``--bag-storage sqlite3``) and
+``rosbag1`` writes ``log.bag`` (``albot2d.logs.rosbag_writer``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from albot2d.errors import InputError
+
+__all__ = [
+    "EXPORTERS",
+    "ROSBAG1_NAME",
+    "ROSBAG2_NAME",
+    "ExportSource",
+    "Exporter",
+    "export_names",
+    "export_options",
+    "write_exports",
+]
+
+ROSBAG1_NAME = "log.bag"
+ROSBAG2_NAME = "log_ros2"
+
+
+@dataclass(frozen=True, eq=False)
+class ExportSource:
+    """What a run leaves to export: its frames (with true poses in simulation), its world,
+    the mappers' result (``albot2d run``; ``None`` for ``simulate``) and the options."""
+
+    frames: Sequence[Any]
+    world: Any = None
+    result: Any = None
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Exporter:
+    """One ``--export`` value: ``write(source, directory)`` puts its files in ``directory``.
+
+    ``needs_frames``: the run's frames must be kept while it runs (``albot2d run``).
+    """
+
+    name: str
+    help: str
+    write: Callable[[ExportSource, Path], None]
+    needs_frames: bool = False
+
+
+def _rosbag(version: int) -> Callable[[ExportSource, Path], None]:
+    def write(source: ExportSource, directory: Path) -> None:
+        from albot2d import __version__
+        from albot2d.logs.rosbag_writer import BagStorage, write_bag
+
+        if version == 1:
+            write_bag(directory / ROSBAG1_NAME, source.frames, ros_version=1)
+        else:
+            storage: BagStorage = source.options.get("bag_storage") or "mcap"
+            write_bag(
+                directory / ROSBAG2_NAME, source.frames, ros_version=2, storage=storage,
+                metadata={"albot2d_version": __version__},
+            )  # fmt: skip
+
+    return write
+
+
+EXPORTERS: dict[str, Exporter] = {
+    exporter.name: exporter
+    for exporter in (
+        Exporter("rosbag2", f"ROS 2 bag {ROSBAG2_NAME}/", _rosbag(2), needs_frames=True),
+        Exporter("rosbag1", f"ROS 1 bag {ROSBAG1_NAME}", _rosbag(1), needs_frames=True),
+    )
+}
+
+
+def export_options(args: Any) -> dict[str, Any]:
+    """The exporters' options from ``args`` (``--bag-storage``), refused where unused."""
+    names = list(getattr(args, "export", None) or [])
+    storage = getattr(args, "bag_storage", None)
+    if storage is not None and "rosbag2" not in names:
+        raise InputError(f"--bag-storage {storage} applies to --export rosbag2 only")
+    if any(name.startswith("rosbag") for name in names):
+        from albot2d.logs.rosbag import require_rosbags
+
+        require_rosbags()  # before the run, not after it
+    return {"bag_storage": storage}
+
+
+def export_names() -> list[str]:
+    """The ``--export`` values, in registry order."""
+    return list(EXPORTERS)
+
+
+def write_exports(out: Path, names: Sequence[str], source: ExportSource) -> list[str]:
+    """Run the exporters ``names`` (duplicates once) and move their files into ``out``.
+
+    Returns the names of the entries written to ``out``. On any failure nothing is moved
+    (entries already moved are removed again) and the error propagates.
+    """
+    chosen = list(dict.fromkeys(names))
+    if not chosen:
+        return []
+    staging = Path(tempfile.mkdtemp(prefix=".albot2d-export.", dir=out))
+    moved: list[Path] = []
+    try:
+        for name in chosen:
+            EXPORTERS[name].write(source, staging)
+        for entry in sorted(staging.iterdir()):
+            target = out / entry.name
+            if target.is_dir() and not target.is_symlink():
+                shutil.rmtree(target)
+            os.replace(entry, target)
+            moved.append(target)
+    except BaseException:
+        for target in moved:
+            with contextlib.suppress(OSError):
+                shutil.rmtree(target) if target.is_dir() else target.unlink()
+        raise
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return [p.name for p in moved]
