@@ -17,7 +17,7 @@ import functools
 import os
 import sys
 import tempfile
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -175,24 +175,31 @@ def spec_from_args(args: argparse.Namespace) -> Any:
     return RunSpec(**{k: v for k, v in given.items() if v is not None or k == "kind"})
 
 
-def add_export_option(p: argparse.ArgumentParser) -> None:
-    """``--export FORMAT ...`` (the registry of ``albot2d.cli.exporters``) and its options."""
-    from albot2d.cli.exporters import EXPORTERS
+def add_export_option(p: argparse.ArgumentParser, names: Sequence[str] | None = None) -> None:
+    """``--export FORMAT ...`` (the registry of ``albot2d.cli.exporters``, or the formats
+    ``names`` of it) and its options."""
+    from albot2d.cli.exporters import DEFAULT_MAP_RESOLUTION_M, EXPORTERS
 
+    chosen = [EXPORTERS[name] for name in (names or EXPORTERS)]
     g = p.add_argument_group("export")
     g.add_argument(
         "--export",
         nargs="+",
         action="extend",
-        choices=list(EXPORTERS),
+        choices=[e.name for e in chosen],
         metavar="FORMAT",
-        help="also write the run as: "
-        + "; ".join(f"{e.name} ({e.help})" for e in EXPORTERS.values()),
+        help="also write the run as: " + "; ".join(f"{e.name} ({e.help})" for e in chosen),
     )
+    if any(e.name == "rosbag2" for e in chosen):
+        g.add_argument(
+            "--bag-storage",
+            choices=("mcap", "sqlite3"),
+            help="storage of the ROS 2 bag (default mcap)",
+        )
     g.add_argument(
-        "--bag-storage",
-        choices=("mcap", "sqlite3"),
-        help="storage of the ROS 2 bag (default mcap)",
+        "--map-resolution",
+        metavar="METRES",
+        help=f"cell size of --export occupancy maps (default {DEFAULT_MAP_RESOLUTION_M:g})",
     )
 
 

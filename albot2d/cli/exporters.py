@@ -6,7 +6,10 @@ asked for and moves what they wrote into the output directory, so nothing appear
 every export succeeded. Add a format by adding an entry to :data:`EXPORTERS`.
 
 ``rosbag2`` writes ``log_ros2/`` (a ROS 2 bag, MCAP unless ``--bag-storage sqlite3``) and
-``rosbag1`` writes ``log.bag`` (``albot2d.logs.rosbag_writer``).
+``rosbag1`` writes ``log.bag`` (``albot2d.logs.rosbag_writer``). ``occupancy`` writes
+``world.pgm/.yaml`` (the true world) and, for a run, ``map_NAME.pgm/.yaml`` per mapper as
+ROS ``map_server`` maps (``--map-resolution``); ``g2o`` writes the ``slam`` mapper's pose
+graph, ``graph_NAME.g2o`` and ``graph_NAME.tum`` (``albot2d.evaluation.run.map_exports``).
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ __all__ = [
 
 ROSBAG1_NAME = "log.bag"
 ROSBAG2_NAME = "log_ros2"
+DEFAULT_MAP_RESOLUTION_M = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,17 +82,47 @@ def _rosbag(version: int) -> Callable[[ExportSource, Path], None]:
     return write
 
 
+def _write_files(directory: Path, files: Mapping[str, bytes]) -> None:
+    for name, data in files.items():
+        (directory / name).write_bytes(data)
+
+
+def _occupancy(source: ExportSource, directory: Path) -> None:
+    from albot2d.evaluation.run.map_exports import WORLD_MAP_NAME, occupancy_files, world_grid
+    from albot2d.logs.map_server import map_server_files
+
+    resolution = source.options.get("map_resolution_m") or DEFAULT_MAP_RESOLUTION_M
+    if source.result is not None:  # every mapper's map, and the world's in simulation
+        _write_files(directory, occupancy_files(source.result, resolution))
+    elif source.world is not None:
+        _write_files(directory, map_server_files(world_grid(source.world, resolution),
+                                                 WORLD_MAP_NAME))  # fmt: skip
+
+
+def _g2o(source: ExportSource, directory: Path) -> None:
+    from albot2d.evaluation.run.map_exports import g2o_files
+
+    _write_files(directory, g2o_files(source.result))
+
+
 EXPORTERS: dict[str, Exporter] = {
     exporter.name: exporter
     for exporter in (
         Exporter("rosbag2", f"ROS 2 bag {ROSBAG2_NAME}/", _rosbag(2), needs_frames=True),
         Exporter("rosbag1", f"ROS 1 bag {ROSBAG1_NAME}", _rosbag(1), needs_frames=True),
+        Exporter(
+            "occupancy", "ROS map_server maps: world.pgm/.yaml, map_NAME.pgm/.yaml", _occupancy
+        ),
+        Exporter("g2o", "the slam mapper's pose graph: graph_NAME.g2o/.tum", _g2o),
     )
 }
 
 
 def export_options(args: Any) -> dict[str, Any]:
-    """The exporters' options from ``args`` (``--bag-storage``), refused where unused."""
+    """The exporters' options from ``args`` (``--bag-storage``, ``--map-resolution``),
+    refused where unused; ``--export g2o`` refused where no mapper keeps a pose graph."""
+    from albot2d.cli.options import positive_number
+
     names = list(getattr(args, "export", None) or [])
     storage = getattr(args, "bag_storage", None)
     if storage is not None and "rosbag2" not in names:
@@ -97,7 +131,17 @@ def export_options(args: Any) -> dict[str, Any]:
         from albot2d.logs.rosbag import require_rosbags
 
         require_rosbags()  # before the run, not after it
-    return {"bag_storage": storage}
+    resolution = positive_number(getattr(args, "map_resolution", None), "--map-resolution")
+    if resolution is not None and "occupancy" not in names:
+        raise InputError("--map-resolution sets the cell size of --export occupancy; give both")
+    if "g2o" in names:
+        if not hasattr(args, "mapper"):  # albot2d simulate: no mappers, no graph
+            raise InputError("--export g2o writes the slam mapper's pose graph: use albot2d "
+                             "run (or replay) --mapper slam")  # fmt: skip
+        mappers = [str(m) for m in args.mapper or ()]
+        if not any(m.split("[")[0] == "slam" or ":" in m for m in mappers):
+            raise InputError("--export g2o writes the slam mapper's pose graph: add --mapper slam")
+    return {"bag_storage": storage, "map_resolution_m": resolution}
 
 
 def export_names() -> list[str]:

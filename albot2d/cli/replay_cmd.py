@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
+    add_export_option,
     add_json_option,
     add_scoring_options,
     choices,
@@ -38,6 +39,7 @@ from albot2d.cli.common import (
     scoring_params,
 )
 from albot2d.cli.options import positive_int
+from albot2d.cli.viewer import add_viewer_options, check_viewer_options, open_viewer
 from albot2d.errors import InputError
 
 __all__ = ["DATA_ENV", "find_log", "register", "run"]
@@ -112,6 +114,8 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="refuse a log with anomalies (bad ranges, timestamps out of order)",
     )
+    add_export_option(p, ("occupancy", "g2o"))
+    add_viewer_options(p)
     add_json_option(p)
     p.set_defaults(handler=run)
 
@@ -131,24 +135,41 @@ def run(args: argparse.Namespace) -> int:
     relations = Path(args.relations) if args.relations is not None else find_relations(log)
     if relations is not None:
         read_relations(relations)  # a bad relations file fails before anything is created
+    from albot2d.cli.exporters import ExportSource, export_options, write_exports
+
+    options = export_options(args)
+    names = list(args.export or [])
+    check_viewer_options(args)
     out, created = prepare_out_dir(args.out)
+    viewer = open_viewer(args, f"albot2d replay {log.name}")
     bar = progress_bar(max_frames, " views", "replay")
 
+    def exports(result: Any) -> list[str]:  # --export: a log has no world
+        return write_exports(out, names, ExportSource([], None, result, options))
+
     def frame(f: Any, travelled: float) -> None:
+        if viewer is not None:
+            viewer.on_frame(f, travelled)
         bar.set_postfix_str(f"{travelled:.0f} m", refresh=False)
         bar.update(1)
 
+    ok = False
     try:
         result = finish(
             out, created, "replay",
             lambda: replay_log(log, relations_path=relations, mappers=mappers, params=params,
                                max_frames=max_frames, on_frame=frame, on_stage=bar.set_description,
                                strict=args.strict, scan_topic=args.scan_topic,
-                               odom_topic=args.odom_topic),
+                               odom_topic=args.odom_topic,
+                               on_mappers=None if viewer is None else viewer.on_mappers),
             args.no_figures, bar.set_description,
+            extra_exports=exports if names else None,
         )  # fmt: skip
+        ok = True
     finally:
         bar.close()
+        if viewer is not None:
+            viewer.finish(ok)
     anomalies = result.report["log"]["anomalies"]
     if any(anomalies[k] for k in anomalies if not k.startswith("frames_")):
         from albot2d.logs.anomalies import LogAnomalies

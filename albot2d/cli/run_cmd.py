@@ -34,6 +34,7 @@ from albot2d.cli.common import (
     scoring_params,
     spec_from_args,
 )
+from albot2d.cli.viewer import add_viewer_options, check_viewer_options, open_viewer
 from albot2d.errors import InputError
 
 __all__ = ["register", "run"]
@@ -93,6 +94,7 @@ def register(subparsers: Any) -> None:
         "over time beside the truth",
     )
     add_export_option(p)
+    add_viewer_options(p)
     p.add_argument(
         "--cprofile",
         metavar="FILE",
@@ -175,13 +177,17 @@ def run(args: argparse.Namespace) -> int:
     extra = _exporting(args, kept)
     if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():
         raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
+    check_viewer_options(args)
     out, created = prepare_out_dir(args.out)
+    viewer = open_viewer(args, f"albot2d run {args.out}")
     bar = None
     keep = _keeps_frames(list(args.export or []))
 
     def start(world: Any, tour: Any) -> None:
         # With --max-frames the run ends after that many views, not at the tour's end.
         nonlocal bar
+        if viewer is not None:
+            viewer.on_start(world, tour)
         if spec.max_frames is not None:
             bar = progress_bar(spec.max_frames, " views", "run")
         elif tour.kind == "explore":  # no tour to measure by: simulated time
@@ -192,6 +198,8 @@ def run(args: argparse.Namespace) -> int:
     def frame(f: Any, travelled: float) -> None:
         if keep:
             kept.append(f)
+        if viewer is not None:
+            viewer.on_frame(f, travelled)
         if bar is None:
             return
         if spec.max_frames is None and spec.tour_kind == "explore":
@@ -209,17 +217,22 @@ def run(args: argparse.Namespace) -> int:
         if bar is not None:
             bar.set_description(name)
 
+    ok = False
     try:
         result = finish(
             out, created, "run",
             _profiled(args.cprofile, lambda: run_experiment(
-                spec, params, on_start=start, on_frame=frame, on_stage=stage)),
+                spec, params, on_start=start, on_frame=frame, on_stage=stage,
+                on_mappers=None if viewer is None else viewer.on_mappers)),
             args.no_figures, stage, animate=args.animate,
             extra_exports=extra(out) if extra is not None else None,
         )  # fmt: skip
+        ok = True
     finally:
         if bar is not None:
             bar.close()
+        if viewer is not None:
+            viewer.finish(ok)
     print_tables(result, out, args.json)
     if recorded is not None:
         diff = report_differences(recorded, result.report)

@@ -8,7 +8,8 @@
 - ``experiment``: ``run_experiment(RunSpec)``, the whole of ``albot2d run``;
 - ``replay``: the same on a recorded log and its relations;
 - ``report``: report.json (a view of the results) and the printed tables;
-- ``export``: files the field's tools read (TUM trajectories, CSV maps).
+- ``export``: files the field's tools read (TUM trajectories, CSV maps);
+- ``map_exports``: ``--export occupancy`` (ROS map_server grids) and ``--export g2o``.
 
 May import: everything below evaluation and ``albot2d.evaluation.metrics``.
 """

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +40,7 @@ from albot2d.logs.log_frames import read_frames
 from albot2d.logs.relations import Relations, read_relations
 from albot2d.logs.rosbag import DEFAULT_ODOM_TOPIC, DEFAULT_SCAN_TOPIC, is_bag, read_bag
 from albot2d.logs.run_files import MANIFEST_NAME, RELATIONS_NAME
+from albot2d.mapping.protocol import Mapper
 from albot2d.mapping.registry import resolve_mappers
 
 __all__ = ["DEFAULT_REPLAY_MAPPERS", "find_relations", "log_stem", "replay_log"]
@@ -111,11 +112,13 @@ def replay_log(
     strict: bool = False,
     scan_topic: str | None = None,
     odom_topic: str | None = None,
+    on_mappers: Callable[[Mapping[str, Mapper]], None] | None = None,
 ) -> ExperimentResult:
     """Map ``log`` with every mapper and score against ``relations_path`` (found if None).
 
     ``on_frame(frame, travelled_m)`` is called after each frame and ``on_stage("scoring")``
-    after the last one (progress display). ``strict`` turns any log anomaly into an
+    after the last one (progress display); ``on_mappers(mappers)`` once the mappers are
+    made, before the first frame (e.g. a viewer). ``strict`` turns any log anomaly into an
     ``InputError`` (see the module docstring). ``scan_topic`` and ``odom_topic`` (default
     ``/scan``, ``/odom``) choose a bag's topics.
     """
@@ -152,6 +155,8 @@ def replay_log(
     if frames and any(":" not in spec for spec in mappers):  # built-ins extract surfaces
         _check_beam_spacing(log_path, frames[0])
     instances = {name: factory() for name, factory in factories.items()}
+    if on_mappers is not None:
+        on_mappers(instances)
     trace = drive_mappers(
         frames, instances, homing=params.homing, last_k_views=params.map_quality.last_k_views,
         max_frames=max_frames, on_frame=on_frame, source=os.fspath(log_path),

@@ -3,7 +3,9 @@
 - ``mapper``: ``LoopClosingSLAM`` (``slam``) and ``ScanMatchingSLAM`` (``scan_odometry``);
 - ``front_end``: KISS-ICP scan-to-map odometry with the wheel odometry as the prediction;
 - ``loop_closure``: closure candidates by proximity, verified by registration;
-- ``pose_graph``: the 2D pose graph of keyframes, optimised by GTSAM.
+- ``pose_graph``: the 2D pose graph of keyframes, optimised by GTSAM;
+- ``graph_export``: the pose graph's factors as plain data with their effective information
+  (the g2o export).
 
 The extra's libraries are imported on first use, so importing this package costs nothing
 without them. May import: geometry and core helpers, perception,
