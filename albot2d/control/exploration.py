@@ -195,6 +195,7 @@ class ExploreDrive:
         yield Frame(
             index=0, timestamp=obs.time_s, scan=obs.scan, odom_pose=obs.odom_pose,
             odom_increment=Pose(), true_pose=obs.true_pose, collided=False,
+            obstacle_poses=obs.obstacle_poses,
         )  # fmt: skip
         last_view_odom = obs.odom_pose
         moved = turned = 0.0
@@ -232,6 +233,7 @@ class ExploreDrive:
                     index=index, timestamp=obs.time_s, scan=obs.scan, odom_pose=obs.odom_pose,
                     odom_increment=last_view_odom.between(obs.odom_pose),
                     true_pose=obs.true_pose, collided=collided,
+                    obstacle_poses=obs.obstacle_poses,
                 )  # fmt: skip
                 last_view_odom = obs.odom_pose
                 moved = turned = 0.0
