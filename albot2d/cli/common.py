@@ -122,7 +122,11 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     )
     drive.add_argument(
         "--tour-kind",
-        help=f"{', '.join(names.tour_kinds)} (default {default['tour_kind']})",
+        "--tour",
+        dest="tour_kind",
+        help=f"{', '.join(names.tour_kinds)} (default {default['tour_kind']}), or explore: "
+        "a frontier explorer drives until it has seen everything it can reach or for 30 "
+        "simulated minutes",
     )
     drive.add_argument(
         "--tour-length",
@@ -401,6 +405,10 @@ def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
     print(f"{result.title}  ({report['wall_time_s']:.1f} s)")
     print(format_summary_table(result.scores))
     print(format_homing_table(result.scores))
+    if "exploration" in report:  # albot2d run --tour explore
+        from albot2d.control.exploration import format_coverage_table
+
+        print(format_coverage_table(report["exploration"]))
     files = report["figures"] + report.get("exports", [])
     print(
         f"-> {out / REPORT_NAME} + {len(files)} files ({', '.join(files)})"

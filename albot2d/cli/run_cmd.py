@@ -151,6 +151,7 @@ def _exporting(
 
 
 def run(args: argparse.Namespace) -> int:
+    from albot2d.control.exploration import DEFAULT_MAX_TIME_S
     from albot2d.evaluation import RunSpec, evaluation_params_from_report, run_experiment
     from albot2d.evaluation.run.report import read_report
     from albot2d.evaluation.run.setup import check_spec
@@ -190,6 +191,8 @@ def run(args: argparse.Namespace) -> int:
             viewer.on_start(world, tour)
         if spec.max_frames is not None:
             bar = progress_bar(spec.max_frames, " views", "run")
+        elif tour.kind == "explore":  # no tour to measure by: simulated time
+            bar = progress_bar(DEFAULT_MAX_TIME_S, " s", "explore")
         else:
             bar = progress_bar(round(tour.length_m, 1), "m", "run")
 
@@ -200,7 +203,10 @@ def run(args: argparse.Namespace) -> int:
             viewer.on_frame(f, travelled)
         if bar is None:
             return
-        if spec.max_frames is not None:
+        if spec.max_frames is None and spec.tour_kind == "explore":
+            bar.n = round(min(f.timestamp, bar.total), 1)
+            bar.set_postfix_str(f"{f.index + 1} views, {travelled:.0f} m", refresh=False)
+        elif spec.max_frames is not None:
             bar.n = f.index + 1
             bar.set_postfix_str(f"{travelled:.0f} m", refresh=False)
         else:

@@ -25,7 +25,7 @@ from albot2d.evaluation.metrics.map_quality import MapQualityParams
 from albot2d.evaluation.run.report import make_report
 from albot2d.evaluation.run.results import OdometryScores, RunScores
 from albot2d.evaluation.run.scoring import EvaluationParams, score_run
-from albot2d.evaluation.run.setup import DEFAULT_MAPPERS, RunSpec, build_run
+from albot2d.evaluation.run.setup import DEFAULT_MAPPERS, EXPLORE_TOUR, RunSpec, build_run
 from albot2d.evaluation.run.trace import HomingParams, Trace, drive_mappers
 from albot2d.frames import Frame
 from albot2d.logs.relations import Relations, RelationsOptions, relations_from_truth
@@ -114,7 +114,14 @@ def run_experiment(
     t0 = time.perf_counter()
     setup = build_run(spec)
     world, tour, profile, sim = setup.world, setup.tour, setup.profile, setup.simulator
-    frames = sim.drive(tour, profile)
+    exploring = None
+    if tour.kind == EXPLORE_TOUR:
+        from albot2d.control.exploration import ExploreDrive
+
+        exploring = ExploreDrive(sim, profile)
+        frames = exploring.frames()
+    else:
+        frames = sim.drive(tour, profile)
     if on_start is not None:
         on_start(world, tour)
     mappers = {name: factory() for name, factory in setup.mapper_factories.items()}
@@ -151,6 +158,10 @@ def run_experiment(
         "relations": None if relations is None else len(relations),
         "relations_source": "truth" if score else None,
     }
+    extra: dict[str, Any] = {}
+    if exploring is not None:  # the tour is the path the explorer drove
+        tour = Tour(trace.true_poses[:, :2], kind=EXPLORE_TOUR)
+        extra["exploration"] = exploring.result.to_dict()
     report = make_report(
         "run",
         seed=spec.seed,
@@ -171,6 +182,7 @@ def run_experiment(
         run=run_info,
         odometry=scores.odometry.to_dict(),
         mappers=scores.mappers_dict(),
+        **extra,
         # Per-view stage times: mean, p50, p95 and max ms (the rows are in steps.csv).
         timing_ms=trace.step_times.summary_ms(),
         figures=[],

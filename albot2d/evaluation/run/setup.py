@@ -23,6 +23,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from albot2d.control.exploration import EXPLORE_TOUR
 from albot2d.errors import InputError
 from albot2d.seeding import RUN_STREAMS, stream_seed
 from worldgen.tours import TOUR_KINDS, plan_tour
@@ -89,9 +90,10 @@ class RunSpec:
             or not (math.isfinite(length) and length > 0)
         ):
             raise InputError(f"RunSpec.tour_length_m must be a positive number, got {length!r}")
-        if self.tour_kind not in TOUR_KINDS:
+        if self.tour_kind not in (*TOUR_KINDS, EXPLORE_TOUR):
             raise InputError(
-                f"unknown tour kind {self.tour_kind!r}; valid: {', '.join(TOUR_KINDS)}"
+                f"unknown tour kind {self.tour_kind!r}; valid: "
+                f"{', '.join((*TOUR_KINDS, EXPLORE_TOUR))}"
             )
         laser_noise_preset(self.laser_noise)
         if self.max_frames is not None and (
@@ -173,6 +175,10 @@ def plan_run_tour(spec: RunSpec, world: World) -> tuple[World, Tour]:
 
         tour = route_tour(world, spec.route)
         return dataclasses.replace(world, start=route_start(world, spec.route)), tour
+    if spec.tour_kind == EXPLORE_TOUR:
+        # Nothing is planned: the explorer decides as it goes (the run's tour becomes the
+        # path it drove, ``albot2d.control.exploration``).
+        return world, Tour(waypoints=world.start.position[None, :], kind=EXPLORE_TOUR)
     return world, plan_tour(
         world,
         kind=spec.tour_kind,

@@ -1,0 +1,286 @@
+"""``FrontierExplorer``: a scripted operator that drives to the nearest reachable frontier.
+
+It knows its true pose (as the paper's human operator, who watched the robot, did) and keeps
+its own ``KnowledgeGrid`` of what the laser has shown. Each plan:
+
+1. the cost grid: impassable where the robot's disc (plus ``wall_margin_m``) would touch
+   an occupied cell or its centre would come nearer than its radius to an unknown cell;
+   ``comfort_cost`` times dearer within ``comfort_margin_m`` more of a wall (so it keeps to
+   the middle of corridors and doorways);
+2. the goals: passable cells near a frontier (a seen free cell next to an unknown one),
+   minus the places already given up;
+3. Dijkstra from the robot's cell (``grid_search.nearest_goal_path``) to the nearest goal,
+   the path cut down to its corners.
+
+It follows the path corner to corner with velocity commands (turn on the spot towards the
+next corner when more than ``turn_in_place_rad`` off heading, else drive with a
+proportional heading correction, at most
+``speed_mps`` / ``turn_rate_radps``) and plans again every ``replan_period_s``, on arrival,
+after a collision (first backing off for ``back_off_s`` along the way it came), or when
+the laser shows something in the strip the disc would sweep in the next
+``stop_distance_m``. When its own cell is impassable (hard against a wall) the search
+starts from the passable cells within a diameter that it sees in a straight line. A goal
+it arrives at without clearing its frontier, or makes no progress towards for
+``stuck_time_s``, is given up. It begins by turning once on the spot (the laser sees only
+forward) and is finished when no frontier is reachable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from albot2d.control.grid_search import dilate, nearest_goal_path, segment_clear, simplify_path
+from albot2d.control.knowledge import GridSpec, KnowledgeGrid
+from albot2d.frames import Scan
+from albot2d.geometry import Pose, wrap_angle
+from albot2d.validation import check_non_negative, check_positive
+
+__all__ = ["ExplorerParams", "FrontierExplorer"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ExplorerParams:
+    """The explorer's settings (see the module docstring). Speeds are a cautious indoor
+    pace for a Pioneer 3-DX (its top speed is 1.2 m/s); the simulator's own limits clamp
+    them further if lower."""
+
+    resolution_m: float = 0.1
+    sensing_range_m: float = 10.0
+    speed_mps: float = 0.5
+    turn_rate_radps: float = 1.0
+    wall_margin_m: float = 0.05
+    comfort_margin_m: float = 0.3
+    comfort_cost: float = 4.0
+    frontier_reach_m: float = 0.5
+    corner_tolerance_m: float = 0.15
+    turn_in_place_rad: float = 0.3
+    heading_gain: float = 2.0
+    goal_tolerance_m: float = 0.3
+    replan_period_s: float = 2.0
+    stop_distance_m: float = 0.15
+    stuck_time_s: float = 15.0
+    give_up_radius_m: float = 1.0
+    back_off_s: float = 0.5
+    back_off_speed_mps: float = 0.2
+    control_period_s: float = 0.1
+    initial_spin: bool = True
+
+    def __post_init__(self) -> None:
+        check_positive(
+            self, "resolution_m", "sensing_range_m", "speed_mps", "turn_rate_radps",
+            "corner_tolerance_m", "turn_in_place_rad", "heading_gain", "goal_tolerance_m",
+            "replan_period_s", "stuck_time_s", "comfort_cost", "control_period_s",
+        )  # fmt: skip
+        check_non_negative(
+            self, "wall_margin_m", "comfort_margin_m", "frontier_reach_m", "stop_distance_m",
+            "give_up_radius_m", "back_off_s", "back_off_speed_mps",
+        )  # fmt: skip
+
+
+class FrontierExplorer:
+    """Explores the grid ``spec`` with a robot of ``radius_m``; call ``observe`` with each
+    observation and ``command`` for the next velocity (``None`` once finished)."""
+
+    def __init__(self, spec: GridSpec, radius_m: float, params: ExplorerParams | None = None):
+        self.params = params if params is not None else ExplorerParams()
+        self.spec = spec
+        self.radius_m = float(radius_m)
+        self.knowledge = KnowledgeGrid(spec, sensing_range_m=self.params.sensing_range_m)
+        self.finished = False
+        self.plans = 0
+        self.given_up: list[tuple[float, float]] = []
+        self._given_up_mask = np.zeros(spec.shape, dtype=bool)
+        self._centres = spec.centres()
+        self._path: FloatArray | None = None  # world (x, y) corners still to drive
+        self._goal: tuple[float, float] | None = None
+        self._spin_left = 2.0 * math.pi if self.params.initial_spin else 0.0
+        self._last_heading: float | None = None
+        self._next_plan_s = 0.0
+        self._replan = True
+        self._backing_s = 0.0
+        self._progress_s = 0.0
+        self._best_goal_dist = math.inf
+
+    # -- sensing -----------------------------------------------------------------------
+
+    def observe(self, pose: Pose, scan: Scan | None, collided: bool = False) -> NDArray[np.intp]:
+        """Take in an observation; returns the flat cells seen for the first time."""
+        self.knowledge.mark_footprint(pose, self.radius_m)
+        if self._last_heading is not None and self._spin_left > 0.0:
+            self._spin_left -= abs(float(wrap_angle(pose.theta - self._last_heading)))
+        self._last_heading = pose.theta
+        if collided:
+            # Back off along the way it came (free: it was just there), then plan again.
+            self._replan = True
+            self._backing_s = self.params.back_off_s
+        if scan is None:
+            return np.zeros(0, dtype=np.intp)
+        if self._path is not None and self._blocked_ahead(scan):
+            self._replan = True
+        return self.knowledge.integrate(pose, scan)
+
+    def _blocked_ahead(self, scan: Scan) -> bool:
+        """A return inside the strip the disc would sweep in the next ``stop_distance_m``."""
+        pts = scan.points()
+        ahead = (pts[:, 0] > 0.0) & (pts[:, 0] < self.radius_m + self.params.stop_distance_m)
+        return bool((ahead & (np.abs(pts[:, 1]) < self.radius_m)).any())
+
+    # -- acting ------------------------------------------------------------------------
+
+    def command(self, pose: Pose, time_s: float) -> tuple[float, float] | None:
+        """The velocity ``(v_mps, omega_radps)`` to hold next, or None when finished."""
+        p = self.params
+        if self.finished:
+            return None
+        if self._spin_left > 0.0:
+            return 0.0, p.turn_rate_radps
+        if self._backing_s > 0.0:
+            self._backing_s -= p.control_period_s
+            return -p.back_off_speed_mps, 0.0
+        if self._path is not None and self._goal is not None:
+            d = math.hypot(self._goal[0] - pose.x, self._goal[1] - pose.y)
+            if d < self._best_goal_dist - 0.2:
+                self._best_goal_dist, self._progress_s = d, time_s
+            elif time_s - self._progress_s > p.stuck_time_s:
+                self._give_up()
+        if self._replan or self._path is None or time_s >= self._next_plan_s:
+            self._plan(pose, time_s)
+            if self.finished:
+                return None
+        assert self._path is not None
+        return self._follow(pose)
+
+    def _give_up(self) -> None:
+        if self._goal is not None:
+            self.given_up.append(self._goal)
+            gx, gy = self._goal
+            xs, ys = self._centres
+            self._given_up_mask |= (xs - gx) ** 2 + (
+                ys - gy
+            ) ** 2 <= self.params.give_up_radius_m**2
+        self._path, self._goal, self._replan = None, None, True
+
+    def _costs(self) -> FloatArray:
+        p, k = self.params, self.knowledge
+        r = self.spec.resolution_m
+        occupied = k.occupied
+        # An occupied cell's wall may lie anywhere in it: up to half a diagonal nearer.
+        hard = dilate(occupied, (self.radius_m + p.wall_margin_m) / r + math.sqrt(0.5))
+        hard |= dilate(k.unknown, self.radius_m / r)
+        soft = dilate(occupied, (self.radius_m + p.wall_margin_m + p.comfort_margin_m) / r)
+        cost = np.where(soft, p.comfort_cost, 1.0)
+        cost[hard] = np.inf
+        return cost
+
+    def _goals(self, passable: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        k = self.knowledge
+        unknown = k.unknown
+        near_unknown = np.zeros_like(unknown)
+        near_unknown[1:, :] |= unknown[:-1, :]
+        near_unknown[:-1, :] |= unknown[1:, :]
+        near_unknown[:, 1:] |= unknown[:, :-1]
+        near_unknown[:, :-1] |= unknown[:, 1:]
+        frontier = k.seen & k.free & near_unknown
+        reach = (self.radius_m + self.params.frontier_reach_m) / self.spec.resolution_m
+        goals = dilate(frontier, reach) & passable
+        return goals & ~self._given_up_mask
+
+    def _plan(self, pose: Pose, time_s: float) -> None:
+        p = self.params
+        self.plans += 1
+        self._replan = False
+        self._next_plan_s = time_s + p.replan_period_s
+        cost = self._costs()
+        passable = np.isfinite(cost)
+        goals = self._goals(passable)
+        if not goals.any():
+            self.finished = True
+            self._path = None
+            return
+        seeds, seed_dist = self._seeds(pose, passable)
+        if len(seeds) == 0:
+            self.finished = True
+            self._path = None
+            return
+        found = nearest_goal_path(cost, goals, seeds, seed_dist)
+        if found is None:
+            self.finished = True
+            self._path = None
+            return
+        cells, _ = found
+        corners = simplify_path(cells, passable)
+        r = self.spec.resolution_m
+        xy = np.column_stack(
+            [self.spec.origin_x_m + (corners[:, 1] + 0.5) * r,
+             self.spec.origin_y_m + (corners[:, 0] + 0.5) * r]
+        )  # fmt: skip
+        goal = (float(xy[-1, 0]), float(xy[-1, 1]))
+        if self._goal is None or math.hypot(goal[0] - self._goal[0], goal[1] - self._goal[1]) > 0.5:
+            self._best_goal_dist, self._progress_s = math.inf, time_s
+        self._goal = goal
+        # The first cell is the robot's own (skip it) or, when that was impassable, the
+        # passable cell the search started from: drive there first, clear of the wall.
+        iy, ix = self.spec.cell_of(pose.x, pose.y)
+        own = int(corners[0, 0]) == iy and int(corners[0, 1]) == ix
+        self._path = xy[1:] if own and len(xy) > 1 else xy
+
+    def _seeds(
+        self, pose: Pose, passable: NDArray[np.bool_]
+    ) -> tuple[NDArray[np.int64], FloatArray]:
+        """The passable cells the search starts from: the robot's own, or when that is
+        impassable (hard against a wall), the passable cells within one radius of it."""
+        iy, ix = self.spec.cell_of(pose.x, pose.y)
+        if passable[iy, ix]:
+            return np.array([iy * self.spec.nx + ix]), np.zeros(1)
+        r = self.spec.resolution_m
+        k = math.ceil(2.0 * self.radius_m / r)
+        y0, y1 = max(iy - k, 0), min(iy + k + 1, self.spec.ny)
+        x0, x1 = max(ix - k, 0), min(ix + k + 1, self.spec.nx)
+        yy, xx = np.mgrid[y0:y1, x0:x1]
+        d = np.hypot(yy - iy, xx - ix)
+        ok = passable[y0:y1, x0:x1] & (d <= k)
+        clear = ~self.knowledge.occupied
+        here = np.array([iy, ix], dtype=np.float64)
+        sy, sx = yy[ok], xx[ok]
+        sight = np.array(
+            [
+                segment_clear(clear, here, np.array([y, x], dtype=np.float64))
+                for y, x in zip(sy, sx, strict=True)
+            ],
+            dtype=bool,
+        )
+        sy, sx = sy[sight], sx[sight]
+        return (sy * self.spec.nx + sx).astype(np.int64), d[ok][sight] * 4.0
+
+    def _follow(self, pose: Pose) -> tuple[float, float]:
+        p = self.params
+        path = self._path
+        assert path is not None
+        # Drop corners reached (the last one is the goal). Corners are driven to, not cut:
+        # the straight legs between them are what the plan checked.
+        while (
+            len(path) > 1
+            and math.hypot(path[0, 0] - pose.x, path[0, 1] - pose.y) < p.corner_tolerance_m
+        ):
+            path = path[1:]
+        self._path = path
+        gx, gy = path[0]
+        dist = math.hypot(gx - pose.x, gy - pose.y)
+        if len(path) == 1 and dist < p.goal_tolerance_m:
+            # Arrived: if its frontier is still there next plan, the goal is given up.
+            self._give_up()
+            return 0.0, 0.0
+        err = float(wrap_angle(math.atan2(gy - pose.y, gx - pose.x) - pose.theta))
+        omega = float(np.clip(p.heading_gain * err, -p.turn_rate_radps, p.turn_rate_radps))
+        if abs(err) > p.turn_in_place_rad:
+            return 0.0, omega
+        v = p.speed_mps * math.cos(err)
+        if len(path) == 1:
+            v = min(v, max(0.1, dist))  # slow down into the goal
+        return v, omega
