@@ -12,13 +12,14 @@ def test_the_report_command_writes_the_page(tmp_path: Path, capsys) -> None:  # 
     out = tmp_path / "benchmarks.md"
     assert main(["--quick", "--out", str(out)]) == 0
     page = out.read_text(encoding="utf-8")
-    assert page == capsys.readouterr().out
+    assert capsys.readouterr().out == page + "\n"  # printed as written
     assert "- machine: " in page and "load average" in page and "kernels " in page
     rows = [line for line in page.splitlines() if line.startswith("| ") and "---" not in line]
     assert rows[0] == "| what | measured | how |"
     what = [r.split(" | ")[0].removeprefix("| ") for r in rows[1:]]
     assert "line extraction, 361-beam scan" in what
     assert "Albot₁ per view (extraction excluded)" in what
+    assert any(w.startswith("`Simulator.step` with a 181-beam scan") for w in what)
     for row in rows[1:]:  # every value a positive number
         value = row.split(" | ")[1]
         number = float(value.split()[0].replace(",", ""))
