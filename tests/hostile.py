@@ -19,7 +19,7 @@ import os
 import resource
 import subprocess
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pytest
@@ -144,3 +144,23 @@ def console_script() -> Path:
     if not script.is_file():
         pytest.skip(f"no albot2d console script beside {sys.executable} (pip install -e .)")
     return script
+
+
+# A bad-input case builds its inputs in a folder and returns the command line (with OUT
+# for the output) and extra environment variables.
+Case = Callable[[Path], tuple[list[str], dict[str, str]]]
+
+
+def replay_args(log: Path, *extra: str) -> list[str]:
+    """``albot2d replay LOG ... --out OUT`` without figures."""
+    return ["replay", str(log), "--no-figures", *extra, "--out", "OUT"]
+
+
+def write_log(tmp: Path) -> Path:
+    """A small valid CARMEN log with its relations file in ``tmp``."""
+    from tests import bad_inputs as bi
+
+    path = tmp / "log.clf"
+    path.write_text(bi.carmen_text())
+    (tmp / "log.relations").write_text(bi.relations_text())
+    return path

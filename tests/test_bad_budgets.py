@@ -23,22 +23,17 @@ import pytest
 
 from tests import bad_inputs as bi
 from tests.bad_input_checks import nothing_written
-from tests.hostile import GIB, MIB, assert_refused, gzip_bomb, limited_run, run_cli
-
-# A case builds its inputs in a folder and returns the command line (with OUT for the
-# output) and extra environment variables.
-Case = Callable[[Path], tuple[list[str], dict[str, str]]]
-
-
-def _replay(log: Path, *extra: str) -> list[str]:
-    return ["replay", str(log), "--no-figures", *extra, "--out", "OUT"]
-
-
-def _log(tmp: Path) -> Path:
-    path = tmp / "log.clf"
-    path.write_text(bi.carmen_text())
-    (tmp / "log.relations").write_text(bi.relations_text())
-    return path
+from tests.hostile import (
+    GIB,
+    MIB,
+    Case,
+    assert_refused,
+    gzip_bomb,
+    limited_run,
+    replay_args,
+    run_cli,
+    write_log,
+)
 
 
 def million_identical_lines(tmp: Path) -> tuple[list[str], dict[str, str]]:
@@ -46,12 +41,12 @@ def million_identical_lines(tmp: Path) -> tuple[list[str], dict[str, str]]:
     line = (bi.flaser_line(1, ranges=["2.0"] * 19) + "\n").encode()
     log = gzip_bomb(tmp / "log.clf.gz", line * 1000, 1000)  # 1,000,000 lines, ~1 MB here
     assert log.stat().st_size < 4 * MIB
-    return _replay(log, "--relations", str(_log(tmp).with_suffix(".relations"))), {}
+    return replay_args(log, "--relations", str(write_log(tmp).with_suffix(".relations"))), {}
 
 
 def one_gigabyte_line(tmp: Path) -> tuple[list[str], dict[str, str]]:
     log = gzip_bomb(tmp / "log.clf.gz", b"FLASER 181 " + b"2.0 " * (MIB // 4), 1024)
-    return _replay(log), {}
+    return replay_args(log), {}
 
 
 def corrupt_deflate(tmp: Path) -> tuple[list[str], dict[str, str]]:
@@ -59,16 +54,16 @@ def corrupt_deflate(tmp: Path) -> tuple[list[str], dict[str, str]]:
     data[40:60] = b"\xff" * 20  # inside the deflate stream; the header stays valid
     log = tmp / "log.clf.gz"
     log.write_bytes(bytes(data))
-    return _replay(log), {}
+    return replay_args(log), {}
 
 
 def dev_zero_relations(tmp: Path) -> tuple[list[str], dict[str, str]]:
-    return _replay(_log(tmp), "--relations", "/dev/zero"), {}
+    return replay_args(write_log(tmp), "--relations", "/dev/zero"), {}
 
 
 def relations_one_gigabyte_line(tmp: Path) -> tuple[list[str], dict[str, str]]:
     relations = gzip_bomb(tmp / "r.relations.gz", b"0" * MIB, 1024)
-    return _replay(_log(tmp), "--relations", str(relations)), {}
+    return replay_args(write_log(tmp), "--relations", str(relations)), {}
 
 
 def dev_zero_houseexpo(tmp: Path) -> tuple[list[str], dict[str, str]]:

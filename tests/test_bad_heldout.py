@@ -20,41 +20,28 @@ import pytest
 
 from tests import bad_inputs as bi
 from tests.bad_input_checks import nothing_written
-from tests.hostile import MIB, assert_refused, gzip_bomb, run_cli
+from tests.hostile import MIB, Case, assert_refused, gzip_bomb, replay_args, run_cli, write_log
 from tests.test_bad_campaign_files import ARGS as FUZZ_ARGS
 from tests.test_bad_campaign_files import PARAMS
-
-Case = Callable[[Path], tuple[list[str], dict[str, str]]]
-
-
-def _replay(log: Path, *extra: str) -> list[str]:
-    return ["replay", str(log), "--no-figures", *extra, "--out", "OUT"]
-
-
-def _log(tmp: Path) -> Path:
-    path = tmp / "log.clf"
-    path.write_text(bi.carmen_text())
-    (tmp / "log.relations").write_text(bi.relations_text())
-    return path
 
 
 def sparse_plain_log(tmp: Path) -> tuple[list[str], dict[str, str]]:
     path = tmp / "zeros.clf"
     with open(path, "wb") as out:
         out.truncate(600 * MIB)
-    return _replay(path), {}
+    return replay_args(path), {}
 
 
 def gzip_of_600mib_comments(tmp: Path) -> tuple[list[str], dict[str, str]]:
     log = gzip_bomb(tmp / "c.clf.gz", b"# " + b"c" * (MIB - 3) + b"\n", 600)
-    return _replay(log), {}
+    return replay_args(log), {}
 
 
 def truncated_gzip_relations(tmp: Path) -> tuple[list[str], dict[str, str]]:
     data = gzip.compress(bi.relations_text().encode() * 50, mtime=0)
     path = tmp / "r.relations.gz"
     path.write_bytes(data[: len(data) * 2 // 3])
-    return _replay(_log(tmp), "--relations", str(path)), {}
+    return replay_args(write_log(tmp), "--relations", str(path)), {}
 
 
 def _world(tmp: Path, mutate: Callable[[dict[str, Any]], None]) -> list[str]:
