@@ -153,6 +153,40 @@ def test_algorithm_4_as_written_remembers_every_view_until_one_is_full() -> None
     inv.check_local_map_rule(restated, rviews.views)
 
 
+def _moved(n: int, shift_m: float) -> Surfaces:
+    """``_view(n)`` with every wall ``shift_m`` farther: RTSV recognises none of them from
+    ``_view`` (their ends are more than 40 cm from where they were), yet all are trackable."""
+    view = _view(n)
+    segs = view.segments + np.array([shift_m, 0.0, shift_m, 0.0])
+    return Surfaces(segs, view.occluded, view.beams)
+
+
+# five walls; the same two walls moved (none tracked, two trackable), twice; five moved walls
+LOST = [_view(5), _view(5), _moved(2, 0.7), _moved(2, 0.7), _moved(5, 0.7), _moved(5, 0.7)]
+
+
+def test_algorithm_4_starts_only_where_no_surface_is_trackable() -> None:
+    """Line 8 tests S_t after update-maps set it to the remembered view's trackable
+    surfaces: a view with trackable surfaces but none tracked is placed by path integration
+    and tracking resumes from it (the paper's Fig. 15: PI mode "when no trackable surfaces
+    are in view"); reading S_t as RTSV's result (``on_lost_tracking``) starts PI mode."""
+    m, views = _feed(Albot1Params(move_using_pi="as_written"), LOST)
+    methods = [(lm.frame_index, lm.method) for lm in m.route]
+    # view 2: nothing tracked → path integration; it has two trackable walls, so view 3
+    # tracks them (2 < 4: remembered, triangulated); view 4 tracks view 3's two walls
+    # (remembered, triangulated), view 5 keeps view 4's five
+    assert methods == [(0, "start"), (1, "triangulation"), (2, "path_integration"),
+                       (3, "triangulation"), (4, "triangulation")]  # fmt: skip
+    inv.check_local_map_rule(m, views.views)
+    lost, lviews = _feed(Albot1Params(move_using_pi="on_lost_tracking"), LOST)
+    # PI mode from view 2 on: views 3 and 4 by path integration, 4 (five trackable) ends it
+    assert [(lm.frame_index, lm.method) for lm in lost.route][2:] == [
+        (2, "path_integration"), (3, "path_integration"), (4, "path_integration")]  # fmt: skip
+    inv.check_local_map_rule(lost, lviews.views)
+    # the preset reads the paper: the case above is the as-written one
+    assert Albot1Params.preset("paper_literal").move_using_pi == "as_written"
+
+
 # -- experiments under readings -----------------------------------------------------------
 def test_readings_are_checked_before_anything_runs(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "never"

@@ -189,9 +189,9 @@ def recount_tracking(
     V(c) is remembered. A remembered view restarts the tracked set (``start_tracking``).
     Only the views, the tracking parameters and the rule go in: nothing of the mapper.
     With ``move_using_pi="as_written"`` (algorithm #4 as the paper writes it), a view
-    remembered with no tracked surface left starts a stretch in which every view is
-    remembered, its ``tracked`` count being its trackable surfaces, until one has at least
-    ``min_tracked``.
+    remembered with no trackable surface (``"on_lost_tracking"``: no tracked surface left)
+    starts a stretch in which every view is remembered, its ``tracked`` count being its
+    trackable surfaces, until one has at least ``min_tracked``.
     """
     out: list[RecountedStep] = []
     if not views:
@@ -223,8 +223,13 @@ def recount_tracking(
                 current = view.select(kept)
             if len(current) < min_tracked:
                 remembered += (frame,)
-                pi_mode = move_using_pi == "as_written" and len(current) == 0
+                lost = len(current) == 0
                 current = start(view)
+                # algorithm #2 line 8: as written, S_t is the remembered view's trackable
+                # surfaces (update-maps line 2); read as RTSV's result, the tracked ones
+                pi_mode = (move_using_pi == "as_written" and len(current) == 0) or (
+                    move_using_pi == "on_lost_tracking" and lost
+                )
         out.append(RecountedStep(frame, len(counted), remembered))
         use_vc = bool(remembered) and remembered[-1] == frame
     return out

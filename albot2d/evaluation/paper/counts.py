@@ -164,9 +164,13 @@ def _gate_text(spec: str) -> tuple[str, str]:
                 "path-integration pose are dropped")  # fmt: skip
     gate += f"; positions from position_endpoint={tri.position_endpoint}"
     if params.move_using_pi == "as_written":
-        after = ("algorithm #4 as written: after a view with no tracked surface, every view is "
-                 "remembered by path integration until one has more than three trackable "
-                 "surfaces")  # fmt: skip
+        after = ("algorithm #4 as written: after a view with no trackable surface, every view "
+                 "is remembered by path integration until one has more than three trackable "
+                 "surfaces; after one with trackable surfaces but none tracked, tracking "
+                 "resumes from it")  # fmt: skip
+    elif params.move_using_pi == "on_lost_tracking":
+        after = ("after a view with no tracked surface, every view is remembered by path "
+                 "integration until one has more than three trackable surfaces")  # fmt: skip
     else:
         after = "after a view with no tracked surface, tracking resumes from it"
     return gate, after

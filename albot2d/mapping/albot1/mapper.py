@@ -130,10 +130,19 @@ class Albot1Params:
       tracked surface was left. ``"restated"`` (default; ``albot1-reading.md``): that view
       becomes the local map and the main loop goes on (the next view is tracked against
       it, triangulated from 1–3 tracked surfaces, or path-integrated again with none).
-      ``"as_written"``: algorithm #4 as the paper writes it: every following view is
-      remembered by path integration too, without tracking, until one has more than three
-      (``min_tracked - 1``) trackable surfaces; that view is remembered (by path
-      integration, line 8) and tracking resumes from it.
+      ``"as_written"``: algorithm #4 as the paper writes it. A view remembered with no
+      tracked surface left is placed by path integration (line 6 has nothing to
+      triangulate from); algorithm #2's line 8 then tests S_t, which update-maps
+      (algorithm #3, line 2) has just set to that view's *trackable* surfaces, so the
+      robot shifts to PI mode only when the view has none ("when no trackable surfaces
+      are in view", the paper's Fig. 15 and Results); with some, tracking resumes from
+      it (line 11). In PI mode every following view is remembered by path integration
+      too, without tracking, until one has more than three (``min_tracked - 1``)
+      trackable surfaces; that view is remembered (by path integration, line 8) and
+      tracking resumes from it. ``"on_lost_tracking"``: as ``"as_written"``, but PI mode
+      starts whenever no *tracked* surface is left (S_t read as RTSV's result), even in a
+      view with trackable surfaces (albot2d's earlier ``as_written``; measured in
+      ``docs/albot1.md``).
 
     ``Albot1Params.preset("default")`` (the defaults; ``"paper"`` is the same, its older
     name), ``preset("paper_literal")`` (the paper's text wherever it speaks, see
@@ -157,13 +166,13 @@ class Albot1Params:
     heading_fallback_surfaces: int = 0
     odometry_fallback_m: float = 0.40
     odometry_fallback_deg: float = 5.0
-    move_using_pi: Literal["restated", "as_written"] = "restated"
+    move_using_pi: Literal["restated", "as_written", "on_lost_tracking"] = "restated"
 
     def __post_init__(self) -> None:
         check_positive_int(self, "min_tracked")
-        if self.move_using_pi not in ("restated", "as_written"):
+        if self.move_using_pi not in ("restated", "as_written", "on_lost_tracking"):
             raise InputError(
-                "Albot1Params.move_using_pi must be restated or as_written, "
+                "Albot1Params.move_using_pi must be restated, as_written or on_lost_tracking, "
                 f"got {self.move_using_pi!r}"
             )
         check_positive(self, "odometry_fallback_m", "odometry_fallback_deg")
@@ -232,8 +241,10 @@ PAPER_LITERAL: dict[str, str] = {
         "'uncertain endpoint' flag"
     ),
     "move_using_pi=as_written": (
-        "algorithm #4 as written: once no tracked surface is left, every view is "
-        "remembered by path integration until one has more than three trackable surfaces"
+        "algorithm #4 as written: a view with no tracked surface left is placed by path "
+        "integration; when it has no trackable surface either (line 8 tests S_t as "
+        "update-maps sets it), every following view is remembered by path integration "
+        "until one has more than three trackable surfaces"
     ),
 }
 
@@ -416,8 +427,15 @@ class Albot1:
         with self.timer.stage("localization"):
             pose_c, method = self.localise(tracked, pi_pose, steps)
         self._update_maps(frame_index, timestamp, view, pose_c, method, tracked=len(tracked))
-        if len(tracked) == 0 and self.params.move_using_pi == "as_written":
-            self._pi_mode = True  # line 9: shift to PI mode (algorithm #4)
+        rule = self.params.move_using_pi
+        if rule == "as_written":
+            # Line 8 tests S_t after line 7: update-maps (algorithm #3, line 2) has set it to
+            # the trackable surfaces of the view just remembered, so algorithm #4 starts only
+            # when that view has none ("when no trackable surfaces are in view"); with some,
+            # line 11 goes on tracking from it.
+            self._pi_mode = len(self._tracked) == 0
+        elif rule == "on_lost_tracking":
+            self._pi_mode = len(tracked) == 0  # S_t read as RTSV's result (line 4)
         return tracked_after
 
     def _move_using_pi_step(
