@@ -89,6 +89,21 @@ def test_lost_reasons_tell_where_the_wall_went() -> None:
     assert loss.incidence_deg == pytest.approx(math.degrees(math.atan2(1.0, 5.0)), abs=0.01)
 
 
+def test_an_end_at_a_split_point_is_told_from_a_walls_last_hit() -> None:
+    # one straight wall extracted as two pieces that share beam 20: the split point counts
+    # as a real end of each, though the wall goes on
+    earlier = Surfaces(np.array([[1.0, -1.0, 3.0, -1.0], [3.0, -1.0, 5.0, -1.0]]),
+                       np.array([[True, False], [False, True]]),
+                       np.array([[0, 20], [20, 40]]))  # fmt: skip
+    predicted = earlier.select(np.array([0]))
+    view = _one([0.5, -1.05, 4.2, -1.05], (True, False))
+    (loss,) = lost_reasons(predicted, view, TrackingParams(), earlier)
+    assert loss.reason == "end_moved" and loss.split_end
+    assert loss.end_moved_m == pytest.approx(math.hypot(1.2, 0.05))
+    (alone,) = lost_reasons(predicted, view, TrackingParams())  # no view to tell it by
+    assert not alone.split_end
+
+
 def test_the_command_checks_its_seeds(capsys) -> None:  # type: ignore[no-untyped-def]
     assert main(["--seeds", "x"]) == 2
     assert "--seeds: expected A-B" in capsys.readouterr().out

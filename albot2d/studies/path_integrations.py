@@ -82,12 +82,16 @@ FloatArray = NDArray[np.float64]
 @dataclass(frozen=True, slots=True)
 class Loss:
     """One tracked surface RTSV did not recognise: ``reason`` (``LOSSES``); for
-    ``end_moved``, how far the nearest real end moved (m) and the beam's incidence on the
-    wall at that end in the earlier observation (degrees; 90 is head-on)."""
+    ``end_moved``, how far the nearest real end moved (m), the beam's incidence on the
+    wall at that end in the earlier observation (degrees; 90 is head-on) and whether either
+    end of the pair is a split point inside a run of hits (``split_end``: a beam shared with
+    the next surface, which extraction counts as a real end) rather than the wall's last
+    hit before a range jump."""
 
     reason: str
     end_moved_m: float = math.nan
     incidence_deg: float = math.nan
+    split_end: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,7 +110,10 @@ class PathIntegration:
 
 @dataclass(frozen=True, slots=True)
 class RouteBreakdown:
-    """Every path integration of one reading on one run, up to E7."""
+    """Every path integration of one reading on one run, up to E7; and how sparse the
+    route's views are: ``no_trackable_views`` have no trackable surface, and the longest
+    run of consecutive views with fewer than ``min_tracked`` (four) trackable surfaces
+    (what ends algorithm #4's loop) is ``longest_sparse_run`` views long."""
 
     seed: int
     dataset: str
@@ -114,6 +121,8 @@ class RouteBreakdown:
     views: int
     local_maps: int
     path_integrations: tuple[PathIntegration, ...] = field(default_factory=tuple)
+    no_trackable_views: int = 0
+    longest_sparse_run: int = 0
 
     def causes(self) -> dict[str, int]:
         counts = Counter(p.cause for p in self.path_integrations)
@@ -131,10 +140,14 @@ class RouteBreakdown:
         return {
             "seed": self.seed, "dataset": self.dataset, "reading": self.reading,
             "views": self.views, "local_maps": self.local_maps,
+            "no_trackable_views": self.no_trackable_views,
+            "longest_sparse_run": self.longest_sparse_run,
             "path_integrations": len(self.path_integrations),
             "causes": self.causes(), "losses": self.losses(),
             "regions": dict(Counter(p.region for p in self.path_integrations)),
             "end_moved_median_m": float(np.median(moved)) if moved else None,
+            "end_moved_at_split": sum(x.split_end for p in self.path_integrations
+                                      for x in p.losses if x.reason == "end_moved"),
             "end_incidence_median_deg": float(np.median(incidence)) if incidence else None,
             "frames": [p.frame for p in self.path_integrations],
         }  # fmt: skip
@@ -148,10 +161,27 @@ def _incidence_deg(surface: FloatArray, end: int) -> float:
     return math.degrees(math.asin(min(1.0, cross / (math.hypot(*p) * math.hypot(*d) + 1e-12))))
 
 
-def lost_reasons(predicted: Surfaces, view: Surfaces, params: TrackingParams) -> tuple[Loss, ...]:
+def _split_ends(surfaces: Surfaces) -> NDArray[np.bool_]:
+    """``(N, 2)``: the end's beam is shared with another surface of the same view (a split
+    point inside a run of hits)."""
+    beams = np.asarray(surfaces.beams)
+    counts = Counter(beams.ravel().tolist())
+    return np.array([[counts[int(b)] > 1 for b in row] for row in beams], bool).reshape(-1, 2)
+
+
+def lost_reasons(
+    predicted: Surfaces,
+    view: Surfaces,
+    params: TrackingParams,
+    earlier: Surfaces | None = None,
+) -> tuple[Loss, ...]:
     """Why each of ``predicted`` (tracked surfaces moved into ``view``'s frame, none of
-    which RTSV recognised) was lost; see the module docstring."""
+    which RTSV recognised) was lost; see the module docstring. ``earlier``: the whole view
+    ``predicted`` was observed in (to tell split points; default: ``predicted`` itself)."""
     trackable = trackable_mask(view, params)
+    view_split = _split_ends(view)
+    earlier_split = _split_ends(earlier if earlier is not None else predicted)
+    earlier_beams = np.asarray((earlier if earlier is not None else predicted).beams)
     out: list[Loss] = []
     v = view.segments
     v_dir = np.arctan2(v[:, 3] - v[:, 1], v[:, 2] - v[:, 0])
@@ -173,18 +203,22 @@ def lost_reasons(predicted: Surfaces, view: Surfaces, params: TrackingParams) ->
         if not (same & trackable).any():
             out.append(Loss("not_trackable"))
             continue
-        best = (math.inf, math.nan)
+        best: tuple[float, float, bool] = (math.inf, math.nan, False)
         for j in np.flatnonzero(same & trackable):
             for end in (0, 1):  # corresponding ends (scan order), real in both
                 if predicted.occluded[k, end] or view.occluded[j, end]:
                     continue
                 moved = math.hypot(*(p[2 * end : 2 * end + 2] - v[j, 2 * end : 2 * end + 2]))
                 if moved < best[0]:
-                    best = (moved, _incidence_deg(p, end))
+                    row = np.flatnonzero((earlier_beams == predicted.beams[k]).all(axis=1))
+                    split = bool(view_split[j, end]) or (
+                        len(row) > 0 and bool(earlier_split[row[0], end])
+                    )
+                    best = (moved, _incidence_deg(p, end), split)
         if math.isinf(best[0]):
             out.append(Loss("no_shared_end"))
         else:
-            out.append(Loss("end_moved", best[0], best[1]))
+            out.append(Loss("end_moved", *best))
     return tuple(out)
 
 
@@ -234,7 +268,8 @@ class PathIntegrationWatcher:
             self.replayed[frame] = len(info)
             self.tracked_before[frame] = len(self.state)
             if not len(info) and len(self.state) and self.trackable[frame]:
-                self.losses[frame] = lost_reasons(info.predicted, view, self.params)
+                earlier = self.views[self.prev_frame][0] if self.prev_frame is not None else None
+                self.losses[frame] = lost_reasons(info.predicted, view, self.params, earlier)
         self.prev_frame = frame
 
     def _on_localise(self, loc: Localisation) -> None:
@@ -296,10 +331,13 @@ def _pi_mode_views(m: Albot1, trackable: dict[int, int], replayed: dict[int, int
     return inside
 
 
-def route_breakdown(seed: int, dataset: str, reading: str = "paper_literal") -> RouteBreakdown:
+def route_breakdown(
+    seed: int, dataset: str, reading: str = "paper_literal", laser_noise: str = "sick_lms200"
+) -> RouteBreakdown:
     """Drive Fig. 16's route on ``seed`` with ``dataset`` and Albot₁ under ``reading``
     (a name of ``paper.runs.READINGS`` or an ``albot1[...]`` spec); every path integration
-    up to E7 with its cause."""
+    up to E7 with its cause. ``laser_noise``: a ``sim.laser.LASER_NOISE_PRESETS`` name (the
+    experiments use ``sick_lms200``; ``zero`` tells what the laser's noise contributes)."""
     from albot2d.evaluation.metrics.updates import region_labels
     from albot2d.evaluation.paper.runs import PAPER_NOISE, reading_spec
     from albot2d.evaluation.run.experiment import RunSpec, run_experiment
@@ -330,7 +368,7 @@ def route_breakdown(seed: int, dataset: str, reading: str = "paper_literal") -> 
 
     spec = RunSpec(seed=seed, kind="fig6", world_params={}, profile=dataset, noise=PAPER_NOISE,
                    tour_kind="loop", tour_length_m=100.0, route="fig16",
-                   mappers=(spec_name,))  # fmt: skip
+                   laser_noise=laser_noise, mappers=(spec_name,))  # fmt: skip
     result = run_experiment(spec, on_start=on_start, on_frame=on_frame, on_mappers=on_mappers,
                             score=False)  # fmt: skip
     w: PathIntegrationWatcher = state["watcher"]
@@ -341,7 +379,13 @@ def route_breakdown(seed: int, dataset: str, reading: str = "paper_literal") -> 
     regions: Any = region_labels(result.world, xy) if rows else []
     out = [dataclasses.replace(p, region=str(r)) for p, r in zip(rows, regions, strict=True)]
     maps = sum(1 for lm in m.route if lm.frame_index <= last)
-    return RouteBreakdown(seed, dataset, reading, last + 1, maps, tuple(out))
+    counts = [n for f, n in sorted(w.trackable.items()) if f <= last]
+    longest = run = 0
+    for n in counts:
+        run = run + 1 if n < m.params.min_tracked else 0
+        longest = max(longest, run)
+    return RouteBreakdown(seed, dataset, reading, last + 1, maps, tuple(out),
+                          counts.count(0), longest)  # fmt: skip
 
 
 def _seeds(text: str) -> list[int]:
@@ -360,6 +404,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--seeds", default="5,7", help="A-B (inclusive) or A,B,C")
     ap.add_argument("--datasets", nargs="+", default=list(DATASETS), choices=DATASETS)
     ap.add_argument("--readings", nargs="+", default=["paper_literal"])
+    ap.add_argument("--laser-noise", default="sick_lms200",
+                    help="laser noise preset (sick_lms200, the experiments'; zero)")  # fmt: skip
     ap.add_argument("--json", action="store_true", help="print every route's breakdown as JSON")
     args = ap.parse_args(argv)
     rows: list[dict[str, Any]] = []
@@ -367,7 +413,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for reading in args.readings:
             for dataset in args.datasets:
                 for seed in _seeds(args.seeds):
-                    rows.append(route_breakdown(seed, dataset, reading).to_dict())
+                    rows.append(route_breakdown(seed, dataset, reading, args.laser_noise).to_dict())
                     if not args.json:
                         _print_row(rows[-1])
     except InputError as exc:
@@ -394,7 +440,9 @@ def _print_row(r: dict[str, Any]) -> None:
     print(
         f"{r['reading']} {r['dataset']} seed {r['seed']}: {r['views']} views, "
         f"{r['local_maps']} local maps, {r['path_integrations']} path integrations "
-        f"[{causes or '-'}] lost surfaces [{losses or '-'}]{extra}; regions {r['regions']}"
+        f"[{causes or '-'}] lost surfaces [{losses or '-'}]{extra}; "
+        f"{r['no_trackable_views']} views with no trackable surface, longest run with < 4: "
+        f"{r['longest_sparse_run']} views"
     )
 
 
