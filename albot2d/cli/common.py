@@ -30,6 +30,8 @@ __all__ = [
     "add_albot1_keys_to_help",
     "add_export_option",
     "add_json_option",
+    "add_mapper_option",
+    "add_out_option",
     "add_run_options",
     "add_scoring_options",
     "choices",
@@ -202,6 +204,31 @@ def add_export_option(p: argparse.ArgumentParser, names: Sequence[str] | None = 
         metavar="METRES",
         help=f"cell size of --export occupancy maps (default {DEFAULT_MAP_RESOLUTION_M:g})",
     )
+
+
+def add_mapper_option(p: argparse.ArgumentParser, builtins: str, default: str) -> None:
+    """``--mapper NAME ...`` (``builtins``, the built-in names the command takes; any
+    ``albot1[KEY=VALUE,...]``; a plugin ``module:Class``), with every albot1 key listed at
+    the end of ``--help``; ``default`` says what runs without it."""
+    p.add_argument(
+        "--mapper",
+        nargs="+",
+        action="extend",
+        metavar="NAME",
+        help=f"mappers: {builtins}, albot1[KEY=VALUE,...] (keys listed below) or "
+        f"module:Class ({default})",
+    )
+    add_albot1_keys_to_help(p)
+
+
+def add_out_option(p: argparse.ArgumentParser, no_figures: str | None = None) -> None:
+    """``--out DIR`` (required) and, where the command draws figures, ``--no-figures``
+    (its help: what is written then)."""
+    p.add_argument(
+        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
+    )
+    if no_figures is not None:
+        p.add_argument("--no-figures", action="store_true", help=no_figures)
 
 
 def add_json_option(

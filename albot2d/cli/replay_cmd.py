@@ -28,9 +28,10 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
-    add_albot1_keys_to_help,
     add_export_option,
     add_json_option,
+    add_mapper_option,
+    add_out_option,
     add_scoring_options,
     finish,
     prepare_out_dir,
@@ -94,22 +95,14 @@ def register(subparsers: Any) -> None:
         metavar="FILE",
         help="Kümmerle relations file (default: found beside the log)",
     )
-    p.add_argument(
-        "--mapper",
-        nargs="+",
-        action="extend",
-        metavar="NAME",
-        help="mappers: albot1, naive, slam and scan_odometry ([slam] extra), "
-        "albot1[KEY=VALUE,...] (keys listed below) or module:Class "
-        "(default: albot1 naive; truth needs a simulated run)",
+    add_mapper_option(
+        p,
+        "albot1, naive, slam and scan_odometry ([slam] extra)",
+        "default: albot1 naive; truth needs a simulated run",
     )
-    add_albot1_keys_to_help(p)
     p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")
     add_scoring_options(p)
-    p.add_argument(
-        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
-    )
-    p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    add_out_option(p, no_figures="write report.json only")
     p.add_argument(
         "--strict",
         action="store_true",

@@ -21,9 +21,10 @@ from pathlib import Path
 from typing import Any
 
 from albot2d.cli.common import (
-    add_albot1_keys_to_help,
     add_export_option,
     add_json_option,
+    add_mapper_option,
+    add_out_option,
     add_run_options,
     add_scoring_options,
     finish,
@@ -68,26 +69,18 @@ def register(subparsers: Any) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
     add_run_options(p)
-    p.add_argument(
-        "--mapper",
-        nargs="+",
-        action="extend",
-        metavar="NAME",
-        help="mappers: albot1, naive, truth, slam and scan_odometry ([slam] extra), "
-        "albot1[KEY=VALUE,...] (keys listed below) or "
-        "module:Class (default: albot1 naive truth)",
+    add_mapper_option(
+        p,
+        "albot1, naive, truth, slam and scan_odometry ([slam] extra)",
+        "default: albot1 naive truth",
     )
-    add_albot1_keys_to_help(p)
     add_scoring_options(p)
     p.add_argument(
         "--reproduce",
         metavar="report.json",
         help="re-run the run recorded in a report (give only --out with it)",
     )
-    p.add_argument(
-        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
-    )
-    p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    add_out_option(p, no_figures="write report.json only")
     p.add_argument(
         "--animate",
         action="store_true",

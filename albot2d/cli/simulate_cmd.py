@@ -32,7 +32,7 @@ PNG_NAME = "paths.png"
 
 
 def register(subparsers: Any) -> None:
-    from albot2d.cli.common import add_export_option, add_run_options
+    from albot2d.cli.common import add_export_option, add_out_option, add_run_options
 
     p = subparsers.add_parser(
         "simulate",
@@ -40,9 +40,7 @@ def register(subparsers: Any) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
     add_run_options(p)
-    p.add_argument(
-        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
-    )
+    add_out_option(p)
     p.add_argument("--no-png", action="store_true", help=f"do not draw {PNG_NAME}")
     add_export_option(p)
     p.set_defaults(handler=run)
@@ -113,13 +111,7 @@ def run(args: argparse.Namespace) -> int:
         "profile": profile.name,
         "odometry_preset": spec.noise,
         "laser_noise_preset": spec.laser_noise,
-        "tour": {
-            "kind": tour.kind,
-            "requested_length_m": spec.tour_length_m,
-            "requested_as": "minimum" if spec.tour_length_is_minimum else "length",
-            "length_m": tour.length_m,
-            "waypoints": len(tour.waypoints),
-        },
+        "tour": spec.tour_record(tour),
         "max_frames": spec.max_frames,
         **sim.params(),
     }
