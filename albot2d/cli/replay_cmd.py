@@ -25,7 +25,7 @@ import argparse
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from albot2d.cli.common import (
     add_export_option,
@@ -42,6 +42,11 @@ from albot2d.cli.common import (
 from albot2d.cli.options import positive_int
 from albot2d.cli.viewer import add_viewer_options, check_viewer_options, open_viewer
 from albot2d.errors import InputError
+
+if TYPE_CHECKING:
+    from albot2d.cli.options import Subcommands
+    from albot2d.evaluation.run.experiment import ExperimentResult
+    from albot2d.frames import Frame
 
 __all__ = ["DATA_ENV", "find_log", "register", "run"]
 
@@ -65,7 +70,7 @@ def find_log(text: str, data: str | None) -> Path:
     raise InputError(f"{text}: no such log file; tried {', '.join(tried)}{hint}")
 
 
-def register(subparsers: Any) -> None:
+def register(subparsers: Subcommands) -> None:
     p = subparsers.add_parser(
         "replay", help="run the mappers on a CARMEN log or ROS bag and score them against its "
         "relations",
@@ -138,10 +143,10 @@ def run(args: argparse.Namespace) -> int:
     viewer = open_viewer(args, f"albot2d replay {log.name}")
     bar = progress_bar(max_frames, " views", "replay")
 
-    def exports(result: Any) -> list[str]:  # --export: a log has no world
+    def exports(result: ExperimentResult) -> list[str]:  # --export: a log has no world
         return write_exports(out, names, ExportSource([], None, result, options))
 
-    def frame(f: Any, travelled: float) -> None:
+    def frame(f: Frame, travelled: float) -> None:
         if viewer is not None:
             viewer.on_frame(f, travelled)
         bar.set_postfix_str(f"{travelled:.0f} m", refresh=False)
