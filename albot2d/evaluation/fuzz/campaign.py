@@ -38,7 +38,7 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from types import FrameType
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
 
@@ -335,6 +335,10 @@ def _write_json(path: Path, value: Mapping[str, object]) -> None:
     atomic_write_text(path, json.dumps(value, indent=2, allow_nan=False) + "\n")
 
 
+# What ``signal.signal`` takes and gives back.
+_Handler = Callable[[int, FrameType | None], object] | int | signal.Handlers | None
+
+
 class _Interrupts:
     """Ctrl-C during a campaign: the first stops handing out episodes (the running ones
     finish and are written down), the second stops at once; neither interrupts the
@@ -345,7 +349,7 @@ class _Interrupts:
         self._writing = False
         self._deferred = False
         self._note = on_note
-        self._previous: dict[int, Any] | None = None  # signal handlers: typeshed's Any
+        self._previous: dict[int, _Handler] | None = None
 
     def __enter__(self) -> _Interrupts:
         if threading.current_thread() is threading.main_thread():

@@ -46,7 +46,7 @@ __all__ = [
     "finite_or_none",
 ]
 
-#: Any JSON value, as ``json.loads`` returns it.
+#: A JSON value, as ``json.loads`` returns it.
 Json: TypeAlias = "bool | int | float | str | list[Json] | dict[str, Json] | None"
 #: A JSON object.
 JsonObject: TypeAlias = "dict[str, Json]"

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, NotRequired, TypedDict
 
 from albot2d.errors import InputError
-from albot2d.evaluation.paper.jobs import FigureRun, JobSummary, Plain
+from albot2d.evaluation.paper.jobs import FigureRun, JobSummary, PlainObject
 from albot2d.evaluation.paper.outputs import ExperimentOutput, FigureSpec
 from albot2d.evaluation.paper.registry import EXPERIMENTS, PAPER_FIGURES, runs_needed
 from albot2d.evaluation.paper.runs import (
@@ -127,7 +127,7 @@ def _job(
     figure_seed: int,
     readings: tuple[str, ...],
     index: int,
-) -> dict[str, Plain]:
+) -> dict[str, PlainObject]:
     """What a worker runs: one (run, seed) under every reading; the summaries go back as
     plain data (``JobSummary.to_plain``)."""
     run, seed = jobs[index]

@@ -16,9 +16,9 @@ the experiments computed from it).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
-from typing import TypeAlias, cast
+from typing import TypeAlias, TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,6 +45,7 @@ __all__ = [
     "MarkSummary",
     "PathIntegrationCauses",
     "Plain",
+    "PlainObject",
     "Snapshot",
     "Updates",
     "ViewAt",
@@ -58,10 +59,17 @@ Plain: TypeAlias = (
     "| dict[str, Plain] | None"
 )
 PlainObject: TypeAlias = "dict[str, Plain]"
+T = TypeVar("T")
 
 
 def _obj(value: Plain) -> Mapping[str, Plain]:
     return cast("Mapping[str, Plain]", value)
+
+
+def _make(cls: Callable[..., T], value: Plain) -> T:
+    """A frozen dataclass from the dict of its fields ``asdict`` made of it (plain data
+    from a worker of this very code: every field there, of its type)."""
+    return cls(**_obj(value))
 
 
 # -- one mapper's map at a moment ----------------------------------------------------------
@@ -267,9 +275,7 @@ class JobSummary:
             marks={k: _mark_summary(_obj(v)) for k, v in _obj(d["marks"]).items()},
             path_integration_causes=_causes(_obj(d["path_integration_causes"])),
             map_quality_at_marks={
-                mark: {n: MapQualityAt(cast("float | None", _obj(q)["accuracy_m_p95"]),
-                                       cast(int, _obj(q)["surfaces"]))
-                       for n, q in _obj(per).items()}
+                mark: {n: _make(MapQualityAt, q) for n, q in _obj(per).items()}
                 for mark, per in quality.items()
             },
             reading=cast(str, d["reading"]), reading_mapper=cast(str, d["reading_mapper"]),
@@ -293,8 +299,13 @@ def _to_plain(value: object) -> Plain:
     if isinstance(value, Revisits):
         return {"min_gap_maps": value.min_gap_maps,
                 "events": [cast(PlainObject, asdict(e)) for e in value.events]}  # fmt: skip
-    if hasattr(value, "__dataclass_fields__"):
-        return {f.name: _to_plain(getattr(value, f.name)) for f in fields(value)}  # type: ignore[arg-type]
+    if isinstance(value, MarkCounts | MapQualityAt):
+        return cast(PlainObject, asdict(value))
+    if isinstance(
+        value, JobSummary | Albot1Result | MapperResult | MarkSummary | Updates
+        | PathIntegrationCauses | FigureRun | Snapshot | MapAt | ViewAt,
+    ):  # fmt: skip
+        return {f.name: _to_plain(getattr(value, f.name)) for f in fields(value)}
     if isinstance(value, Mapping):
         return {str(k): _to_plain(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
@@ -303,12 +314,8 @@ def _to_plain(value: object) -> Plain:
 
 
 def _mapper_fields(d: Mapping[str, Plain]) -> tuple[ProcessCounts, EndPoseError | None]:
-    counts = dict(_obj(d["counts"]))
     end = d["end_pose_error"]
-    return (
-        ProcessCounts(**counts),  # type: ignore[arg-type]
-        None if end is None else EndPoseError(**cast("dict[str, float]", end)),
-    )
+    return _make(ProcessCounts, d["counts"]), None if end is None else _make(EndPoseError, end)
 
 
 def _mapper_result(d: Mapping[str, Plain]) -> MapperResult:
@@ -321,22 +328,21 @@ def _albot1_result(d: Mapping[str, Plain]) -> Albot1Result:
     return Albot1Result(
         counts, end,
         homing=tuple(_homing_stop(_obj(h)) for h in cast("list[Plain]", d["homing"])),
-        homing_summary=HomingSummary(**cast("dict[str, float]", d["homing_summary"])),  # type: ignore[arg-type]
+        homing_summary=_make(HomingSummary, d["homing_summary"]),
         revisits=None if rev is None else Revisits(
             cast(int, _obj(rev)["min_gap_maps"]),
-            tuple(RevisitEvent(**cast("dict[str, int]", e))
-                  for e in cast("list[Plain]", _obj(rev)["events"])),
+            tuple(_make(RevisitEvent, e) for e in cast("list[Plain]", _obj(rev)["events"])),
         ),
-        egocentric=None if ego is None else EgocentricQuality(**cast("dict[str, float]", ego)),  # type: ignore[arg-type]
+        egocentric=None if ego is None else _make(EgocentricQuality, ego),
     )  # fmt: skip
 
 
 def _homing_stop(d: Mapping[str, Plain]) -> HomingStop:
     ego = d["egocentric"]
     return HomingStop(
-        HomingResult(**cast("dict[str, float]", d["homing"])),  # type: ignore[arg-type]
+        _make(HomingResult, d["homing"]),
         cast(float, d["travelled_m"]),
-        None if ego is None else EgocentricQuality(**cast("dict[str, float]", ego)),  # type: ignore[arg-type]
+        None if ego is None else _make(EgocentricQuality, ego),
     )
 
 
@@ -344,13 +350,14 @@ def _mark_summary(d: Mapping[str, Plain]) -> MarkSummary:
     return MarkSummary(
         cast(float, d["true_travelled_m"]), cast(int, d["frame"]),
         cast(str, d["true_path_sha256"]),
-        {k: MarkCounts(**cast("dict[str, int]", v)) for k, v in _obj(d["counts"]).items()},
+        {k: _make(MarkCounts, v) for k, v in _obj(d["counts"]).items()},
     )  # fmt: skip
 
 
 def _causes(d: Mapping[str, Plain]) -> PathIntegrationCauses:
-    return PathIntegrationCauses(
-        *(tuple(cast("list[Plain]", d[f.name])) for f in fields(PathIntegrationCauses))  # type: ignore[arg-type]
+    return _make(
+        PathIntegrationCauses,
+        {f.name: tuple(cast("list[Plain]", d[f.name])) for f in fields(PathIntegrationCauses)},
     )
 
 

@@ -14,7 +14,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TypedDict
+from typing import Literal, TypedDict
 
 import numpy as np
 
@@ -135,6 +135,11 @@ def room_exit_rows(update: Updates, after: int = 2) -> list[int]:
     return list(range(rows[0], last + 1))
 
 
+_Count = Literal[
+    "views", "updates", "triangulations", "path_integrations", "views_with_no_tracked_surface"
+]
+
+
 class _RoomExit(TypedDict):
     rows: list[int]
     methods: list[str]
@@ -182,8 +187,8 @@ class FIG15:
             seq = method_sequences(_updates(j).methods)
             n_seq.append(sum(1 for _, r in seq if r >= 2))
 
-        def col(key: str) -> list[float | None]:
-            return [e[key] for e in exits]  # type: ignore[literal-required]
+        def col(key: _Count) -> list[float | None]:
+            return [e[key] for e in exits]
 
         any_pi = [e["path_integrations"] > 0 for e in exits]
         switch = [bool(e["triangulation_then_2plus_pi"]) for e in exits]
