@@ -4,15 +4,16 @@ A campaign's episode ``k`` is fully described by the campaign parameters and ``k
 seed is child ``k`` of the campaign seed (``SeedSequence(seed).spawn``, built directly as
 ``SeedSequence(seed, spawn_key=(k,))``), from which it draws the world kind, the world's
 size, the tour's minimum length and the run seed (the ``RunSpec`` seed: world and
-simulator). Nothing else travels to a worker, so results never depend on the number of
-workers or the order they finish in.
+simulator; ``record.EpisodeSpec.draw``). Nothing else travels to a worker, so results
+never depend on the number of workers or the order they finish in.
 
 ``run_episode`` runs the experiment (``run_experiment``, exactly as ``albot2d run`` does
 with the same ``RunSpec``) with the invariant checks attached (``albot2d.evaluation.
-invariants``), scores only the record's metrics (``albot2d.evaluation.fuzz.episode_metrics``)
-and returns an :class:`EpisodeOutcome`: the JSON record for the campaign's
-``episodes.jsonl`` and, for a failing episode, the reproducer document (a fully scored
-report.json that ``albot2d run --reproduce`` replays, plus the world JSON and the failure).
+checks``; what they find is a ``record.CheckOutcome``), scores only the record's metrics
+(``albot2d.evaluation.fuzz.episode_metrics``) and returns an :class:`EpisodeOutcome`: the
+typed :class:`EpisodeRecord` of the campaign's ``episodes.jsonl`` and, for a failing
+episode, the reproducer document (a fully scored report.json that ``albot2d run
+--reproduce`` replays, plus the world JSON and the failure).
 ``run_checked`` also returns the run itself (scored in full unless asked otherwise);
 ``crash_outcome`` builds the outcome of an episode that crashed, also outside
 ``run_episode`` (a worker process that died), with a reproducer that replays like any
@@ -70,6 +71,7 @@ if TYPE_CHECKING:
 __all__ = [
     "REPRODUCE_HOW",
     "EpisodeOutcome",
+    "EpisodeRecord",
     "EpisodeSpec",
     "crash_outcome",
     "episode_seed",
