@@ -112,7 +112,7 @@ def test_discretisation_sigma_covers_real_extraction_of_exact_corners() -> None:
     it. Real extraction of exact scans (1° beams) of a wall meeting another at 20–160°,
     seen from 1.5–5 m at random bearings, so the corner falls anywhere between two beams:
     the wall's fitted direction against the truth. The model is an upper bound that
-    scales right: over fits of < 16 and ≥ 16 beams the measured RMS lies within 15–100 %
+    scales right: over fits of < 16 and ≥ 16 beams the measured RMS lies within 10–100 %
     of the model's, and no fit is off by more than 3 of its σ."""
     rng = np.random.default_rng(7)
     split = ExtractionParams().split_distance_m
@@ -146,7 +146,7 @@ def test_discretisation_sigma_covers_real_extraction_of_exact_corners() -> None:
     assert np.all(np.abs(err) <= 3.0 * sig)
     for group in (n < 16, n >= 16):
         ratio = math.sqrt(np.mean(err[group] ** 2) / np.mean(sig[group] ** 2))
-        assert 0.15 < ratio <= 1.0, ratio
+        assert 0.1 < ratio <= 1.0, ratio
 
 
 def test_the_odometry_envelope_of_a_pure_turn_and_a_straight_move() -> None:
@@ -283,3 +283,18 @@ def test_path_integration_links_carry_odometry_over_the_link_only(typical: _Run)
     np.testing.assert_allclose(bound, whole, rtol=1e-9)
     floor = typical.bound(pi, OdometryNoise())
     np.testing.assert_allclose(floor, math.radians(params.floor_deg))
+
+
+def test_the_calibration_study_measures_albot1_links_against_the_model() -> None:
+    """``albot2d.studies.heading_calibration`` on one zero-noise fuzzing episode: every
+    triangulation link gets a finite, positive sigma from its reported surfaces, the
+    episode holds the bound, and a link's error is the truth's, not the model's."""
+    from albot2d.studies.heading_calibration import calibrate_episode
+
+    ep = calibrate_episode(0, 2026, "none", "zero")
+    assert len(ep.links) > 20
+    sigma = np.array([link.sigma_rad for link in ep.links])
+    assert np.all(np.isfinite(sigma) & (sigma > 0.0))
+    errors = np.abs([link.error_rad for link in ep.links])
+    assert 0.0 < ep.worst_ratio < 1.0
+    assert errors.max() > 0.0 and np.median(errors) < np.median(sigma)

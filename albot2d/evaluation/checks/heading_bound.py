@@ -72,6 +72,7 @@ __all__ = [
     "heading_error_bound",
     "heading_errors",
     "link_errors",
+    "link_heading_variance",
     "odometry_heading_envelope",
 ]
 
@@ -316,10 +317,14 @@ def _triangulation_variance(
         return float(1.0 / np.sum(1.0 / worst))
 
 
-def _used_variance(local: Surfaces, current: Surfaces, laser: LaserNoise, split: float) -> float:
-    """The heading variance of a link triangulated from the surface pairs it reported: each
-    pair's heading is the difference of its two fits, the pairs averaged with
-    inverse-variance weights."""
+def link_heading_variance(
+    local: Surfaces, current: Surfaces, laser: LaserNoise, split_distance_m: float
+) -> float:
+    """The heading variance (rad²) of a link triangulated from the surface pairs it reported
+    (``local[i]`` in the local map, ``current[i]`` in the view): each pair's heading is the
+    difference of its two fits (the laser's noise and its discrete sampling in each), the
+    pairs averaged with inverse-variance weights."""
+    split = split_distance_m
     var = (
         direction_sigma(local, laser) ** 2 + discretisation_sigma(local, split) ** 2
         + direction_sigma(current, laser) ** 2 + discretisation_sigma(current, split) ** 2
@@ -366,7 +371,7 @@ def link_errors(
         lm, prev = route[k], route[k - 1]
         a, b = int(rows[k - 1]), int(rows[k])
         if lm.method == "triangulation" and used is not None and len(used[k - 1][0]):
-            var[k] = _used_variance(*used[k - 1], laser, split)
+            var[k] = link_heading_variance(*used[k - 1], laser, split)
         elif lm.method == "triangulation":
             rel = between_arrays(truth[a], truth[b])
             var[k] = _triangulation_variance(
