@@ -13,16 +13,19 @@ error, and errors of successive links add up as a random walk:
   ``σ_dir = σ_p √(12 / n) / L`` (``direction_sigma``). The laser's discrete sampling,
   which remains with exact ranges: a beam of the next face within extraction's split
   distance ``e`` of the line joins the fit at an end, at most ``δ_max = e / (1 - h)`` off
-  the wall (``h`` the end beam's leverage), tilting it by ``6 δ (n-1) / (n (n+1) L)``,
-  its offset uniform in where the corner falls between two beams: ``σ_disc² = 2 ×
-  (6 δ_max (n-1) / (n (n+1) L))² / 3`` for the two ends (``discretisation_sigma``; ``n``
-  is the beams the laser's angular resolution puts on ``L`` at that range and incidence).
+  the wall (``h`` the end beam's leverage), tilting it by ``g δ``,
+  ``g = 6 (n-1) / (n (n+1) L)``; where the corner falls between two beams is uniform, so
+  the offset is uniform over the beam spacing ``s = r Δφ`` at that end's range, and kept
+  only within ``δ_max``: ``σ_disc² = g² Σ_ends min(s, δ_max)³ / (3 s)``
+  (``discretisation_sigma``; ``n`` is the beams the laser's angular resolution ``Δφ`` puts
+  on ``L`` at that range and incidence).
   A surface's heading is the difference of two such fits (``σ² = σ_local² +
   σ_current²``, each ``σ_dir² + σ_disc²``), and ``m`` of them are
-  averaged with inverse-variance weights (``1/σ² = Σ 1/σ_i²``). Which surfaces were used is
-  not recorded, so the bound takes the ``m`` *least* precise of the surfaces seen in both
-  views (found here with the true relative pose) — ``m`` the link's recorded tracked count:
-  no ``m``-subset does worse.
+  averaged with inverse-variance weights (``1/σ² = Σ 1/σ_i²``). The surfaces are those
+  the mapper reports for the link (``used``: Albot1's ``on_localise`` hook, recorded by the
+  fuzz episode and by ``ReferenceLinks``); given none, the bound takes the ``m`` *least*
+  precise of the surfaces seen in both views (found here with the true relative pose) —
+  ``m`` the link's recorded tracked count: no ``m``-subset does worse.
 - a **path-integration** link has odometry's error over that link only: ``k`` standard
   deviations of its random heading error over the true motion of the link, plus its
   systematic part at full strength (``odometry_heading_envelope``).
@@ -203,11 +206,13 @@ def discretisation_sigma(surfaces: Surfaces, split_distance_m: float) -> FloatAr
     a beam at offset ``δ`` at an end has residual ``δ (1 - h)``, ``h`` its leverage
     (``_end_leverage``), and tilts the line by ``g δ``, ``g = 6 (n-1) / (n (n+1) L)``; so
     ``δ ≤ δ_max = e / (1 - h)``. Where a corner falls between two beams is uniform, so the
-    offset of the first beam past it is uniform over the beam spacing across the line,
-    ``s``; kept only when within ``δ_max``, its second moment ``min(s, δ_max)³ / (3 s)``
-    is largest, ``δ_max² / 3``, when ``s = δ_max`` — taken, since ``s`` depends on the
-    neighbouring face, which the view need not show. Each of the two ends adds
-    ``g² δ_max² / 3``. Surfaces not from a scan (no beams): 0; fewer than three beams: a
+    offset of the first beam past it is uniform over the beam spacing ``s``: taken as the
+    arc between two beams at that end's range, ``s = r Δφ``, with the laser's angle between
+    beams ``Δφ`` read from the surface itself (the bearings of its end beams over its
+    ``n - 1`` steps). Kept only when within ``δ_max``, its second moment is
+    ``E[δ²] = min(s, δ_max)³ / (3 s)``. A stray is assumed at both ends, whichever kind of
+    end (the view need not show the neighbouring face): ``σ² = g² (E[δ²]_0 + E[δ²]_1)``.
+    Surfaces not from a scan (no beams): 0; fewer than three beams: a
     line through two beams fits any stray, so ``inf``."""
     beams = surfaces.beams
     from_scan = beams[:, 0] >= 0
@@ -437,15 +442,21 @@ def check_heading_error_bound(
 class ReferenceLinks:
     """An ``on_frame``-style hook running Albot1 (default parameters) on the same frames,
     so a mapper without a route map of its own is held to the links a view-based
-    localiser finds on that run (``route``)."""
+    localiser finds on that run (``route``) and the surfaces it localised each from
+    (``used``)."""
 
     def __init__(self, mapper: Albot1 | None = None) -> None:
         self.mapper = mapper if mapper is not None else Albot1()
         self.used: list[tuple[Surfaces, Surfaces]] = []
+        self._chained = self.mapper.on_localise
         self.mapper.on_localise = self._localised
 
     def _localised(self, localisation: Localisation) -> None:
+        """The surface pairs each local map was localised from (``used``), then any hook
+        the mapper already had."""
         self.used.append((localisation.tracked.local, localisation.tracked.current))
+        if self._chained is not None:
+            self._chained(localisation)
 
     def __call__(self, frame: Frame, travelled_m: float = 0.0) -> None:
         self.mapper.observe(frame)
