@@ -33,6 +33,7 @@ __all__ = [
     "STATUSES",
     "CheckMetrics",
     "CheckOutcome",
+    "DrawParams",
     "EpisodeError",
     "EpisodeMetrics",
     "EpisodeOutcome",
