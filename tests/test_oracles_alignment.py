@@ -191,7 +191,7 @@ def test_ape_result_is_evos_on_a_square_and_albot2ds_on_a_straight_line() -> Non
     assert got.trans_m_max == pytest.approx(0.3, abs=1e-12)
     assert got.poses == 4
     line = np.column_stack([np.arange(5.0), np.zeros(5), np.zeros(5)])
-    shifted = line + [0.0, 0.2, 0.0]
+    shifted = line + np.array([0.0, 0.2, 0.0])
     got = ape_result(np.arange(5.0), shifted, line)
     assert got is not None
     assert got.implementation == "albot2d"

@@ -68,7 +68,7 @@ def test_facing_side_by_each_test_worked_in_the_robots_frame(test: str, facing_y
         segs = _world([c[0] for c in cases])
     else:
         robot, cases = Pose(1.0, -2.0, 0.0), FACING_CASES
-        segs = np.array([c[0] for c in cases]) + [1.0, -2.0, 1.0, -2.0]
+        segs = np.array([c[0] for c in cases]) + np.array([1.0, -2.0, 1.0, -2.0])
     want = [c[col] for c in cases]
     assert facing_mask(segs, robot, test).tolist() == want  # type: ignore[arg-type]
     assert facing_seen_mask(segs, robot, test, "any").tolist() == want  # type: ignore[arg-type]
