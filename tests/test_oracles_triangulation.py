@@ -1,0 +1,146 @@
+"""Triangulation's options against poses worked out by hand.
+
+A view seen from a known pose ``T`` is the local map's surfaces moved by ``T⁻¹`` (by hand:
+``R(−θ)(p − t)``). An affordance from a pair of matching endpoints is ``p_local −
+R(θ) p_view``: exactly ``T`` for a true pair, and ``T + δ`` when the local map holds that
+end displaced by ``δ`` (an occluded end cut short, or an observation shifted along its
+own line). So each option's choice of endpoint and of affordance has a known answer:
+
+- every option combination (the array path, reached by non-default options or by nine
+  surfaces) recovers ``T`` from an exact view;
+- ``position_endpoint``: ``"both"`` and ``"local_key"`` ignore a local end that is
+  occluded (and displaced); ``"current_real"`` uses it when it is the nearer: ``T + δ``;
+- ``choose``: ``"nearest_to_pi"`` takes the affordance nearest path integration,
+  ``"fitness"`` the long wall's (its fitness worked out below).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from albot2d.geometry import Pose
+from albot2d.mapping.albot1.triangulation import TriangulationParams, pose_affordances, triangulate
+from albot2d.perception.surfaces import Surfaces
+
+T = Pose(0.7, -0.4, math.radians(25.0))
+ROOM = np.array(
+    [
+        [3.0, -2.0, 3.0, 2.0],
+        [2.5, 2.5, -1.0, 2.5],
+        [-1.5, 2.0, -1.5, -1.0],
+        [-1.0, -2.5, 2.0, -2.5],
+        [4.0, -1.0, 5.0, 0.5],
+        [1.0, 3.5, 0.0, 4.5],
+        [-2.5, -0.5, -3.0, -2.0],
+        [0.5, -3.5, 1.5, -4.0],
+        [2.0, 1.0, 2.0, 1.6],
+    ]
+)
+
+
+def in_view(segs: np.ndarray, pose: Pose) -> np.ndarray:
+    """Segments of the local map as seen from ``pose``: ``R(−θ)(p − t)`` by hand."""
+    c, s = math.cos(pose.theta), math.sin(pose.theta)
+    pts = segs.reshape(-1, 2) - [pose.x, pose.y]
+    local = np.column_stack([c * pts[:, 0] + s * pts[:, 1], -s * pts[:, 0] + c * pts[:, 1]])
+    return local.reshape(-1, 4)
+
+
+def assert_pose(got: Pose | None, want: Pose, atol: float = 1e-9) -> None:
+    assert got is not None
+    assert (got.x, got.y) == pytest.approx((want.x, want.y), abs=atol)
+    assert math.remainder(got.theta - want.theta, 2 * math.pi) == pytest.approx(0.0, abs=atol)
+
+
+PI = Pose(T.x + 0.05, T.y - 0.03, T.theta + math.radians(1.0))
+
+OPTIONS = [
+    {},
+    {"choose": "fitness"},
+    {"heading": "inlier_mean"},
+    {"heading": "selected"},
+    {"position_endpoint": "current_real"},
+    {"position_endpoint": "local_key"},
+    {"prefer_nearer_endpoint": False},
+    {"use_outlier_heuristic": False},
+    {"choose": "fitness", "heading": "inlier_mean", "use_outlier_heuristic": False},
+]
+
+
+@pytest.mark.parametrize("options", OPTIONS, ids=lambda o: "-".join(map(str, o.values())))
+@pytest.mark.parametrize("count", [4, 9])
+def test_every_option_recovers_the_true_pose_from_an_exact_view(options: dict, count: int) -> None:
+    params = TriangulationParams(**options)
+    local = Surfaces.from_segments(ROOM[:count])
+    current = Surfaces.from_segments(in_view(ROOM[:count], T))
+    assert_pose(triangulate(local, current, PI, params), T)
+
+
+def _cut_wall(robot: Pose) -> tuple[Surfaces, Surfaces]:
+    """One wall x = 3, y ∈ [−2, 2]: seen whole in the view, but in the local map its
+    second end was occluded and stops 0.5 m short, at (3, 1.5)."""
+    local = Surfaces.from_segments([[3.0, -2.0, 3.0, 1.5]], [[False, True]])
+    current = Surfaces.from_segments(in_view(np.array([[3.0, -2.0, 3.0, 2.0]]), robot))
+    return local, current
+
+
+@pytest.mark.parametrize(
+    ("endpoint", "prefer_nearer", "shift_y"),
+    [
+        ("both", True, 0.0),  # the local end is occluded: only end 0 is usable
+        ("local_key", True, 0.0),  # the local key end is its real one, end 0
+        ("current_real", True, -0.5),  # end 1 is real in the view and the nearer
+        ("current_real", False, 0.0),  # end 0 first when nearness is not preferred
+    ],
+)
+def test_which_endpoint_affords_the_position(
+    endpoint: str, prefer_nearer: bool, shift_y: float
+) -> None:
+    """From (0.7, 0.6) the wall's end (3, 2) is 2.69 m away and (3, −2) 3.47 m. Using the
+    local map's cut end (3, 1.5) with the view's (3, 2) places the robot 0.5 m short:
+    (0.7, 0.1); the direction (and so the heading) is the same either way."""
+    robot = Pose(0.7, 0.6, math.radians(25.0))
+    local, current = _cut_wall(robot)
+    params = TriangulationParams(
+        position_endpoint=endpoint,  # type: ignore[arg-type]
+        prefer_nearer_endpoint=prefer_nearer,
+    )
+    want = Pose(robot.x, robot.y + shift_y, robot.theta)
+    assert_pose(triangulate(local, current, robot, params, gate=(1.0, 5.0)), want)
+    aff = pose_affordances(local, current, robot.theta, params)
+    assert len(aff.poses) == 1
+    np.testing.assert_allclose(aff.poses[0], [want.x, want.y, want.theta], atol=1e-9)
+
+
+def test_pose_affordances_pairs_swapped_ends_when_a_surface_is_seen_reversed() -> None:
+    """The view lists the wall's ends the other way round (as after turning round): the
+    direction differs by π, resolved by the heading hint, and end 0 of the local map
+    pairs with end 1 of the view: still the true pose, for each surface."""
+    segs = ROOM[:4]
+    view = in_view(segs, T)[:, [2, 3, 0, 1]]
+    aff = pose_affordances(Surfaces.from_segments(segs), Surfaces.from_segments(view), T.theta)
+    assert aff.surface.tolist() == [0, 1, 2, 3]
+    np.testing.assert_allclose(aff.poses, np.tile([T.x, T.y, T.theta], (4, 1)), atol=1e-9)
+
+
+def test_fitness_prefers_the_long_wall_where_path_integration_prefers_the_short() -> None:
+    """Two surfaces: a 4 m wall (x = 3) seen exactly, affording T; a 0.5 m ledge
+    (y = 2.5) whose local observation is shifted 0.3 m along itself, affording
+    T + (0.3, 0). Path integration at T + (0.25, 0): the ledge's affordance is 0.05 m
+    from it, the wall's 0.25 m, so ``nearest_to_pi`` takes the ledge. Fitness
+    length·(400 − d)·(5 − Δθ)/max(range, 2000) in mm and degrees, d the distance of the
+    view's end moved by path integration from the local end (0.25 m for the wall, 0.05 m
+    for the ledge): the wall's 4000·150·5/r > the ledge's 500·350·5/r' for any ranges
+    of 2–3.5 m, so ``fitness`` takes the wall: T exactly."""
+    local = np.array([[3.0, -2.0, 3.0, 2.0], [1.3, 2.5, 0.8, 2.5]])
+    truth = np.array([[3.0, -2.0, 3.0, 2.0], [1.0, 2.5, 0.5, 2.5]])
+    current = Surfaces.from_segments(in_view(truth, T))
+    pi = Pose(T.x + 0.25, T.y, T.theta)
+    local_s = Surfaces.from_segments(local)
+    nearest = triangulate(local_s, current, pi, TriangulationParams(choose="nearest_to_pi"))
+    assert_pose(nearest, Pose(T.x + 0.3, T.y, T.theta))
+    fitness = triangulate(local_s, current, pi, TriangulationParams(choose="fitness"))
+    assert_pose(fitness, T)
