@@ -197,3 +197,41 @@ def test_ape_result_is_evos_on_a_square_and_albot2ds_on_a_straight_line() -> Non
     assert got.implementation == "albot2d"
     assert got.trans_m_max == pytest.approx(0.0, abs=1e-12)
     assert got.poses == 5
+
+
+def test_ape_result_without_evo_is_albot2ds_ape(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where evo is not installed (``albot2d`` without the eval extra) report.json's APE
+    is albot2d's own: the radial 0.3 m errors of the square, by hand."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "evo.core.geometry", None)  # import fails
+    ref = np.column_stack([SQUARE, HEADINGS])
+    centre = SQUARE.mean(axis=0)
+    out = (SQUARE - centre) / np.linalg.norm(SQUARE - centre, axis=1)[:, None]
+    est = np.column_stack([SQUARE + 0.3 * out, HEADINGS])
+    got = ape_result(np.arange(4.0), est, ref)
+    assert got is not None
+    assert got.implementation == "albot2d"
+    assert got.trans_m_max == pytest.approx(0.3, abs=1e-12)
+
+
+def test_evo_pose_errors_reject_a_matrix_that_is_not_a_rotation() -> None:
+    """evo's own check (``lie.is_so3``) and message, on all poses at once: a pose whose
+    rotation part is scaled by 1.1 is no rotation."""
+    pytest.importorskip("evo", reason="evo is the [eval] extra (also in the test extra)")
+    from types import SimpleNamespace
+
+    from evo.core.lie_algebra import LieAlgebraException
+
+    from albot2d.evaluation.metrics.alignment import evo_pose_errors
+
+    good = np.tile(np.eye(4), (2, 1, 1))
+    bad = good.copy()
+    bad[1, :3, :3] *= 1.1
+    ref = SimpleNamespace(positions_xyz=np.zeros((2, 3)), poses_se3=list(good))
+    est = SimpleNamespace(positions_xyz=np.zeros((2, 3)), poses_se3=list(bad))
+    with pytest.raises(LieAlgebraException, match=r"^matrix is not a valid SO\(3\) group element$"):
+        evo_pose_errors(est, ref)
+    trans, angle = evo_pose_errors(ref, ref)
+    np.testing.assert_array_equal(trans, [0.0, 0.0])
+    np.testing.assert_array_equal(angle, [0.0, 0.0])
