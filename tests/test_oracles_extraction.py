@@ -80,3 +80,33 @@ def test_a_symmetric_room_gives_symmetric_surfaces(backend: str) -> None:
     s = extract_surfaces(scan, backend=backend)
     m = extract_surfaces(mirror, backend=backend)
     assert s.beams.tolist() == (180 - m.beams[::-1, ::-1]).tolist()
+
+
+def _crossing(angle: float, y_line: float) -> np.ndarray:
+    """Where the beam at ``angle`` from the origin meets the line y = ``y_line``."""
+    return np.array([y_line / math.tan(angle), y_line])
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_real_end_at_a_range_jump_is_uncertain_by_its_gap(backend: str) -> None:
+    """A box (x ∈ [1.7, 2.3], y ∈ [−1.3, −0.7]) in front of a wall x = 4: its top face
+    y = −0.7, seen at a grazing angle, ends at the corner (2.3, −0.7) with the next beam
+    on the wall behind. That end is real (the neighbour is farther, off the line) but
+    lies anywhere between the last hit and where the next beam crosses the face's line:
+    ``uncertain`` exactly when that gap (worked out here from the beam angles and the
+    true face y = −0.7; the fitted line differs from it by under 2 mm, moving the
+    crossing by under 1 mm) exceeds ``max_endpoint_gap_m``."""
+    from tests.perception_helpers import box
+
+    world = np.vstack([np.array([[4.0, -6.0, 4.0, 6.0]]), box(2.0, -1.0, 0.3, 0.3)])
+    scan = scan_of(world)
+    default = extract_surfaces(scan, ExtractionParams(), backend=backend)
+    top = int(np.flatnonzero(np.abs(default.segments[:, [1, 3]] + 0.7).max(axis=1) < 0.01)[0])
+    last = default.beams[top, 1]
+    gap = float(np.hypot(*(_crossing(scan.angles[last + 1], -0.7) - default.segments[top, 2:])))
+    assert 0.02 < gap < 0.2
+    for limit, want in ((gap - 0.005, True), (gap + 0.005, False)):
+        got = extract_surfaces(scan, ExtractionParams(max_endpoint_gap_m=limit), backend=backend)
+        assert got.occluded[top].tolist() == [False, False]
+        assert got.uncertain is not None
+        assert got.uncertain[top].tolist() == [False, want]

@@ -199,3 +199,35 @@ def test_rtsv_after_a_known_motion_keeps_ids_and_local_geometry() -> None:
     same, _ = rtsv(survivors, view1, Pose())
     assert same.ids.tolist() == [10]
     np.testing.assert_array_equal(same.local.segments, view0.segments[:1])
+
+
+def test_fallback_leaves_out_occluded_ends_and_measures_each_pair() -> None:
+    """Fallback distances per pair, occluded ends left out. P0 (−2, 0.3)–(2, 0.3) has
+    only its second end real, and it lies on V0 (1, 0.3)–(3, 0.3) (whose second end is
+    occluded): 0 m. P1 (10, 0)–(14, 0) is 6 m from V1 (20, 0.3)–(22, 0.3): no match.
+    P2 (0, 5)–(4, 5) has its occluded first end on V2 (−1, 5.05)–(1, 5.05), but that end
+    does not count: V2's real end (−1, 5.05) is 1.001 m from P2, P2's real end 3 m from
+    V2: no match."""
+    real_second = [True, False]
+    pred = Surfaces.from_segments(
+        [[-2.0, 0.3, 2.0, 0.3], [10.0, 0.0, 14.0, 0.0], [0.0, 5.0, 4.0, 5.0]],
+        [real_second, real_second, real_second],
+    )
+    view = Surfaces.from_segments(
+        [[1.0, 0.3, 3.0, 0.3], [20.0, 0.3, 22.0, 0.3], [-1.0, 5.05, 1.0, 5.05]],
+        [[False, True], [False, True], [False, True]],
+    )
+    fallback = TrackingParams(line_distance_fallback=True)
+    pi, vj, dist, _ = match_surfaces(pred, view, fallback, backend="numpy")
+    assert (pi.tolist(), vj.tolist()) == ([0], [0])
+    assert dist[0] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_nothing_to_match_gives_four_empty_arrays(backend: str) -> None:
+    for got in (
+        match_surfaces(PRED, VIEW, None, [False] * 4, backend=backend),
+        match_surfaces(Surfaces.empty(), VIEW, backend=backend),
+    ):
+        assert [len(x) for x in got] == [0, 0, 0, 0]
+        assert got[0].dtype == got[1].dtype == np.int64
