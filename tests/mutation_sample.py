@@ -79,14 +79,22 @@ def _module(meta: Path, root: Path) -> str:
 
 
 def sample(
-    root: Path, per_module: int, seed: int, skip: tuple[str, ...] = (), named: bool = True
+    root: Path,
+    per_module: int,
+    seed: int,
+    skip: tuple[str, ...] = (),
+    named: bool = True,
+    exclude: frozenset[str] = frozenset(),
 ) -> list[str]:
     """``per_module`` mutant names of each mutated module (sorted, then drawn), skipping
-    modules whose path contains any of ``skip``; the named mutants appended if ``named``."""
+    modules whose path contains any of ``skip`` and the mutants in ``exclude`` (those of
+    earlier samples, whose survivors were looked at); the named mutants appended if
+    ``named``."""
     rng = random.Random(seed)
     names: list[str] = []
     for meta in _metas(root, skip):
         keys = sorted(json.loads(meta.read_text(encoding="utf-8"))["exit_code_by_key"])
+        keys = [k for k in keys if k not in exclude]
         names += rng.sample(keys, min(per_module, len(keys)))
     return names + [n for n in NAMED if named and n not in names]
 
@@ -141,9 +149,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--skip", action="append", default=[], help="module path part to leave out")
     parser.add_argument("--without-named", action="store_true", help="the random draw only")
     parser.add_argument("--report", action="store_true", help="score the sample, not list it")
+    parser.add_argument(
+        "--exclude-sample",
+        action="append",
+        default=[],
+        metavar="SEED:PER_MODULE",
+        help="leave out the mutants of that earlier random draw (repeatable)",
+    )
     args = parser.parse_args(argv)
+    exclude: set[str] = set()
+    for spec in args.exclude_sample:
+        seed_text, _, per_text = spec.partition(":")
+        exclude |= set(sample(args.root, int(per_text), int(seed_text), named=False))
     names = sample(
-        args.root, args.per_module, args.seed, tuple(args.skip), named=not args.without_named
+        args.root,
+        args.per_module,
+        args.seed,
+        tuple(args.skip),
+        named=not args.without_named,
+        exclude=frozenset(exclude),
     )
     if not args.report:
         print("\n".join(names))
