@@ -184,3 +184,44 @@ def test_forward_view_polygon_is_the_buffer_clipped_at_the_lateral_axis(
     # Nothing behind the robot: a point 0.3 m behind is outside, 0.3 m ahead inside.
     assert not got.contains(shapely.Point(robot.x - 0.3 * c, robot.y - 0.3 * s))
     assert got.contains(shapely.Point(robot.x + 0.3 * c, robot.y + 0.3 * s))
+
+
+@pytest.mark.parametrize("backend", SHARE_BACKENDS)
+def test_a_view_surface_through_the_viewpoint_hides_nothing(backend: str) -> None:
+    """A view surface passing through the robot itself (local y ∈ [−1, 1] at x = 0) is
+    met by every sight line at the robot, not in front of it: a surface 0.3 m ahead is
+    not seen through it, though it lies within the 0.5 m allowed beyond."""
+    view = _world([(0.0, -1.0, 0.0, 1.0)])
+    segs = _world([(0.3, -0.1, 0.3, 0.1)])
+    np.testing.assert_array_equal(visible_share(segs, view, ROBOT, 0.5, backend=backend), [0.0])
+
+
+def test_quick_touch_box_grows_the_ring_box_each_way() -> None:
+    """Ring (0, 0), (2, 1), (1, 3) and enlarge 0.5 m: the box grows by 1.011·0.5 m
+    (+1 µm) on all four sides."""
+    from albot2d.mapping.albot1.deletion import quick_touch_box
+
+    grow = 1.011 * 0.5 + 1e-6
+    got = quick_touch_box(np.array([[0.0, 0.0], [2.0, 1.0], [1.0, 3.0]]), 0.5)
+    assert got == pytest.approx([-grow, -grow, 2.0 + grow, 3.0 + grow], abs=1e-12)
+
+
+def test_an_empty_views_polygon_is_a_disc_of_sixty_four_sides() -> None:
+    """No surfaces: P is the viewpoint buffered by 0.5 m with 16 segments a quadrant, a
+    regular 64-gon of area ½·64·r²·sin(2π/64)."""
+    got = view_polygon(np.zeros((0, 4)), ROBOT, 0.5, "all_round")
+    assert got.area == pytest.approx(0.5 * 64 * 0.25 * math.sin(2 * math.pi / 64), rel=1e-9)
+    assert got.contains(shapely.Point(ROBOT.x + 0.49, ROBOT.y))
+
+
+def test_forward_clip_reaches_the_farthest_point_from_a_robot_below_the_origin() -> None:
+    """The robot at (0, −2) facing +y, one wall 4 m ahead (y = 2): P is the triangle
+    buffered by 0.5 m, cut at the lateral axis y = −2 only (its far side at y = 2.5 is
+    kept whole)."""
+    robot = Pose(0.0, -2.0, math.pi / 2)
+    segs = np.array([[0.5, 2.0, -0.5, 2.0]])
+    got = view_polygon(segs, robot, 0.5, "forward")
+    want = shapely.Polygon([(0.0, -2.0), (0.5, 2.0), (-0.5, 2.0)]).buffer(0.5, quad_segs=16)
+    want = want.intersection(shapely.box(-100.0, -2.0, 100.0, 100.0))
+    assert got.area == pytest.approx(want.area, rel=1e-9)
+    assert got.bounds[3] == pytest.approx(2.5, abs=1e-9)

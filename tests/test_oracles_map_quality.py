@@ -114,3 +114,16 @@ def test_bounded_nearest_distance_by_radius(beyond: str) -> None:
     got = nearest_segment_distance_bounded(pts, WALL, (0.5, 2.0), beyond=beyond)
     far = [3.0, 12.0] if beyond == "nearest" else [math.inf, math.inf]
     np.testing.assert_allclose(got, [0.2, 1.0, *far], atol=1e-12)
+
+
+def test_a_point_equidistant_from_two_walls_has_one_distance() -> None:
+    """(5, 1) is 1 m from y = 0 and from y = 2: one distance per point, 1 m, whether the
+    nearest wall is searched within radii or by the tree."""
+    from albot2d.evaluation.metrics.map_quality import nearest_segment_distance
+
+    walls = np.array([[0.0, 0.0, 10.0, 0.0], [0.0, 2.0, 10.0, 2.0]])
+    pts = np.array([[5.0, 1.0], [5.0, 0.5]])
+    np.testing.assert_allclose(nearest_segment_distance(pts, walls), [1.0, 0.5], atol=1e-12)
+    np.testing.assert_allclose(nearest_segment_distance_bounded(pts, walls), [1.0, 0.5], atol=1e-12)
+    far = np.array([[5.0, 30.0]])
+    np.testing.assert_allclose(nearest_segment_distance_bounded(far, walls), [28.0], atol=1e-12)

@@ -132,3 +132,30 @@ def test_exact_induced_move_of_any_direction(
     noise = OdometryNoise(induced_step_m=0.5, induced_along_motion=along)
     got = perturb_increment(increment, noise, None, "move")
     assert (got.x, got.y, got.theta) == pytest.approx(want, abs=1e-12)
+
+
+def test_one_cells_heading_error_is_alpha_times_root_cell_times_its_normal() -> None:
+    """alpha2 = 0.1 rad/√m on 1 cm cells: one cell driven turns the heading by
+    0.1·√0.01·z = 0.01·z, z the rng's first normal (the cell's heading normal)."""
+    odom = Odometry(OdometryNoise(alpha2=0.1, resolution_m=0.01), np.random.default_rng(5))
+    z = np.random.default_rng(5).standard_normal(2)
+    odom.update(Pose(0.01, 0.0, 0.0))
+    assert odom.pose.theta == pytest.approx(0.01 * z[0], rel=1e-9)
+    assert odom.pose.x == pytest.approx(0.01, abs=1e-15)
+
+
+def test_heading_variance_of_a_path_by_hand() -> None:
+    """alpha1 = 0.1, alpha2 = 0.2: 2 rad turned and 3 m driven (signs ignored):
+    0.01·2 + 0.04·3 = 0.14 rad²."""
+    from albot2d.sim.odometry import heading_variance_rad2
+
+    noise = OdometryNoise(alpha1=0.1, alpha2=0.2)
+    got = heading_variance_rad2(noise, [3.0, -3.0, 0.0], [2.0, -2.0, 0.0])
+    np.testing.assert_allclose(got, [0.14, 0.14, 0.0], atol=1e-15)
+
+
+def test_random_noise_without_an_rng_is_refused_by_name() -> None:
+    with pytest.raises(
+        ValueError, match=r"^perturb_increment: random odometry noise needs an rng$"
+    ):
+        perturb_increment(Pose(1.0, 0.0, 0.0), OdometryNoise(alpha1=0.1), None)

@@ -231,3 +231,41 @@ def test_nothing_to_match_gives_four_empty_arrays(backend: str) -> None:
     ):
         assert [len(x) for x in got] == [0, 0, 0, 0]
         assert got[0].dtype == got[1].dtype == np.int64
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [
+        ("match_endpoint", "nearest", "TrackingParams.match_endpoint must be corresponding or key"),
+        ("match_order", "random", "TrackingParams.match_order must be distance or fitness"),
+        ("match_candidates", "some", "TrackingParams.match_candidates must be trackable or all"),
+    ],
+)
+def test_tracking_params_name_the_field_and_its_choices(
+    field: str, value: str, message: str
+) -> None:
+    from albot2d.errors import InputError
+
+    with pytest.raises(InputError, match=rf"^{message}, got {value!r}$"):
+        TrackingParams(**{field: value})  # type: ignore[arg-type]
+
+
+def test_candidates_may_be_any_truthy_mask() -> None:
+    """A 0/1 float mask selects as a bool one does."""
+    pi, vj, _, _ = match_surfaces(PRED, VIEW, None, [1.0, 1.0, 0.0, 1.0], backend="numpy")
+    assert (pi.tolist(), vj.tolist()) == ([0, 1], [0, 1])
+
+
+def test_all_candidates_recognise_a_surface_that_is_no_longer_trackable() -> None:
+    """A wall tracked at 2 m long is seen next as 0.3 m (shortened by an occluder): not
+    trackable (≤ 0.4 m), so RTSV by the paper loses it; with ``match_candidates="all"``
+    (every surface of the view) it is recognised, its real end unmoved."""
+    from albot2d.perception.tracking import recognise
+
+    current = Surfaces.from_segments([[3.0, -1.0, 3.0, 1.0]])
+    view = Surfaces.from_segments([[3.0, -1.0, 3.0, -0.7]], [[False, True]])
+    assert len(recognise(current, view, Pose())) == 0
+    info = recognise(current, view, Pose(), TrackingParams(match_candidates="all"))
+    assert info.view_index.tolist() == [0]
+    assert info.candidates.tolist() == [True]
+    assert info.distance_m[0] == pytest.approx(0.0, abs=1e-12)

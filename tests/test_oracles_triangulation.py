@@ -144,3 +144,91 @@ def test_fitness_prefers_the_long_wall_where_path_integration_prefers_the_short(
     assert_pose(nearest, Pose(T.x + 0.3, T.y, T.theta))
     fitness = triangulate(local_s, current, pi, TriangulationParams(choose="fitness"))
     assert_pose(fitness, T)
+
+
+def test_local_key_end_is_paired_through_swapped_ends() -> None:
+    """The cut wall seen reversed (ends listed the other way round): the local map's key
+    end is its real end 0, which pairs with the view's end 1; the affordance is the true
+    pose, not the one the cut end (0.5 m short) would give."""
+    robot = Pose(0.7, 0.6, math.radians(25.0))
+    local, current = _cut_wall(robot)
+    swapped = Surfaces.from_segments(current.segments[:, [2, 3, 0, 1]])
+    params = TriangulationParams(position_endpoint="local_key")
+    aff = pose_affordances(local, swapped, robot.theta, params)
+    np.testing.assert_allclose(aff.poses, [[robot.x, robot.y, robot.theta]], atol=1e-9)
+
+
+def _two_walls_one_turned() -> tuple[Surfaces, Surfaces, float]:
+    """Walls A (x = 3) and B (y = 2.5) seen from T; B's observation turned by +0.6°
+    about its end 0 in the view, so B affords heading T.θ − 0.6° (and a position a few
+    cm off). Returns (local, current, 0.6° in radians)."""
+    eps = math.radians(0.6)
+    local = np.array([[3.0, -2.0, 3.0, 2.0], [2.5, 2.5, -1.0, 2.5]])
+    view = in_view(local, T)
+    b0, b1 = view[1, :2], view[1, 2:]
+    c, s = math.cos(eps), math.sin(eps)
+    d = b1 - b0
+    view[1, 2:] = b0 + np.array([c * d[0] - s * d[1], s * d[0] + c * d[1]])
+    return Surfaces.from_segments(local), Surfaces.from_segments(view), eps
+
+
+def test_heading_options_on_two_affordances_that_disagree_by_0_6_degrees() -> None:
+    """Path integration at T: A (exact, 0 m off) is chosen. ``"selected"`` keeps its
+    pose, T. ``"inlier_mean"`` moves the heading by the mean deviation of the kept
+    affordances within 1°, (0 − 0.6°)/2, and places the robot by A's endpoint pair at that
+    heading: p_local − R(h)·p_view, with A's nearer end in the view."""
+    local, current, eps = _two_walls_one_turned()
+    selected = triangulate(local, current, T, TriangulationParams(heading="selected"))
+    assert_pose(selected, T)
+    h = T.theta - eps / 2
+    view_a = current.segments[0].reshape(2, 2)
+    k = int(np.argmin(np.hypot(view_a[:, 0], view_a[:, 1])))
+    pc, pl = view_a[k], local.segments[0].reshape(2, 2)[k]
+    want = pl - [
+        math.cos(h) * pc[0] - math.sin(h) * pc[1],
+        math.sin(h) * pc[0] + math.cos(h) * pc[1],
+    ]
+    got = triangulate(local, current, T, TriangulationParams(heading="inlier_mean"))
+    assert_pose(got, Pose(float(want[0]), float(want[1]), h))
+
+
+def test_weighted_heading_weighs_directions_by_beams_and_length() -> None:
+    """The directions' inverse-variance weights n·L² per observation (n beams, L metres),
+    combined as 1/(1/w_local + 1/w_view). A (4 m) from 100 beams in both views, B (3.5 m)
+    from 10: weights 100·16/2 = 800 and 10·12.25/2 = 61.25; B's direction is 0.6° off,
+    so the heading is T.θ − 0.6°·61.25/861.25, both within the 1° consensus."""
+    from albot2d.mapping.albot1.triangulation import heading_from_directions
+
+    local, current, eps = _two_walls_one_turned()
+    beams = np.array([[0, 99], [200, 209]])
+    local = Surfaces(local.segments, local.occluded, beams)
+    current = Surfaces(current.segments, current.occluded, beams)
+    got = heading_from_directions(local, current, T)
+    assert got == pytest.approx(T.theta - eps * 61.25 / 861.25, abs=1e-12)
+
+
+def test_pi_fitness_by_hand() -> None:
+    """One affordance: its view end (1, 2) moved by path integration (0.5, 0.2, 0) lands
+    at (1.5, 2.2), 0.1 m from its local end (1.6, 2.2); heading 1° from path
+    integration; the surface 2 m long, its end 2.236 m away:
+    2000·(400 − 100)·(5 − 1)/2236.07."""
+    from albot2d.mapping.albot1.triangulation import Affordances, _pi_fitness
+
+    aff = Affordances(
+        np.array([[0.0, 0.0, math.radians(1.0)]]),
+        np.array([0]),
+        np.array([[1.6, 2.2]]),
+        np.array([[1.0, 2.0]]),
+    )
+    current = Surfaces.from_segments([[1.0, 2.0, 1.0, 4.0]])
+    got = _pi_fitness(aff, current, Pose(0.5, 0.2, 0.0))
+    assert got[0] == pytest.approx(2000 * 300 * 4 / (1000 * math.hypot(1.0, 2.0)), rel=1e-9)
+
+
+def test_no_affordance_is_four_empty_arrays() -> None:
+    """A wall with both ends occluded in the local map affords no position."""
+    local = Surfaces.from_segments([[3.0, -2.0, 3.0, 2.0]], [[True, True]])
+    current = Surfaces.from_segments(in_view(local.segments, T))
+    aff = pose_affordances(local, current, T.theta)
+    assert [a.shape for a in aff] == [(0, 3), (0,), (0, 2), (0, 2)]
+    assert triangulate(local, current, T, TriangulationParams(heading="selected")) is None
