@@ -215,13 +215,13 @@ def test_an_empty_views_polygon_is_a_disc_of_sixty_four_sides() -> None:
 
 
 def test_forward_clip_reaches_the_farthest_point_from_a_robot_below_the_origin() -> None:
-    """The robot at (0, −2) facing +y, one wall 4 m ahead (y = 2): P is the triangle
-    buffered by 0.5 m, cut at the lateral axis y = −2 only (its far side at y = 2.5 is
-    kept whole)."""
-    robot = Pose(0.0, -2.0, math.pi / 2)
-    segs = np.array([[0.5, 2.0, -0.5, 2.0]])
+    """The robot at (0, −1) facing +y, one wall 4 m ahead (y = 3): P is the triangle
+    buffered by 0.5 m, cut at the lateral axis y = −1 only (its far side at y = 3.5 is
+    kept whole: the clipping box must reach past the wall, measured from the robot)."""
+    robot = Pose(0.0, -1.0, math.pi / 2)
+    segs = np.array([[0.5, 3.0, -0.5, 3.0]])
     got = view_polygon(segs, robot, 0.5, "forward")
-    want = shapely.Polygon([(0.0, -2.0), (0.5, 2.0), (-0.5, 2.0)]).buffer(0.5, quad_segs=16)
-    want = want.intersection(shapely.box(-100.0, -2.0, 100.0, 100.0))
+    want = shapely.Polygon([(0.0, -1.0), (0.5, 3.0), (-0.5, 3.0)]).buffer(0.5, quad_segs=16)
+    want = want.intersection(shapely.box(-100.0, -1.0, 100.0, 100.0))
     assert got.area == pytest.approx(want.area, rel=1e-9)
-    assert got.bounds[3] == pytest.approx(2.5, abs=1e-9)
+    assert got.bounds[3] == pytest.approx(3.5, abs=1e-9)
