@@ -5,7 +5,13 @@
 ``mutmut run``), plus (unless ``--without-named``) the named mutants the issue asks to be
 killed. Prints the names, one per line, for ``mutmut run NAMES``::
 
-    mutmut run --max-children 1 $(python -m tests.mutation_sample --per-module 15 --seed 1128)
+    S="--without-named --per-module 40 --seed 1130"
+    S="$S --exclude-sample 1128:15 --exclude-sample 1129:40"
+    mutmut run --max-children 1 $(python -m tests.mutation_sample $S)
+    python -m tests.mutation_sample $S --report
+
+(the measurement of docs/mutation.md: seed 1130, leaving out the two samples drawn and
+read before it).
 
 ``--report``: instead of the names, the score of that sample from mutmut's recorded exit
 codes: per module killed / non-equivalent and the Wilson 95 % interval. A timeout counts
