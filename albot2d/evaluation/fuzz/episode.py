@@ -288,13 +288,16 @@ class _Checks:
                     truth,
                 )
         links = route
+        used = self.localisations.pairs if self.localisations is not None else None
         if links is None and self.reference is not None:
-            links = self.reference.route
+            links, used = self.reference.route, self.reference.used
         if links is not None and len(estimate) == len(truth):
             tracking = mapper.params.tracking if isinstance(mapper, Albot1) else None
+            extraction = mapper.params.extraction if isinstance(mapper, Albot1) else None
             bound = hb.heading_error_bound(
                 links, trace.frame_indices, truth, noise_preset(self.spec.noise),
                 get_profile(self.spec.profile), self.laser, tracking,
+                extraction=extraction, used=used,
             )  # fmt: skip
             err = hb.heading_errors(estimate, truth)
             metrics["heading_bound_ratio_max"] = float(np.max(err / bound))
