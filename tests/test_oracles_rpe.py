@@ -63,3 +63,18 @@ def test_to_dict_nests_short_and_long_under_the_overall_numbers() -> None:
     assert got["short"] == {"trans_m_mean": pytest.approx(0.1), "trans_m_std": 0.0,
                             "rot_deg_mean": 0.0, "rot_deg_std": 0.0, "relations": 1}  # fmt: skip
     assert got["long"]["relations"] == 1  # type: ignore[index]
+
+
+def test_a_split_under_a_second_is_allowed() -> None:
+    rel = [[1.1, 0.0, 0.0]]
+    got = relative_pose_error(T, POSES, [0.0], [1.0], rel, split_s=0.5)
+    assert (got.short.relations, got.long.relations) == (0, 1)
+
+
+def test_relation_errors_without_an_estimate_are_nan() -> None:
+    from albot2d.evaluation.metrics.rpe import relation_errors
+
+    trans, rot, used = relation_errors([], np.zeros((0, 3)), [0.0], [1.0], [[1.0, 0.0, 0.0]])
+    assert np.isnan(trans).all() and np.isnan(rot).all()
+    assert trans.dtype == rot.dtype == np.float64
+    assert used.tolist() == [False]

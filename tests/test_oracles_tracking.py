@@ -269,3 +269,16 @@ def test_all_candidates_recognise_a_surface_that_is_no_longer_trackable() -> Non
     assert info.view_index.tolist() == [0]
     assert info.candidates.tolist() == [True]
     assert info.distance_m[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_numba_backend_refuses_settings_only_numpy_covers() -> None:
+    with pytest.raises(ValueError, match="paper's matching settings"):
+        match_surfaces(PRED, VIEW, TrackingParams(line_distance_fallback=True), backend="numba")
+
+
+def test_all_candidates_are_a_bool_mask() -> None:
+    from albot2d.perception.tracking import recognise
+
+    info = recognise(PRED, VIEW, Pose(), TrackingParams(match_candidates="all"))
+    assert info.candidates.dtype == np.bool_
+    assert info.candidates.tolist() == [True] * 4

@@ -232,3 +232,49 @@ def test_no_affordance_is_four_empty_arrays() -> None:
     aff = pose_affordances(local, current, T.theta)
     assert [a.shape for a in aff] == [(0, 3), (0,), (0, 2), (0, 2)]
     assert triangulate(local, current, T, TriangulationParams(heading="selected")) is None
+
+
+def test_params_and_inputs_are_checked_by_name() -> None:
+    from albot2d.errors import InputError
+    from albot2d.mapping.albot1.triangulation import heading_from_directions
+
+    with pytest.raises(InputError, match=r"heading_consensus_deg must be >= 0, got -1\.0"):
+        TriangulationParams(heading_consensus_deg=-1.0)
+    with pytest.raises(
+        InputError,
+        match=r"^TriangulationParams.position_endpoint must be both, local_key or "
+        r"current_real, got 'any'$",
+    ):
+        TriangulationParams(position_endpoint="any")  # type: ignore[arg-type]
+    two = Surfaces.from_segments(ROOM[:2])
+    with pytest.raises(ValueError, match=r"^local has 2 surfaces but current has 1$"):
+        heading_from_directions(two, two.select([0]), T)
+
+
+def test_pi_fitness_by_hand_with_a_turned_path_integration() -> None:
+    """Path integration (0.5, 0.2, 90°) moves the view end (1, 2) to (−1.5, 1.2); the
+    local end (−1.5, 1.5) is 0.3 m from it; the affordance heading 92°: 2° off. The
+    surface 2 m long, its end 2.236 m away: 2000·(400 − 300)·(5 − 2)/2236.07."""
+    from albot2d.mapping.albot1.triangulation import Affordances, _pi_fitness
+
+    aff = Affordances(
+        np.array([[0.0, 0.0, math.radians(92.0)]]),
+        np.array([0]),
+        np.array([[-1.5, 1.5]]),
+        np.array([[1.0, 2.0]]),
+    )
+    current = Surfaces.from_segments([[1.0, 2.0, 1.0, 4.0]])
+    got = _pi_fitness(aff, current, Pose(0.5, 0.2, math.pi / 2))
+    assert got[0] == pytest.approx(2000 * 100 * 3 / (1000 * math.hypot(1.0, 2.0)), rel=1e-9)
+
+
+def test_fitness_chooses_the_long_wall_listed_second() -> None:
+    """The fitness test above with the two surfaces in the other order."""
+    local = np.array([[1.3, 2.5, 0.8, 2.5], [3.0, -2.0, 3.0, 2.0]])
+    truth = np.array([[1.0, 2.5, 0.5, 2.5], [3.0, -2.0, 3.0, 2.0]])
+    current = Surfaces.from_segments(in_view(truth, T))
+    pi = Pose(T.x + 0.25, T.y, T.theta)
+    got = triangulate(
+        Surfaces.from_segments(local), current, pi, TriangulationParams(choose="fitness")
+    )
+    assert_pose(got, T)
