@@ -163,12 +163,14 @@ def test_random_noise_without_an_rng_is_refused_by_name() -> None:
 
 def test_turning_slips_forward_by_alpha4_along_the_heading() -> None:
     """alpha4 = 0.1 m/√rad on 1° cells: turning one cell slips 0.1·√(π/180)·z metres
-    along the heading it had (facing +y, so along y), z the cell's distance normal."""
+    along the heading it had (60°), z the cell's distance normal."""
     res = math.radians(1.0)
     noise = OdometryNoise(alpha4=0.1, resolution_deg=1.0)
-    odom = Odometry(noise, np.random.default_rng(9), start=Pose(0.0, 0.0, math.pi / 2))
+    start = Pose(0.0, 0.0, math.pi / 3)
+    odom = Odometry(noise, np.random.default_rng(9), start=start)
     z = np.random.default_rng(9).standard_normal(2)
     odom.update(Pose(0.0, 0.0, -res))
-    assert odom.pose.x == pytest.approx(0.0, abs=1e-15)
-    assert odom.pose.y == pytest.approx(0.1 * math.sqrt(res) * z[1] * 1.0, rel=1e-9)
-    assert odom.pose.theta == pytest.approx(math.pi / 2 - res, abs=1e-12)
+    slip = 0.1 * math.sqrt(res) * z[1]
+    assert odom.pose.x == pytest.approx(0.5 * slip, rel=1e-9)
+    assert odom.pose.y == pytest.approx(math.sqrt(3) / 2 * slip, rel=1e-9)
+    assert odom.pose.theta == pytest.approx(math.pi / 3 - res, abs=1e-12)
