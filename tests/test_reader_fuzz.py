@@ -300,8 +300,7 @@ def test_episode_record_mutations_raise_only_input_error(tmp_path_factory, data:
         return
     summary = summarise(list(records.values()), {}, ran=0, wall_time_s=0.0, workers=1)
     assert summary["ok"] + summary["violations"] + summary["crashes"] == summary["episodes"]
-    assert all(records[k]["metrics"].get("frames") is not None
-               for k in records if records[k]["status"] == "ok")  # fmt: skip
+    assert all(records[k].metrics is not None for k in records if records[k].status == "ok")
 
 
 @given(st.data())

@@ -30,17 +30,20 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from albot2d.atomic import atomic_write_bytes
 from albot2d.cli.common import add_json_option, choices, defaults_of
 from albot2d.cli.options import positive_int, positive_number, seed_value
 from albot2d.errors import InputError
 
+if TYPE_CHECKING:
+    from albot2d.evaluation.fuzz.campaign import CampaignParams
+
 __all__ = ["register", "run"]
 
 
-def register(subparsers: Any) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     from albot2d.evaluation.fuzz.backends import BACKENDS
     from albot2d.evaluation.fuzz.campaign import CampaignParams
 
@@ -124,12 +127,12 @@ def _range(values: list[str] | None, option: str) -> tuple[float, float] | None:
     return low, high
 
 
-def _params(args: argparse.Namespace) -> Any:
+def _params(args: argparse.Namespace) -> CampaignParams:
     from albot2d.evaluation.fuzz.campaign import CampaignParams
 
     if args.episodes is None:
         raise InputError("give --episodes N, the number of episodes to run")
-    values: dict[str, Any] = {"episodes": positive_int(args.episodes, "--episodes")}
+    values: dict[str, object] = {"episodes": positive_int(args.episodes, "--episodes")}
     seed = seed_value(args.seed)
     if seed is not None:
         values["seed"] = seed
@@ -144,7 +147,7 @@ def _params(args: argparse.Namespace) -> Any:
     tour = _range(args.tour_length, "--tour-length")
     if tour is not None:
         values["tour_length_min_m"], values["tour_length_max_m"] = tour
-    return CampaignParams(**values)
+    return CampaignParams(**values)  # type: ignore[arg-type]  # checked in __post_init__
 
 
 def _workers(text: str | None) -> int:
@@ -184,7 +187,8 @@ def _write_histograms(out: Path, no_figures: bool) -> str | None:
         from albot2d.viz.campaign import render_campaign_histograms_png
 
         records, _ = read_episodes(out / EPISODES_NAME)
-        png = render_campaign_histograms_png([records[k] for k in sorted(records)])
+        # the figure reads records as episodes.jsonl has them (plain data)
+        png = render_campaign_histograms_png([records[k].to_json() for k in sorted(records)])
     except ImportError as exc:
         print(
             f"albot2d fuzz: note: no histograms ({exc}); pip install 'albot2d[viz]'",
