@@ -225,3 +225,16 @@ def test_forward_clip_reaches_the_farthest_point_from_a_robot_below_the_origin()
     want = want.intersection(shapely.box(-100.0, -1.0, 100.0, 100.0))
     assert got.area == pytest.approx(want.area, rel=1e-9)
     assert got.bounds[3] == pytest.approx(3.5, abs=1e-9)
+
+
+def test_touching_mask_tests_the_forward_ray_even_when_p_is_empty() -> None:
+    import shapely
+
+    from albot2d.geometry import Pose
+    from albot2d.mapping.albot1.deletion import touching_mask
+
+    segs = np.array([[1.0, -0.5, 1.0, 0.5], [1.0, 2.0, 1.0, 3.0]])  # across / off the ray
+    empty = shapely.Polygon()
+    assert touching_mask(empty, segs, Pose(), forward_ray_m=2.0).tolist() == [True, False]
+    assert touching_mask(empty, segs, Pose(), forward_ray_m=0.0).tolist() == [False, False]
+    assert touching_mask(empty, segs, Pose(0.0, 0.0, math.pi), 2.0).tolist() == [False, False]
