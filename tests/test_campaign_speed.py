@@ -15,7 +15,7 @@ import shapely
 import shapely.affinity
 
 from albot2d.evaluation.checks import hit_geometry
-from albot2d.evaluation.checks.deletion import _ahead, _seen_samples
+from albot2d.evaluation.checks.deletion import _seen_samples, ahead_square
 from albot2d.evaluation.checks.simulator import SegmentGrid
 from albot2d.evaluation.fuzz.campaign import CampaignParams
 from albot2d.evaluation.fuzz.episode import EpisodeSpec
@@ -178,4 +178,4 @@ def test_the_half_plane_square_is_the_affine_transform_of_the_robot_frame_one(se
         square = shapely.Polygon([(0, -big), (big, -big), (big, big), (0, big)])
         c, s = math.cos(theta), math.sin(theta)
         moved = shapely.affinity.affine_transform(square, [c, -s, s, c, x, y])
-        assert shapely.equals_exact(_ahead(Pose(x, y, theta), big), moved, tolerance=0.0)
+        assert shapely.equals_exact(ahead_square(Pose(x, y, theta), big), moved, tolerance=0.0)

@@ -19,7 +19,7 @@ import sys
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
+from typing import TYPE_CHECKING, NamedTuple, NoReturn
 
 from albot2d.atomic import atomic_paths
 from albot2d.cli.options import positive_int, positive_number, world_params
@@ -39,11 +39,11 @@ __all__ = [
     "add_export_option",
     "add_json_option",
     "add_mapper_option",
+    "add_noise_options",
     "add_out_option",
     "add_run_options",
     "add_scoring_options",
     "choices",
-    "defaults_of",
     "differences",
     "finish",
     "prepare_out_dir",
@@ -88,11 +88,23 @@ def choices() -> Choices:
     )
 
 
-def defaults_of(cls: type) -> dict[str, Any]:
-    """A dataclass's field defaults by name (what --help says an option not given means)."""
-    return {
-        f.name: f.default for f in dataclasses.fields(cls) if f.default is not dataclasses.MISSING
-    }
+def add_noise_options(
+    group: argparse.ArgumentParser | argparse._ArgumentGroup,
+    *,
+    profile: str,
+    noise: str,
+    laser_noise: str,
+) -> None:
+    """``--profile``, ``--noise`` and ``--laser-noise``, their help naming the given
+    defaults (a run's and a fuzzing campaign's differ)."""
+    names = choices()
+    group.add_argument("--profile", help=f"{', '.join(names.profiles)} (default {profile})")
+    group.add_argument(
+        "--noise", help=f"odometry noise preset: {', '.join(names.noises)} (default {noise})"
+    )
+    group.add_argument(
+        "--laser-noise", help=f"{' or '.join(names.laser_noises)} (default {laser_noise})"
+    )
 
 
 # Fields two reports of the same run may differ in: file lists, the version, and a fuzzing
@@ -119,14 +131,8 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
         help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)",
     )
     drive = p.add_argument_group("driving")
-    drive.add_argument("--profile", help=f"{', '.join(names.profiles)} (default {default.profile})")
-    drive.add_argument(
-        "--noise",
-        help=f"odometry noise preset: {', '.join(names.noises)} (default {default.noise})",
-    )
-    drive.add_argument(
-        "--laser-noise",
-        help=f"{' or '.join(names.laser_noises)} (default {default.laser_noise})",
+    add_noise_options(
+        drive, profile=default.profile, noise=default.noise, laser_noise=default.laser_noise
     )
     drive.add_argument(
         "--tour-kind",
@@ -269,7 +275,6 @@ def scoring_params(
     args: argparse.Namespace, base: EvaluationParams | None = None
 ) -> EvaluationParams:
     """EvaluationParams from the scoring options (unset ones from ``base`` or defaults)."""
-    import dataclasses
 
     from albot2d.evaluation import EvaluationParams
 

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from albot2d.atomic import atomic_write_bytes
-from albot2d.cli.common import add_json_option, choices, defaults_of
+from albot2d.cli.common import add_json_option, add_noise_options, choices
 from albot2d.cli.options import positive_int, positive_number, seed_value
 from albot2d.errors import InputError
 
@@ -47,7 +47,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     from albot2d.evaluation.fuzz.backends import BACKENDS
     from albot2d.evaluation.fuzz.campaign import CampaignParams
 
-    names, default = choices(), defaults_of(CampaignParams)
+    names, default = choices(), CampaignParams(episodes=1)
     p = subparsers.add_parser(
         "fuzz", help="fuzzing campaign: many random episodes, invariants checked, reproducers",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -60,7 +60,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         action="extend",
         metavar="KIND",
         help=f"world kinds to draw from: {', '.join(names.world_kinds)} "
-        f"(default {' '.join(default['kinds'])})",
+        f"(default {' '.join(default.kinds)})",
     )
     p.add_argument(
         "--world-size",
@@ -74,25 +74,19 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         nargs=2,
         metavar=("MIN", "MAX"),
         help="minimum tour length range in metres "
-        f"(default {default['tour_length_min_m']:g} {default['tour_length_max_m']:g})",
+        f"(default {default.tour_length_min_m:g} {default.tour_length_max_m:g})",
     )
     p.add_argument(
-        "--tour-kind", help=f"{', '.join(names.tour_kinds)} (default {default['tour_kind']})"
+        "--tour-kind", help=f"{', '.join(names.tour_kinds)} (default {default.tour_kind})"
     )
-    p.add_argument("--profile", help=f"{', '.join(names.profiles)} (default {default['profile']})")
-    p.add_argument(
-        "--noise",
-        help=f"odometry noise: {', '.join(names.noises)} (default {default['noise']})",
-    )
-    p.add_argument(
-        "--laser-noise",
-        help=f"{' or '.join(names.laser_noises)} (default {default['laser_noise']})",
+    add_noise_options(
+        p, profile=default.profile, noise=default.noise, laser_noise=default.laser_noise
     )
     p.add_argument(
         "--mapper",
         metavar="NAME",
         help="mapper under test: albot1, naive, truth, albot1[KEY=VALUE,...] (keys listed "
-        f"below) or module:Class (default {default['mapper']})",
+        f"below) or module:Class (default {default.mapper})",
     )
     from albot2d.cli.common import add_albot1_keys_to_help
 

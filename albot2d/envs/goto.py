@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from albot2d.control.goal_seeker import GoalSeeker, GoalSeekerParams
 from albot2d.control.knowledge import GridSpec
-from albot2d.envs.base import AlbotEnv, _clipped, pose_space
+from albot2d.envs.base import AlbotEnv, clip_to_pose_space, pose_space
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, wrap_angle
 from albot2d.sim.commands import Observation
@@ -72,7 +72,7 @@ class GoToEnv(AlbotEnv):
 
     def _observation(self, obs: Observation) -> dict[str, NDArray[Any]]:
         out = super()._observation(obs)
-        out["goal"] = _clipped(obs.odom_pose.between(self.goal).as_array())
+        out["goal"] = clip_to_pose_space(obs.odom_pose.between(self.goal).as_array())
         return out
 
     def _draw_goal(self) -> Pose:
