@@ -145,9 +145,24 @@ def nested(depth: int) -> str:
     return "[" * depth + "]" * depth
 
 
+# Every metric an episode of Albot1 records (scored, then measured by the checks).
+_OK_METRICS = {
+    "frames": 10, "travelled_m": 20.0, "collided_frames": 0, "local_maps": 4,
+    "triangulations": 3, "path_integrations": 0, "global_map_surfaces": 12,
+    "homing_stops": 0, "homing_bearing_error_max_deg": None,
+    "homing_distance_error_max_m": None, "rpe_trans_m": 0.1, "rpe_rot_deg": 0.5,
+    "odometry_rpe_trans_m": 0.2, "odometry_rpe_rot_deg": 0.9, "end_trans_m": 0.3,
+    "end_rot_deg": 1.0, "odometry_end_trans_m": 0.6, "odometry_end_rot_deg": 2.0,
+    "map_accuracy_m": 0.05, "map_accuracy_p95_m": 0.2, "map_completeness": 0.8,
+    "local_map_position_error_max_m": 0.04, "local_map_heading_error_max_deg": 0.7,
+    "heading_error_max_deg": 1.5, "heading_error_mean_deg": 0.6,
+    "odometry_heading_error_max_deg": 3.0, "odometry_heading_error_mean_deg": 1.2,
+}  # fmt: skip
+
+
 def episode_record(index: int, *, seed: int = 0, status: str = "ok") -> dict[str, Any]:
     """A whole episodes.jsonl record of episode ``index`` of a campaign with ``seed``, as
-    albot2d writes it (the metrics shortened), with ``status`` and the fields it needs."""
+    albot2d writes it, with ``status`` and the fields it needs."""
     record: dict[str, Any] = {
         "episode": index,
         "seed": {"entropy": seed, "spawn_key": [index]},
@@ -162,7 +177,7 @@ def episode_record(index: int, *, seed: int = 0, status: str = "ok") -> dict[str
         "checked": ["route_connected"],
         "violations": {},
         "error": None,
-        "metrics": {"frames": 10, "travelled_m": 20.0, "collided_frames": 0, "rpe_rot_deg": 0.5},
+        "metrics": dict(_OK_METRICS),
         "digest": "0" * 64,
         "timings": {"total_s": 1.0, "ms_per_view": 100.0},
     }

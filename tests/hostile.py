@@ -21,6 +21,7 @@ import subprocess
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -34,6 +35,7 @@ __all__ = [
     "installed_env",
     "limited_run",
     "run_cli",
+    "simulate_world_args",
 ]
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -164,3 +166,15 @@ def write_log(tmp: Path) -> Path:
     path.write_text(bi.carmen_text())
     (tmp / "log.relations").write_text(bi.relations_text())
     return path
+
+
+def simulate_world_args(tmp: Path, mutate: Callable[[dict[str, Any]], None]) -> list[str]:
+    """``albot2d simulate --world W --out OUT`` on the small valid world document changed
+    by ``mutate`` (in place), written to ``tmp``."""
+    from tests import bad_inputs as bi
+
+    doc = bi.world_doc()
+    mutate(doc)
+    path = tmp / "w.json"
+    path.write_text(bi.world_text(doc))
+    return ["simulate", "--world", str(path), "--out", "OUT"]

@@ -4,7 +4,8 @@
 ``max_range`` intersected with every segment; the range is the distance from the origin
 to the nearest intersection point (overlaps count by their nearest point). Segments the
 raycaster treats as zero-length are left out here too. ``BACKENDS`` parametrises a test
-over the raycaster's kernels (numba only where it is installed).
+over the raycaster's kernels (numba only where it is installed); ``assert_same_ranges``
+compares two casts of the same beams.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ __all__ = [
     "BACKENDS",
     "CONTACT_M",
     "EXACT_M",
+    "assert_same_ranges",
     "assume_not_touching",
     "box_segments",
     "coord",
@@ -124,3 +126,25 @@ def assume_not_touching(segs: np.ndarray, ox: float, oy: float) -> None:
     design (all ranges 0) while the references still see past it: skip those origins."""
     d = point_segment_distance(np.array([[ox, oy]]), segs)
     assume(not np.any((d > 0.0) & (d <= 4 * CONTACT_M)))
+
+
+def assert_same_ranges(
+    got: np.ndarray,
+    want: np.ndarray,
+    max_range: float,
+    segs: np.ndarray | None = None,
+    origin: tuple[float, float] = (0.0, 0.0),
+    angles: np.ndarray | None = None,
+    *,
+    tol_m: float = EXACT_M,
+) -> None:
+    """Equal to ``tol_m`` or both inf; a hit within EXACT_M of ``max_range`` may fall either
+    side, and so may a beam grazing a segment end (when ``segs`` and ``angles`` are given)."""
+    exempt = np.zeros(len(got), dtype=bool)
+    if segs is not None and angles is not None:
+        exempt = grazing(segs, origin, angles)
+    both = np.isfinite(got) & np.isfinite(want) & ~exempt
+    np.testing.assert_allclose(got[both], want[both], rtol=0.0, atol=tol_m)
+    only = (np.isfinite(got) != np.isfinite(want)) & ~exempt
+    edge = np.where(np.isfinite(got), got, want)[only]
+    assert np.all(np.abs(edge - max_range) < EXACT_M), (np.flatnonzero(only), edge)

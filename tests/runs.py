@@ -4,7 +4,8 @@ The invariant, property and SLAM tests drive the same sequence: a world, a tour,
 simulator's frames, a mapper fed every frame. ``simulate`` and ``office_loop`` make the
 frames (real pymunk simulations); ``map_frames`` feeds any mapper; ``run_albot1`` maps with
 Albot1 and its invariant recorders attached (global-map updates and the views given);
-``check_mapper_contract`` checks a mapper against the protocol's signatures and on a run.
+``check_mapper_contract`` checks a mapper against the protocol's signatures and on a run;
+``small_run`` is the quick ``RunSpec`` the run-pipeline tests share.
 """
 
 from __future__ import annotations
@@ -13,11 +14,12 @@ import inspect
 import typing
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
 from albot2d.evaluation.checks.invariants import UpdateRecorder, ViewRecorder
+from albot2d.evaluation.run.setup import RunSpec
 from albot2d.frames import Frame
 from albot2d.mapping import Albot1, Albot1Params, Mapper, MapperCounts
 from albot2d.seeding import make_rng
@@ -36,6 +38,7 @@ __all__ = [
     "office_loop",
     "run_albot1",
     "simulate",
+    "small_run",
 ]
 
 M = TypeVar("M", bound=Mapper)
@@ -59,6 +62,19 @@ def simulate(
         laser_noise=laser if laser is not None else LaserNoise(),
     )
     return list(sim.drive(tour, profile=profile))
+
+
+def small_run(seed: int, **changes: Any) -> RunSpec:
+    """A short run: a 20 m tour (profile dataset3) through a 15 m × 15 m rooms world;
+    ``changes`` set any other ``RunSpec`` field."""
+    return RunSpec(
+        kind="rooms",
+        seed=seed,
+        world_params={"width_m": 15.0, "height_m": 15.0},
+        profile="dataset3",
+        tour_length_m=20.0,
+        **changes,
+    )
 
 
 SLAM_MISSING = "the [slam] extra is not installed (pip install -e '.[slam]')"

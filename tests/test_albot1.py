@@ -83,6 +83,30 @@ def test_exact_views_give_exact_poses_and_a_map_on_the_walls() -> None:
     assert d.max() < 1e-9
 
 
+def test_tracked_surfaces_are_readable_after_each_view() -> None:
+    """``tracked`` is nothing before the first view, then the surfaces still tracked:
+    each a surface of the latest view, with ids that survive from view to view until a
+    new local map starts the tracking afresh."""
+    m = Albot1()
+    assert m.tracked is None
+    poses = corridor_poses(30)
+    ids: list[set[int]] = []
+    local_maps: list[int] = []
+    for k, pose in enumerate(poses):
+        view = view_from(pose)
+        m.observe_view(k, float(k), view, Pose() if k == 0 else poses[k - 1].between(pose))
+        tracked = m.tracked
+        assert tracked is not None and 0 < len(tracked) <= len(view)
+        seen = transform_segments(pose.as_array(), tracked.current.segments)
+        d = point_segment_distance(seen.reshape(-1, 2), PANELS).min(axis=1)
+        assert d.max() < 1e-9  # the latest observation, in the latest view's frame
+        ids.append(set(tracked.ids.tolist()))
+        local_maps.append(m.counts().local_maps)
+    kept = [bool(a & b) for a, b in itertools.pairwise(ids)]
+    fresh = [b > a for a, b in itertools.pairwise(local_maps)]
+    assert kept == [not f for f in fresh] and 0 < sum(fresh) < sum(kept)
+
+
 def test_triangulation_corrects_odometry_errors() -> None:
     poses = corridor_poses()
     rng = np.random.default_rng(5)

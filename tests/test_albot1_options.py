@@ -181,7 +181,7 @@ def test_surface_heading_fallback_corrects_only_the_heading() -> None:
         m = Albot1(Albot1Params(heading_fallback_surfaces=int(on)))
         tracked = start_tracking(view, TrackingParams(min_view_angle_deg=0.0))
         tracked = tracked.__class__(tracked.ids, tracked.local, moved)
-        pose, method = m._triangulate_or_move_using_pi(tracked, odometric, 1)
+        pose, method = m.localise(tracked, odometric, 1)
         assert method == "path_integration"
         assert (pose.x, pose.y) == (odometric.x, odometric.y)
         expected = truth.theta if on else odometric.theta

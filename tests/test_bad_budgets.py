@@ -15,7 +15,6 @@ import json
 import resource
 import sys
 import textwrap
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +31,7 @@ from tests.hostile import (
     limited_run,
     replay_args,
     run_cli,
+    simulate_world_args,
     write_log,
 )
 
@@ -85,19 +85,11 @@ def sparse_world(tmp: Path) -> tuple[list[str], dict[str, str]]:
     return ["simulate", "--world", str(path), "--out", "OUT"], {}
 
 
-def _world_file(tmp: Path, mutate: Callable[[dict[str, Any]], None]) -> list[str]:
-    doc = bi.world_doc()
-    mutate(doc)
-    path = tmp / "w.json"
-    path.write_text(bi.world_text(doc))
-    return ["simulate", "--world", str(path), "--out", "OUT"]
-
-
 def duplicated_walls(tmp: Path) -> tuple[list[str], dict[str, str]]:
     def mutate(doc: dict[str, Any]) -> None:
         doc["walls"] = doc["walls"] + doc["walls"][:1] * 400_000  # under the 500,000 cap
 
-    return _world_file(tmp, mutate), {}
+    return simulate_world_args(tmp, mutate), {}
 
 
 def houseexpo_100k_vertices(tmp: Path) -> tuple[list[str], dict[str, str]]:
@@ -117,7 +109,7 @@ def absurd_ndarray(tmp: Path) -> tuple[list[str], dict[str, str]]:
             "__type__": "ndarray", "dtype": "float64", "shape": [0, 10**12, 10**12], "data": [],
         }  # fmt: skip
 
-    return _world_file(tmp, mutate), {}
+    return simulate_world_args(tmp, mutate), {}
 
 
 def box_on_start(tmp: Path) -> tuple[list[str], dict[str, str]]:
@@ -126,7 +118,7 @@ def box_on_start(tmp: Path) -> tuple[list[str], dict[str, str]]:
         box["pose"] = list(doc["start"])
         doc["dynamic_obstacles"] = [box]
 
-    return _world_file(tmp, mutate), {}
+    return simulate_world_args(tmp, mutate), {}
 
 
 def box_on_roadmap(tmp: Path) -> tuple[list[str], dict[str, str]]:
@@ -136,7 +128,7 @@ def box_on_roadmap(tmp: Path) -> tuple[list[str], dict[str, str]]:
         box["pose"] = [(nodes[i][0] + nodes[j][0]) / 2, (nodes[i][1] + nodes[j][1]) / 2, 0.0]
         doc["dynamic_obstacles"] = [box]
 
-    return _world_file(tmp, mutate), {}
+    return simulate_world_args(tmp, mutate), {}
 
 
 def episodes_1e9(tmp: Path) -> tuple[list[str], dict[str, str]]:

@@ -12,7 +12,6 @@ from __future__ import annotations
 import gzip
 import json
 import textwrap
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +19,16 @@ import pytest
 
 from tests import bad_inputs as bi
 from tests.bad_input_checks import nothing_written
-from tests.hostile import MIB, Case, assert_refused, gzip_bomb, replay_args, run_cli, write_log
+from tests.hostile import (
+    MIB,
+    Case,
+    assert_refused,
+    gzip_bomb,
+    replay_args,
+    run_cli,
+    simulate_world_args,
+    write_log,
+)
 from tests.test_bad_campaign_files import ARGS as FUZZ_ARGS
 from tests.test_bad_campaign_files import PARAMS
 
@@ -44,27 +52,19 @@ def truncated_gzip_relations(tmp: Path) -> tuple[list[str], dict[str, str]]:
     return replay_args(write_log(tmp), "--relations", str(path)), {}
 
 
-def _world(tmp: Path, mutate: Callable[[dict[str, Any]], None]) -> list[str]:
-    doc = bi.world_doc()
-    mutate(doc)
-    path = tmp / "w.json"
-    path.write_text(bi.world_text(doc))
-    return ["simulate", "--world", str(path), "--out", "OUT"]
-
-
 def reversed_repeats(tmp: Path) -> tuple[list[str], dict[str, str]]:
     def mutate(doc: dict[str, Any]) -> None:
         x1, y1, x2, y2 = doc["walls"][3]
         doc["walls"] += [[x2, y2, x1, y1]] * 1000
 
-    return _world(tmp, mutate), {}
+    return simulate_world_args(tmp, mutate), {}
 
 
 def long_walls(tmp: Path) -> tuple[list[str], dict[str, str]]:
     def mutate(doc: dict[str, Any]) -> None:
         doc["walls"] += [[0.0, 0.01 * k, 99_999.0, 0.01 * k] for k in range(6)]
 
-    return _world(tmp, mutate), {}
+    return simulate_world_args(tmp, mutate), {}
 
 
 def many_dimensions(tmp: Path) -> tuple[list[str], dict[str, str]]:
@@ -73,14 +73,14 @@ def many_dimensions(tmp: Path) -> tuple[list[str], dict[str, str]]:
             "__type__": "ndarray", "dtype": "int8", "shape": [1] * 40, "data": [1],
         }  # fmt: skip
 
-    return _world(tmp, mutate), {}
+    return simulate_world_args(tmp, mutate), {}
 
 
 def person_on_start(tmp: Path) -> tuple[list[str], dict[str, str]]:
     def mutate(doc: dict[str, Any]) -> None:
         doc["dynamic_obstacles"] = [bi.person(doc, pose=list(doc["start"]))]
 
-    return _world(tmp, mutate), {}
+    return simulate_world_args(tmp, mutate), {}
 
 
 def houseexpo_6000(tmp: Path) -> tuple[list[str], dict[str, str]]:

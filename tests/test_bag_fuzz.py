@@ -26,6 +26,7 @@ from albot2d.logs.carmen import MAX_BEAMS
 from albot2d.logs.rosbag import read_bag
 from albot2d.validation import COORDINATE_LIMIT_M
 from tests.bag_helpers import BagScan, write_test_bag
+from tests.strategies import corrupted
 
 _NASTY_32 = [0.0, -0.0, -1.0, 3e38, -3e38, 1e-45, 1e7, 0.5, math.pi, -7.0, float("nan"),
              float("inf"), float("-inf")]  # fmt: skip
@@ -68,33 +69,13 @@ def _check(path: Path) -> None:
         assert np.all(np.isfinite(valid)) and np.all(valid <= frame.scan.max_range_m)
 
 
-@st.composite
-def _mutated(draw: st.DrawFn, data: bytes) -> bytes:
-    out = bytearray(data)
-    for _ in range(draw(st.integers(1, 6))):
-        at = draw(st.integers(0, len(out)))
-        op = draw(st.sampled_from(["replace", "insert", "delete", "truncate", "flip"]))
-        chunk = draw(st.binary(min_size=1, max_size=8))
-        if op == "replace":
-            out[at : at + len(chunk)] = chunk
-        elif op == "insert":
-            out[at:at] = chunk
-        elif op == "delete":
-            del out[at : at + len(chunk)]
-        elif op == "truncate":
-            del out[at:]
-        elif at < len(out):
-            out[at] ^= 1 << draw(st.integers(0, 7))
-    return bytes(out)
-
-
 @pytest.mark.parametrize("kind", list(_SUFFIXES))
 @given(data=st.data())
 def test_byte_mutations_raise_only_input_error(
     tmp_path_factory: pytest.TempPathFactory, valid_bags: dict[str, bytes], kind: str, data: Any
 ) -> None:
     path = tmp_path_factory.mktemp("fuzz") / f"m{_SUFFIXES[kind]}"
-    path.write_bytes(data.draw(_mutated(valid_bags[kind])))
+    path.write_bytes(data.draw(corrupted(valid_bags[kind])))
     _check(path)
 
 

@@ -24,6 +24,7 @@ from albot2d.evaluation.fuzz.campaign import (
     run_campaign,
 )
 from albot2d.evaluation.fuzz.episode import EpisodeSpec, episode_seed, run_episode
+from albot2d.evaluation.fuzz.record import CheckMetrics, CheckOutcome, EpisodeRecord
 from albot2d.evaluation.fuzz.reproducer import replay_reproducer
 from albot2d.evaluation.fuzz.summary import COMPARED_METRICS, format_summary, summarise
 from tests.campaign_helpers import SMALL
@@ -174,10 +175,10 @@ def test_an_episode_depends_on_the_seed_and_its_index_only() -> None:
 def test_identical_seeds_give_identical_episodes() -> None:
     spec = EpisodeSpec.draw(CampaignParams(episodes=1, seed=8, **SMALL), 0)
     a, b = run_episode(spec).record, run_episode(spec).record
-    assert comparable([a]) == comparable([b])
-    assert a["digest"] is not None and a["status"] == "ok", a["violations"]
+    assert comparable([a.to_json()]) == comparable([b.to_json()])
+    assert a.digest is not None and a.status == "ok", a.violations
     other = EpisodeSpec.draw(CampaignParams(episodes=2, seed=8, **SMALL), 1)
-    assert run_episode(other).record["digest"] != a["digest"]
+    assert run_episode(other).record.digest != a.digest
 
 
 # -- backends ---------------------------------------------------------------------------------
@@ -237,7 +238,7 @@ def test_resume_redoes_only_the_missing_and_the_cut_off_episodes(reference, tmp_
         params,
         tmp_path,
         resume=True,
-        on_episode=lambda r: ran.append(r["episode"]),
+        on_episode=lambda r: ran.append(r.episode),
         on_note=notes.append,
     )
     assert sorted(ran) == [2, 3]
@@ -262,9 +263,13 @@ def test_ties_are_neither_wins_nor_losses() -> None:
         (1.0, 1.0 + 1e-6),
     ]
     records = [
-        {"episode": k, "status": "ok", "metrics": {mine: a, odo: b}}
+        EpisodeRecord(
+            episode=k, entropy=0, spec=None, status="ok",
+            checks=CheckOutcome(metrics=CheckMetrics(a, a, b, b)),
+        )
         for k, (a, b) in enumerate(pairs)
-    ]
+    ]  # fmt: skip
+    assert (mine, odo) == ("heading_error_mean_deg", "odometry_heading_error_mean_deg")
     summary = summarise(records, {}, ran=6, wall_time_s=1.0, workers=1)
     cmp = summary["mapper_vs_odometry"]["heading_error_mean_deg"]
     assert (cmp["mapper_better"], cmp["mapper_worse"], cmp["ties"]) == (2, 1, 3)
@@ -287,7 +292,7 @@ def test_a_violation_is_saved_as_a_reproducer_that_replays(
     path = reproducer_path(tmp_path / "c", record["episode"])
     doc = json.loads(path.read_text())
     assert doc["reproducer"]["world_json"]["format"] == "albot2d-world"
-    assert replay_reproducer(path).record["violations"] == record["violations"]
+    assert replay_reproducer(path).record.to_json()["violations"] == record["violations"]
     done = subprocess.run(
         [sys.executable, "-m", "albot2d", "run", "--reproduce", str(path), "--no-figures",
          "--out", str(tmp_path / "again")],
@@ -431,7 +436,7 @@ def test_pinned_campaign_findings_now_pass(index: int, kind: str, run_seed: int)
     spec = EpisodeSpec.draw(CampaignParams(episodes=1000, seed=0), index)
     assert (spec.kind, spec.run_seed) == (kind, run_seed)  # still the episode that failed
     record = run_episode(spec).record
-    assert record["status"] == "ok", record["violations"]
+    assert record.status == "ok", record.violations
 
 
 def test_an_episode_runs_with_the_heap_frozen_and_hands_it_back() -> None:

@@ -40,10 +40,12 @@ def test_a_damaged_tail_is_left_out_to_be_redone(tmp_path: Path) -> None:
     whole = record_line(0) + record_line(1, status="crash")
     for tail in (b'{"episode": 2, "sta', b"\x00" * 300, b"\x00" * 50 + b"\n" + b"\x00" * 9):
         path.write_bytes(whole + tail)
-        assert read_episodes(path) == (
-            {0: bi.episode_record(0), 1: bi.episode_record(1, status="crash")},
-            len(whole),
-        )
+        records, keep = read_episodes(path)
+        assert keep == len(whole)
+        assert {k: r.to_json() for k, r in records.items()} == {
+            0: bi.episode_record(0),
+            1: bi.episode_record(1, status="crash"),
+        }
 
 
 def write_campaign(folder: Path, params: CampaignParams, episodes: bytes = b"") -> None:

@@ -2,22 +2,20 @@
 that must not outlive the campaign, Ctrl-C once and twice, two campaigns on one folder.
 
 Every campaign here is an ``albot2d fuzz`` subprocess with two pool workers on tiny
-corridor worlds (``dataset3``: a view per metre), so an episode takes a fraction of a
-second and each test a few seconds. The random kill moments come from a seeded generator
-whose seed a failure prints; ``ALBOT2D_KILL_SEED=SEED`` replays that sequence.
+corridor worlds (``dataset3``: a view per metre; ``tests/fuzz_processes.py`` starts
+them), so an episode takes a fraction of a second and each test a few seconds. The random
+kill moments come from a seeded generator whose seed a failure prints;
+``ALBOT2D_KILL_SEED=SEED`` replays that sequence.
 """
 
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import random
 import signal
 import subprocess
-import sys
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -31,11 +29,19 @@ from albot2d.evaluation.fuzz.campaign import (
     run_campaign,
 )
 from albot2d.evaluation.fuzz.lock import LOCK_NAME
+from tests.fuzz_processes import (  # noqa: F401  (the fixture is used by name)
+    EPISODES,
+    MARKER,
+    _no_campaign_left_running,
+    assert_whole_lines,
+    output,
+    start_fuzz,
+    wait_for,
+    wait_for_first_episode,
+)
 
 psutil = pytest.importorskip("psutil")
 
-ROOT = Path(__file__).resolve().parents[1]
-EPISODES = 6
 TINY = {
     "kinds": ("corridors",),
     "world_size_min_m": 12.0,
@@ -43,73 +49,10 @@ TINY = {
     "tour_length_min_m": 8.0,
     "tour_length_max_m": 12.0,
 }
-TINY_ARGS = [
-    "--kinds",
-    "corridors",
-    "--world-size",
-    "12",
-    "14",
-    "--tour-length",
-    "8",
-    "12",
-    "--profile",
-    "dataset3",
-]
 # How long the workers of a killed campaign may live on (they poll every 0.25 s).
 ORPHAN_GRACE_S = 5.0
 # How long a campaign may take to stop after a second Ctrl-C.
 SECOND_INTERRUPT_GRACE_S = 10.0
-
-
-# Set in the environment of every campaign started here, and so of all its processes:
-# how the test finds them all, even those started after it last looked.
-MARKER = "ALBOT2D_CAMPAIGN_TEST"
-
-
-def start_fuzz(
-    out: Path,
-    *extra: str,
-    episodes: int = EPISODES,
-    seed: int = 21,
-) -> subprocess.Popen[str]:
-    """``albot2d fuzz`` in the background, its output to files (not pipes: orphaned workers
-    would hold a pipe open, and reading it would wait for them)."""
-    logs = out.parent / "logs"
-    logs.mkdir(exist_ok=True)
-    n = len(list(logs.iterdir())) // 2
-    with open(logs / f"{n}.out", "w") as stdout, open(logs / f"{n}.err", "w") as stderr:
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "albot2d", "fuzz", "--episodes", str(episodes), "--seed",
-             str(seed), "--workers", "2", *TINY_ARGS, "--no-figures", "--out", str(out),
-             *extra],
-            stdout=stdout, stderr=stderr, text=True,
-            env={**os.environ, "PYTHONPATH": str(ROOT), MARKER: str(out)},
-        )  # fmt: skip
-    proc.logs = (logs / f"{n}.out", logs / f"{n}.err")  # type: ignore[attr-defined]
-    _STARTED.append(proc)
-    return proc
-
-
-_STARTED: list[subprocess.Popen[str]] = []
-
-
-@pytest.fixture(autouse=True)
-def _no_campaign_left_running() -> Iterator[None]:
-    """A test that fails half-way must not leave its campaign running (nor a Popen whose
-    ResourceWarning would then fail whichever test happens to collect it)."""
-    yield
-    while _STARTED:
-        proc = _STARTED.pop()
-        if proc.poll() is None:
-            proc.kill()
-        proc.wait(timeout=30)
-
-
-def output(proc: subprocess.Popen[str], timeout_s: float) -> tuple[str, str]:
-    """Wait for ``proc``; its stdout and stderr."""
-    proc.wait(timeout=timeout_s)
-    out, err = proc.logs  # type: ignore[attr-defined]
-    return out.read_text(), err.read_text()
 
 
 def family_of(out: Path) -> list:  # type: ignore[type-arg]
@@ -122,14 +65,6 @@ def family_of(out: Path) -> list:  # type: ignore[type-arg]
         except psutil.Error:  # gone, or not ours to read
             pass
     return found
-
-
-def wait_for(predicate, timeout_s: float, what: str) -> None:  # type: ignore[no-untyped-def]
-    deadline = time.monotonic() + timeout_s
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
-        time.sleep(0.05)
 
 
 def descendants(pid: int) -> list:  # type: ignore[type-arg]
@@ -154,12 +89,6 @@ def alive(processes: list) -> list:  # type: ignore[type-arg]
 def episodes_written(out: Path) -> int:
     path = out / EPISODES_NAME
     return len(read_episodes(path)[0]) if path.exists() else 0
-
-
-def assert_whole_lines(path: Path) -> list[dict]:
-    data = path.read_bytes()
-    assert data == b"" or data.endswith(b"\n"), f"a cut-off line in {path}: {data[-80:]!r}"
-    return [json.loads(line) for line in data.splitlines()]
 
 
 def comparable(records: list[dict]) -> list[dict]:
@@ -286,12 +215,7 @@ def test_a_second_ctrl_c_stops_the_campaign_within_seconds(tmp_path: Path) -> No
 def test_a_first_ctrl_c_lets_the_running_episodes_finish(tmp_path: Path) -> None:
     out = tmp_path / "fuzz"
     proc = start_fuzz(out, episodes=20)
-    path = out / EPISODES_NAME
-    wait_for(
-        lambda: (path.exists() and path.stat().st_size > 0) or proc.poll() is not None,
-        60,
-        "a first episode",
-    )
+    wait_for_first_episode(proc, out, 60)
     proc.send_signal(signal.SIGINT)
     _, stderr = output(proc, 60)
     assert proc.returncode == 130, stderr

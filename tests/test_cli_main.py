@@ -65,3 +65,29 @@ def test_run_and_simulate_share_their_world_and_driving_options() -> None:
     }
     assert shared <= set(run) and shared <= set(simulate)
     assert {k: run[k] for k in shared} == {k: simulate[k] for k in shared}
+
+
+def test_an_interrupt_inside_a_compiled_kernel_is_an_interrupt(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """SIGTERM or Ctrl-C arriving while numba's dispatcher runs Python code comes out as a
+    ``SystemError`` caused by the ``KeyboardInterrupt``: still exit 130 and one line. A
+    ``SystemError`` of another cause stays an error."""
+    import albot2d.cli.world_cmd as world_cmd
+
+    def interrupted_in_a_kernel(args: object) -> int:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("CPUDispatcher returned a result with an exception set") from exc
+
+    monkeypatch.setattr(world_cmd, "run", interrupted_in_a_kernel)
+    assert main(["world", "--kind", "rooms", "--out", "w.json"]) == 130
+    assert capsys.readouterr().err == "albot2d world: interrupted\n"
+
+    def broken(args: object) -> int:
+        raise SystemError("a real bug")
+
+    monkeypatch.setattr(world_cmd, "run", broken)
+    with pytest.raises(SystemError, match="a real bug"):
+        main(["world", "--kind", "rooms", "--out", "w.json"])

@@ -14,13 +14,14 @@ import numpy as np
 import pytest
 
 from albot2d.cli import main
-from albot2d.evaluation import RunSpec, run_experiment
+from albot2d.evaluation import run_experiment
 from albot2d.evaluation.run.replay import find_relations, log_stem
 from albot2d.geometry import Pose
 from albot2d.logs import read_frames, read_relations, read_run, write_run
 from albot2d.seeding import RUN_STREAMS, stream_seed
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
+from tests.runs import small_run
 from worldgen import plan_tour
 from worldgen.generate import generate
 
@@ -87,15 +88,7 @@ def test_replay_a_simulated_log(
 
 
 def test_replay_agrees_with_the_run_that_made_the_log(run_dir: Path, tmp_path: Path) -> None:
-    spec = RunSpec(
-        kind="rooms",
-        seed=5,
-        world_params={"width_m": 15.0, "height_m": 15.0},
-        profile="dataset3",
-        tour_length_m=20.0,
-        tour_length_is_minimum=True,  # the fixture's tour
-        mappers=("naive",),
-    )
+    spec = small_run(5, tour_length_is_minimum=True, mappers=("naive",))  # the fixture's run
     live = run_experiment(spec).report
     out = tmp_path / "replay"
     assert (

@@ -150,6 +150,9 @@ def test_from_houseexpo(tmp_path: Path, capsys) -> None:
     [
         (["--kind", KIND], ["not both"]),
         (["--width", "10"], ["--from-houseexpo takes only", "width_m"]),
+        (["--param", "robot_radius_m=abc"], ["robot_radius_m", "number of metres", "'abc'"]),
+        (["--param", "clearance_margin_m=true"], ["clearance_margin_m", "True"]),
+        (["--param", "robot_radius_m=-1"], ["robot_radius_m must be > 0", "-1"]),
     ],
 )
 def test_from_houseexpo_rejects_generator_options(tmp_path: Path, capsys, extra, needles) -> None:

@@ -46,7 +46,7 @@ def _reference(m: Albot1, report: UpdateReport, robot: Pose, view: np.ndarray) -
     segs, ids = snap.segments[older], snap.map_ids[older]
     poly = di._view_polygon(view, robot, params.enlarge_m, params.enlarge, params.include_viewpoint)
     hits = di.shapely.intersects(poly, di.shapely.linestrings(segs.reshape(-1, 2, 2)))
-    seeable = hits & di._facing(segs, robot, params.facing_test)
+    seeable = hits & di.facing_mask(segs, robot, params.facing_test)
     if params.seen_side == "front":
         d = segs[:, 2:] - segs[:, :2]
         r = np.array([robot.x, robot.y]) - segs[:, :2]
@@ -152,7 +152,7 @@ def test_the_prefilters_drop_only_points_shapely_calls_unseen(seed: int) -> None
         expected = di._seen_samples(segs, view, robot, beyond_m, 8).mean(axis=1)
         for share in (0.0, 0.3, 0.5, 1.0):
             for backend in BACKENDS:
-                got = di._visible(segs, view, robot, beyond_m, 8, share, backend)
+                got = di.visible_mask(segs, view, robot, beyond_m, 8, share, backend)
                 assert np.array_equal(got, (expected > 0) & (expected >= share))
         kernels = di._kernels()
         if kernels is not None:  # the compiled prefilter drops no seen point either
@@ -185,7 +185,7 @@ def test_the_visible_share_keeps_the_preset_semantics() -> None:
 
 
 def _visible_list(segs: np.ndarray, view: np.ndarray, robot: Pose, share: float) -> list[bool]:
-    return di._visible(segs, view, robot, 0.5, 8, share).tolist()
+    return di.visible_mask(segs, view, robot, 0.5, 8, share).tolist()
 
 
 @pytest.mark.parametrize("seed", range(3))

@@ -78,13 +78,13 @@ def test_the_fuzz_campaign_catches_an_over_deleting_mapper() -> None:
         tour_length_max_m=15.0,
     )  # fmt: skip
     record = run_episode(EpisodeSpec.draw(campaign, 0)).record
-    assert record["status"] == "violation"
-    messages = record["violations"]["update_deletes_facing_overlap"]
+    assert record.status == "violation"
+    messages = record.violations["update_deletes_facing_overlap"]
     assert any("deleted that the rule keeps" in msg for msg in messages)
     # The same episode with Albot1 as it is passes the invariant.
     plain = run_episode(EpisodeSpec.draw(dataclasses.replace(campaign, mapper="albot1"), 0))
-    assert "update_deletes_facing_overlap" in plain.record["checked"]
-    assert "update_deletes_facing_overlap" not in plain.record["violations"]
+    assert "update_deletes_facing_overlap" in plain.record.checked
+    assert "update_deletes_facing_overlap" not in plain.record.violations
 
 
 # -- the definition's parts, by hand ---------------------------------------------------------

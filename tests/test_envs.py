@@ -140,3 +140,109 @@ def test_module_qualified_id_in_a_fresh_interpreter() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert "['goal', 'odometry', 'ranges']" in out.stdout
+
+
+def _run_goto_baseline(seed: int, **options: object) -> tuple[bool, dict]:
+    from albot2d.envs.goto import baseline_policy as goto_policy
+
+    env = gymnasium.make("albot2d/GoTo-v0", **SMALL, **options)
+    obs, info = env.reset(seed=seed)
+    policy = goto_policy(env.unwrapped)
+    terminated = truncated = False
+    while not (terminated or truncated):
+        # The policy is handed no truth: an empty info proves it never reads it.
+        obs, _reward, terminated, truncated, info = env.step(policy(obs, {}))
+    env.close()
+    return terminated, info
+
+
+@pytest.mark.parametrize("seed", [0, 3, 7])
+def test_goto_baseline_arrives_with_perfect_odometry(seed: int) -> None:
+    # Goals 2-10 m away, often round a wall: it has to plan through what it has not seen.
+    terminated, info = _run_goto_baseline(seed, noise="none")
+    assert terminated, info
+    assert info["distance_m"] <= 0.3
+
+
+def test_goto_baseline_trusts_odometry_so_drift_can_defeat_it() -> None:
+    # With odometry noise the seeker stops where its odometry says the goal is; the
+    # environment judges by the truth. The miss must be the odometry's error at the stop.
+    from albot2d.envs.goto import baseline_policy as goto_policy
+    from albot2d.geometry import Pose
+
+    env = GoToEnv(**SMALL, noise="high")
+    obs, info = env.reset(seed=1)
+    policy = goto_policy(env)
+    for _ in range(1200):
+        obs, _r, terminated, _t, info = env.step(policy(obs, {}))
+        if terminated or (np.hypot(*obs["goal"][:2]) <= 0.1 and abs(obs["goal"][2]) <= 0.1):
+            break
+    believed = Pose.from_array(obs["odometry"]).compose(Pose.from_array(obs["goal"]))
+    odometry_error = env.last.true_pose.distance_to(
+        env.world.start.compose(Pose.from_array(obs["odometry"]))
+    )
+    miss = info["distance_m"]
+    # Where odometry thinks it is, it stands on the goal (within the seeker's tolerance);
+    # the true miss is the odometry error, give or take that tolerance.
+    assert np.hypot(believed.x - Pose.from_array(obs["odometry"]).x,
+                    believed.y - Pose.from_array(obs["odometry"]).y) <= 0.1  # fmt: skip
+    assert abs(miss - odometry_error) <= 0.1 + 1e-9
+
+
+def test_human_render_draws_into_a_pyplot_window(tmp_path) -> None:
+    # No display here: a real pyplot figure on the Agg backend in a fresh interpreter; the
+    # same code path a window takes (plt.ion, plt.figure, plt.pause) runs.
+    code = f"""
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np, gymnasium, albot2d.envs
+env = gymnasium.make("albot2d/Explore-v0", render_mode="human", kind="rooms",
+                     world_params={{"width_m": 14.0, "height_m": 10.0}})
+env.reset(seed=0)
+assert env.render() is None  # human mode shows, returns nothing
+for _ in range(3):
+    env.step(np.array([0.3, 0.2], dtype=np.float32))
+figs = plt.get_fignums()
+assert len(figs) == 1, figs
+fig = plt.figure(figs[0])
+fig.savefig(r"{tmp_path / "frame.png"}")
+image = np.asarray(fig.canvas.buffer_rgba())[..., :3]
+assert image.std() > 0
+env.close()
+assert plt.get_fignums() == [], plt.get_fignums()
+print("ok")
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().endswith("ok")
+    assert (tmp_path / "frame.png").stat().st_size > 1000
+
+
+def test_baselines_evaluate_and_summarise() -> None:
+    from albot2d.envs.baselines import evaluate, summary
+
+    episodes = evaluate("GoTo-v0", episodes=2, seed=0, noise="none", **SMALL)
+    assert [e.seed for e in episodes] == [0, 1]
+    assert all(e.terminated and e.final <= 0.3 for e in episodes)
+    text = summary("GoTo-v0", episodes)
+    assert text.startswith("GoTo-v0: 2 of 2 episodes terminated (100 %)")
+    short = evaluate("Explore-v0", episodes=1, max_steps=50, **SMALL)
+    assert short[0].steps == 50 and not short[0].terminated
+    assert 0.0 < short[0].final < 1.0
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [(["Nope-v0"], "'Nope-v0'"), (["GoTo-v0", "--noise", "loud"], "'loud'"),
+     (["GoTo-v0", "--episodes", "0"], "episodes must be at least 1, got 0")],
+)  # fmt: skip
+def test_baselines_command_refuses_bad_input_in_one_line(argv: list[str], needle: str) -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "albot2d.envs.baselines", *argv],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert out.returncode == 2, out.stderr
+    assert out.stdout == ""
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0], out.stderr

@@ -39,17 +39,11 @@ from albot2d.mapping import Albot1, GroundTruthIntegration
 from albot2d.seeding import RUN_STREAMS, stream_seed
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
+from tests.runs import small_run
 from worldgen import plan_tour
 from worldgen.generate import generate
 
-SPEC = RunSpec(
-    kind="rooms",
-    seed=3,
-    world_params={"width_m": 15.0, "height_m": 15.0},
-    profile="dataset3",
-    tour_length_m=20.0,
-    noise="typical",
-)
+SPEC = small_run(3, noise="typical")
 PARAMS = EvaluationParams(homing=HomingParams(stop_every_m=4.0, min_start_distance_m=1.5))
 
 

@@ -7,16 +7,16 @@ import pytest
 from albot2d.cli.experiments_cmd import parse_seeds
 from albot2d.errors import InputError
 from albot2d.evaluation.paper import counts, plan_jobs, table1
+from albot2d.evaluation.paper.jobs import JobSummary, MarkCounts, PathIntegrationCauses
 from albot2d.evaluation.paper.process_exp import FIG15, FIG16, method_sequences, room_exit_rows
 from albot2d.evaluation.paper.stats import over_seeds, verdict_of
+from tests import paper_jobs as pj
 
 
-def _counts_job(views: int, maps: int, pi: int, marks: tuple[str, ...]) -> dict:
-    c = {"views": views, "local_maps": maps, "path_integrations": pi}
-    return {
-        "mapper_results": {"albot1": {"counts": dict(c)}},
-        "marks": {m: {"counts": {"albot1": dict(c)}} for m in marks},
-    }
+def _counts_job(views: int, maps: int, pi: int, marks: tuple[str, ...]) -> JobSummary:
+    c = MarkCounts(views, maps, pi)
+    return pj.job(end_counts=pj.counts(views, maps, pi),
+                  marks={m: pj.mark(mapper_counts={"albot1": c}) for m in marks})  # fmt: skip
 
 
 def test_counts_ratio_and_path_integration_checks():
@@ -44,36 +44,29 @@ def test_counts_ratio_and_path_integration_checks():
     assert r["verdict"] == "partly"
 
 
-def _stop(dist: float, bearing_err: float, dist_err: float) -> dict:
-    return {"view": 1, "travelled_m": 1.0, "bearing_est_deg": 0.0, "bearing_true_deg": 0.0,
-            "distance_est_m": dist + dist_err, "distance_true_m": dist,
-            "bearing_error_deg": bearing_err, "distance_error_m": dist_err}  # fmt: skip
-
-
 def test_table1_counts_only_stops_17_to_35_m_from_s():
-    acw = {"seed": 0, "mapper_results": {"albot1": {"homing": [
+    _stop = pj.homing_stop
+    acw = pj.job(homing=[
         _stop(10.0, 30.0, 9.0),  # too near: not a Table 1 stop
         _stop(20.0, 6.9, -2.9),  # within
         _stop(34.0, -7.5, 0.0),  # bearing out of bound
-    ]}}}  # fmt: skip
-    cw = {"seed": 0, "mapper_results": {"albot1": {"homing": [
-        _stop(17.0, 0.0, 3.1), _stop(30.0, 1.0, 1.0), _stop(40.0, 50.0, 50.0)]}}}  # fmt: skip
+    ])  # fmt: skip
+    cw = pj.job(homing=[_stop(17.0, 0.0, 3.1), _stop(30.0, 1.0, 1.0), _stop(40.0, 50.0, 50.0)])
     r = table1.compute({"fig8_anticlockwise": [acw], "fig8_clockwise": [cw]}, [0])
     ours = r["ours"]
     assert ours["n_stops"] == 4
     assert [s["within_bound"] for s in ours["stops"]] == [True, False, False, True]
     assert ours["fraction_within_bound"] == 0.5
-    assert ours["bearing_error_abs_max_deg"] == 7.5
+    assert ours["bearing_error_abs_max_deg"] == pytest.approx(7.5)  # via radians
     assert r["paper"]["fraction_within_bound"] == 1.0 and len(r["paper"]["rows"]) == 4
     assert r["verdict"] == "partly"
 
 
-def _fig16_job(p95_albot1: float, p95_naive: float, pi: int) -> dict:
-    return {
-        "map_quality_at_marks": {"E7": {"albot1": {"accuracy_m_p95": p95_albot1},
-                                        "naive": {"accuracy_m_p95": p95_naive}}},
-        "marks": {"E7": {"counts": {"albot1": {"path_integrations": pi}}}},
-    }  # fmt: skip
+def _fig16_job(p95_albot1: float, p95_naive: float, pi: int) -> JobSummary:
+    return pj.job(
+        quality_at={"E7": pj.quality(albot1=p95_albot1, naive=p95_naive)},
+        marks={"E7": pj.mark(mapper_counts={"albot1": MarkCounts(0, 0, pi)})},
+    )
 
 
 def test_fig16_ratio_of_naive_to_albot1_and_path_integrations():
@@ -119,14 +112,13 @@ def test_seed_ranges_and_bad_input():
     ]  # fmt: skip
 
 
-def _room_update(methods: list[str], tracked: list[int]) -> dict:
+def _room_update(methods: list[str], tracked: list[int]) -> pj.Updates:
     """A fig15 route along x: RD at 2 m, R at 5 m, back at RD at 8 m (true distance); a
     view every metre (two at R: the arrival, then the turn)."""
     xs = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 5.0, 4.0, 3.0, 2.0, 1.0, 0.0]
     assert len(methods) == len(tracked) == len(xs)
-    return {"true_xy": [[x, 0.0] for x in xs], "methods": methods, "tracked": tracked,
-            "waypoint_along_m": {"S": [0.0], "RD": [2.0, 8.0], "R": [5.0], "E1": [10.0]},
-            "flags": [bool(m) for m in methods], "regions": ["corridor"] * len(xs)}  # fmt: skip
+    return pj.updates([[x, 0.0] for x in xs], methods, tracked, ["corridor"] * len(xs),
+                      {"S": [0.0], "RD": [2.0, 8.0], "R": [5.0], "E1": [10.0]})  # fmt: skip
 
 
 def test_fig15_counts_the_methods_from_the_room_to_the_corridor():
@@ -139,7 +131,7 @@ def test_fig15_counts_the_methods_from_the_room_to_the_corridor():
     assert room_exit_rows(u) == [5, 6, 7, 8, 9, 10, 11]
     plain = _room_update(["start"] + ["triangulation"] * 11, [0] + [3] * 11)
     jobs = {"fig15_room": [u, plain], "fig6_start_stop": [u, plain]}
-    jobs = {k: [{"updates": x} for x in v] for k, v in jobs.items()}
+    jobs = {k: [pj.job(steps=x) for x in v] for k, v in jobs.items()}
     r = FIG15.compute(jobs, [0, 1])
     exit_ = r["ours"]["room_exit"]
     assert exit_["path_integrations"]["per_seed"] == {"0": 2.0, "1": 0.0}
@@ -147,19 +139,18 @@ def test_fig15_counts_the_methods_from_the_room_to_the_corridor():
     assert exit_["views_with_no_tracked_surface"]["per_seed"] == {"0": 2.0, "1": 0.0}
     assert exit_["share_of_seeds_triangulation_then_2plus_pi"] == 0.5
     assert r["verdict"] == "reproduced"  # half of the seeds
-    jobs["fig15_room"][0] = {"updates": plain}
+    jobs["fig15_room"][0] = pj.job(steps=plain)
     assert FIG15.compute(jobs, [0, 1])["verdict"] == "not reproduced"
 
 
 def test_path_integration_causes_are_split_and_cut_at_the_mark():
-    causes = {"frames": [3, 7, 9, 20], "tracked": [0, 2, 0, 0],
-              "turning": [True, False, False, True],
-              "regions": ["corridor", "corridor", "hall", "corridor"],
-              "update_frames": [0, 3, 5, 7, 9, 20],
-              "update_methods": ["start", "path_integration", "triangulation",
-                                 "path_integration", "path_integration",
-                                 "path_integration"]}  # fmt: skip
-    job = {"path_integration_causes": causes, "marks": {"E7": {"frame": 10}}}
+    causes = PathIntegrationCauses(
+        frames=(3, 7, 9, 20), tracked=(0, 2, 0, 0), turning=(True, False, False, True),
+        regions=("corridor", "corridor", "hall", "corridor"), update_frames=(0, 3, 5, 7, 9, 20),
+        update_methods=("start", "path_integration", "triangulation", "path_integration",
+                        "path_integration", "path_integration"),
+    )  # fmt: skip
+    job = pj.job(causes=causes, marks={"E7": pj.mark(frame=10)})
     c = counts._pi_causes([job], "E7", [0])
     values = {k: v["per_seed"]["0"] for k, v in c.items()}
     assert values == {"total": 3, "no_tracked_surface": 2, "tracked_but_no_pose": 1,
@@ -183,3 +174,39 @@ def test_run_experiment_without_scoring_drives_the_same_run():
     assert light.report["run"]["frames"] == full.report["run"]["frames"] == 8
     counts = full.report["mappers"]["albot1"]["counts"]
     assert light.trace.mappers["albot1"].counts().local_maps == counts["local_maps"]
+
+
+def _same_plain(a: object, b: object) -> bool:
+    import numpy as np
+
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (
+            isinstance(a, np.ndarray)
+            and isinstance(b, np.ndarray)
+            and a.dtype == b.dtype
+            and np.array_equal(a, b)
+        )
+    if isinstance(a, dict) and isinstance(b, dict):
+        return list(a) == list(b) and all(_same_plain(a[k], b[k]) for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_same_plain(x, y) for x, y in zip(a, b, strict=True))
+    return type(a) is type(b) and a == b
+
+
+def test_a_job_summary_crosses_a_process_whole():
+    """A job's typed summary, to plain data (what a worker sends back) and back: every
+    number, array (dtype too) and key order the same, and it pickles as plain data."""
+    import pickle
+
+    from albot2d.evaluation.paper.runs import run_job_readings
+
+    out = run_job_readings("fig6_dataset1", 0, quick=True, albot_x=False, keep_figures=True,
+                           readings=("default", "paper_literal"))  # fmt: skip
+    for reading, summary in out.items():
+        assert summary.figures is not None and summary.figures.snaps  # the figure seed's
+        assert summary.reading == reading and summary.others  # naive beside Albot1
+        plain = summary.to_plain()
+        again = JobSummary.from_plain(pickle.loads(pickle.dumps(plain)))
+        assert _same_plain(again.to_plain(), plain)
+        assert again.albot1 == summary.albot1 and again.marks == summary.marks
+        assert again.map_quality_at_marks == summary.map_quality_at_marks

@@ -3,16 +3,13 @@ same results on any number of workers, and index.html in a real headless Chromiu
 
 from __future__ import annotations
 
-import html
 import json
-import re
-import shutil
-import subprocess
 from pathlib import Path
 
 import pytest
 
 from albot2d.cli import main
+from tests.browser import chromium, probe_page
 
 pytest.importorskip("matplotlib")
 # Every experiment of the paper, run --quick (about a minute even on a quiet machine).
@@ -94,14 +91,6 @@ def test_bad_input_is_one_line_and_writes_nothing(argv, message, tmp_path, capsy
     assert not out.exists()
 
 
-def _chromium() -> str:
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    pytest.skip("headless Chromium not installed (Debian: apt-get install -y chromium)")
-
-
 # Injected into a copy of the page only: reports, once loaded, the images that did not load
 # and how many tables there are, as an attribute the dumped DOM shows.
 _PROBE = (
@@ -113,19 +102,9 @@ _PROBE = (
 
 
 def test_page_in_headless_chromium(quick_out):
-    chromium = _chromium()
+    chromium()
     page = (quick_out / "index.html").read_text()
-    probe = quick_out / "probe.html"
-    probe.write_text(page.replace("</body>", _PROBE))
-    proc = subprocess.run(
-        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--enable-logging=stderr",
-         "--v=0", "--virtual-time-budget=5000", "--dump-dom", probe.as_uri()],
-        capture_output=True, text=True, timeout=120, check=False,
-    )  # fmt: skip
-    probe.unlink()
-    found = re.search(r'data-probe="([^"]*)"', proc.stdout)
-    assert found, proc.stderr[-2000:]
-    result = json.loads(html.unescape(found.group(1)))
+    result, proc = probe_page(page, quick_out, _PROBE, "--enable-logging=stderr", "--v=0")
     data = json.loads((quick_out / "experiments.json").read_text())
     # every reading's figures (default: default and paper_literal) are on the page
     n_figures = sum(len(v["figures"]) for r in data["experiments"].values()

@@ -5,16 +5,11 @@ overflows the page's width; Chromium's --dump-dom gives that back."""
 
 from __future__ import annotations
 
-import html
-import json
-import re
-import shutil
-import subprocess
-
 import pytest
 
 pytest.importorskip("matplotlib")
 
+from tests.browser import chromium, probe_page
 from tests.figure_specs import paper_specs
 
 _PROBE = (
@@ -26,14 +21,6 @@ _PROBE = (
     "bad:bad,wide:wide,scroll:document.documentElement.scrollWidth,width:W,"
     "banner:!!document.getElementById('smoke-banner')}));});</script></body>"
 )
-
-
-def _chromium() -> str:
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    pytest.skip("headless Chromium not installed (Debian: apt-get install -y chromium)")
 
 
 def _page(out):
@@ -63,19 +50,10 @@ def _page(out):
 
 @pytest.mark.parametrize("width", [1280, 700])
 def test_no_image_is_missing_or_overflowing(tmp_path, width):
-    chromium = _chromium()
+    chromium()
     page, n_images = _page(tmp_path)
     assert page.count("(smoke run)") >= 2 * n_images  # summary and section of every verdict
-    probe = tmp_path / "probe.html"
-    probe.write_text(page.replace("</body>", _PROBE), encoding="utf-8")
-    proc = subprocess.run(
-        [chromium, "--headless", "--no-sandbox", "--disable-gpu", f"--window-size={width},900",
-         "--virtual-time-budget=5000", "--dump-dom", probe.as_uri()],
-        capture_output=True, text=True, timeout=120, check=False,
-    )  # fmt: skip
-    found = re.search(r'data-probe="([^"]*)"', proc.stdout)
-    assert found, proc.stderr[-2000:]
-    result = json.loads(html.unescape(found.group(1)))
+    result, _ = probe_page(page, tmp_path, _PROBE, f"--window-size={width},900")
     assert result["images"] == n_images and result["bad"] == []
     assert result["wide"] == [], result
     assert result["scroll"] <= result["width"], result  # nothing wider than the window

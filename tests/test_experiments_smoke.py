@@ -8,13 +8,15 @@ import numpy as np
 
 from albot2d.cli import main
 from albot2d.evaluation.paper.figdata import map_panel
+from albot2d.evaluation.paper.jobs import FigureRun, MapAt, Snapshot
 
 
-def _fig(reached: bool) -> dict:
-    snap = {"reached": reached, "frame": 149, "true_travelled_m": 7.2,
-            "maps": {"albot1": {"segments": np.zeros((1, 4))}}}  # fmt: skip
-    return {"snaps": {"E5": snap}, "true_poses": np.zeros((200, 3)),
-            "world_walls": np.zeros((1, 4)), "waypoints": {}}  # fmt: skip
+def _fig(reached: bool) -> FigureRun:
+    albot1 = MapAt(np.zeros((1, 4)), np.zeros(1, dtype=np.int64), np.zeros(3), 149, 20, 0)
+    snap = Snapshot(np.zeros(3), 7.2, 149, {"albot1": albot1}, reached)
+    return FigureRun(world_walls=np.zeros((1, 4)), true_poses=np.zeros((200, 3)),
+                     odom_poses=np.zeros((200, 3)), snaps={"E5": snap}, waypoints={},
+                     updates=None, views=None)  # fmt: skip
 
 
 def test_a_panel_names_the_place_only_when_the_run_got_there():

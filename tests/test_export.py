@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from albot2d.evaluation import RunSpec, run_experiment
+from albot2d.evaluation import run_experiment
 from albot2d.evaluation.metrics.alignment import (
     absolute_pose_error,
     align_se2,
@@ -17,15 +17,9 @@ from albot2d.evaluation.metrics.alignment import (
 )
 from albot2d.evaluation.run.export import export_files, segments_csv, tum_text
 from albot2d.geometry import compose_arrays, transform_segments
+from tests.runs import small_run
 
-SPEC = RunSpec(
-    kind="rooms",
-    seed=1,
-    world_params={"width_m": 15.0, "height_m": 15.0},
-    profile="dataset3",
-    tour_length_m=20.0,
-    max_frames=70,
-)
+SPEC = small_run(1, max_frames=70)
 
 
 @pytest.fixture(scope="module")

@@ -68,8 +68,8 @@ def robust_optimum(mapper: object) -> np.ndarray:
     params.setRelativeErrorTol(1e-14)
     params.setAbsoluteErrorTol(0.0)
     params.setMaxIterations(100)
-    # the mapper's GTSAM graph itself (PoseGraph keeps it private)
-    result = gtsam.LevenbergMarquardtOptimizer(graph._graph, values, params).optimize()
+    # the mapper's GTSAM graph itself
+    result = gtsam.LevenbergMarquardtOptimizer(graph.factor_graph, values, params).optimize()
     return np.array([[result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()]
                      for k in range(len(graph.estimate))])  # fmt: skip
 

@@ -13,25 +13,18 @@ import pytest
 
 pytest.importorskip("matplotlib")
 
-from albot2d.evaluation import RunSpec, run_experiment
+from albot2d.evaluation import run_experiment
 from albot2d.evaluation.metrics.homing import HomingResult
 from albot2d.evaluation.run.experiment import ExperimentResult
 from albot2d.viz import error_curves, plot_errors_vs_distance, plot_estimated_paths, plot_homing
+from tests.runs import small_run
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
 @pytest.fixture(scope="module")
 def result() -> ExperimentResult:
-    spec = RunSpec(
-        kind="rooms",
-        seed=2,
-        world_params={"width_m": 15.0, "height_m": 15.0},
-        profile="dataset3",
-        tour_length_m=20.0,
-        max_frames=60,
-    )
-    return run_experiment(spec)
+    return run_experiment(small_run(2, max_frames=60))
 
 
 def test_error_curves_against_the_truth(result: ExperimentResult) -> None:

@@ -16,6 +16,7 @@ from albot2d.sim.raycast import NEAR_PASS_MIN_PIECES, BeamFan, RayCaster, cast_b
 from tests.raycast_helpers import (
     BACKENDS,
     EXACT_M,
+    assert_same_ranges,
     assume_not_touching,
     box_segments,
     coord,
@@ -32,26 +33,6 @@ heading = st.floats(-math.pi, math.pi, allow_nan=False)
 
 def make_caster(backend: str, segments: object, **kwargs: object) -> RayCaster:
     return RayCaster(segments, backend=backend, **kwargs)  # type: ignore[arg-type]
-
-
-def assert_same_ranges(
-    got: np.ndarray,
-    want: np.ndarray,
-    max_range: float,
-    segs: np.ndarray | None = None,
-    origin: tuple[float, float] = (0.0, 0.0),
-    angles: np.ndarray | None = None,
-) -> None:
-    """Equal to EXACT_M; a reference hit within EXACT_M of max_range may fall either side, and
-    so may a beam grazing a segment end (when ``segs`` and ``angles`` are given)."""
-    ok = np.zeros(len(got), dtype=bool)
-    if segs is not None and angles is not None:
-        ok = grazing(segs, origin, angles)
-    both = np.isfinite(got) & np.isfinite(want) & ~ok
-    np.testing.assert_allclose(got[both], want[both], rtol=0.0, atol=EXACT_M)
-    only = (np.isfinite(got) != np.isfinite(want)) & ~ok
-    edge = np.where(np.isfinite(got), got, want)[only]
-    assert np.all(np.abs(edge - max_range) < EXACT_M), (np.flatnonzero(only), edge)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)

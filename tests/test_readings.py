@@ -202,14 +202,10 @@ def test_readings_are_checked_before_anything_runs(tmp_path, capsys) -> None:  #
 def test_compute_readings_puts_each_reading_side_by_side() -> None:
     from albot2d.evaluation.paper.campaign import compute_readings
     from albot2d.viz.paper_page import render_page
+    from tests import paper_jobs as pj
 
-    def job(err: float) -> dict:
-        stop = {"view": 1, "travelled_m": 20.0, "bearing_est_deg": 0.0, "bearing_true_deg": err,
-                "distance_est_m": 20.0, "distance_true_m": 20.0, "bearing_error_deg": err,
-                "distance_error_m": 0.0}  # fmt: skip
-        return {"seed": 0, "mapper_results": {"albot1": {"homing": [stop]}}, "figures": {},
-                "frames": 10, "travelled_m": 30.0, "tour_length_m": 30.0,
-                "world_sha256": "0" * 64}  # fmt: skip
+    def job(err: float) -> pj.JobSummary:
+        return pj.job(homing=[pj.homing_stop(20.0, err, 0.0, travelled_m=20.0)])
 
     by_reading = {
         "default": {"fig8_anticlockwise": [job(1.0)], "fig8_clockwise": [job(2.0)]},

@@ -15,17 +15,11 @@ from albot2d.seeding import RUN_STREAMS, stream_seed
 from albot2d.sim.laser import LASER_NOISE_PRESETS, LaserNoise, laser_noise_preset
 from albot2d.sim.odometry import noise_preset
 from albot2d.sim.simulator import Simulator
+from tests.runs import small_run
 from worldgen import generate, plan_tour
 from worldgen.io import world_to_json
 
-SPEC = RunSpec(
-    kind="rooms",
-    seed=4,
-    world_params={"width_m": 15.0, "height_m": 15.0},
-    profile="dataset3",
-    tour_length_m=20.0,
-    mappers=("albot1", "naive"),
-)
+SPEC = small_run(4, mappers=("albot1", "naive"))
 
 
 def test_build_run_is_world_tour_and_simulator_made_by_hand() -> None:

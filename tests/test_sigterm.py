@@ -3,8 +3,8 @@
 A campaign sent SIGTERM stops handing out episodes, lets the running ones finish and be
 written down, releases its lock and shuts its pool down (no "leaked semaphore" warning),
 exits 130 and resumes to the uninterrupted result; ``albot2d run`` sent SIGTERM leaves no
-output behind. Real processes, as in ``tests/test_campaign_processes.py`` (whose helpers
-these tests share).
+output behind. Real processes, as in ``tests/test_campaign_processes.py`` (helpers shared in
+``tests/fuzz_processes.py``).
 """
 
 from __future__ import annotations
@@ -20,26 +20,22 @@ import pytest
 
 from albot2d.evaluation.fuzz.campaign import EPISODES_NAME
 from albot2d.evaluation.fuzz.lock import LOCK_NAME
-from tests.test_campaign_processes import (  # noqa: F401  (the fixture is used by name)
+from tests.fuzz_processes import (  # noqa: F401  (the fixture is used by name)
+    ROOT,
     _no_campaign_left_running,
     assert_whole_lines,
     output,
     start_fuzz,
     wait_for,
+    wait_for_first_episode,
 )
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_sigterm_stops_a_campaign_cleanly_and_it_resumes(tmp_path: Path) -> None:
     out = tmp_path / "fuzz"
     proc = start_fuzz(out, episodes=8)
     path = out / EPISODES_NAME
-    wait_for(
-        lambda: (path.exists() and path.stat().st_size > 0) or proc.poll() is not None,
-        120,
-        "a first episode",
-    )
+    wait_for_first_episode(proc, out, 120)
     proc.send_signal(signal.SIGTERM)
     _, stderr = output(proc, 120)
     assert proc.returncode == 130, stderr

@@ -172,6 +172,28 @@ def test_gnc_drops_false_closures_and_keeps_true_ones(extra: None, loss: str) ->
     assert np.degrees(abs(between_arrays(truth[79], gnc.estimate[79])[2])) < 4.0
 
 
+def test_the_factor_graph_and_each_closures_factor_are_readable(extra: None) -> None:
+    """``factor_graph`` is the graph optimised (a prior, a factor per step, one per
+    closure); ``loop_factor_indices`` names each closure's factor, in the order of
+    ``loops``, and is a copy."""
+    import gtsam
+
+    graph = PoseGraph(PoseGraphParams(loop_kernel="none"))
+    graph.add_keyframe(None, np.zeros(3))
+    for k in range(1, 6):
+        graph.add_keyframe(np.array([1.0, 0.0, 0.0]), np.array([k, 0.0, 0.0]))
+    assert graph.loop_factor_indices == ()
+    graph.add_loop(5, 1, np.array([-4.0, 0.0, 0.0]))
+    graph.add_loop(4, 0, np.array([-4.0, 0.0, 0.0]))
+    factors = graph.factor_graph
+    assert int(factors.size()) == 1 + 5 + 2
+    assert graph.loop_factor_indices == (6, 7)
+    for (i, j), f in zip(graph.loops, graph.loop_factor_indices, strict=True):
+        factor = factors.at(f)
+        assert isinstance(factor, gtsam.BetweenFactorPose2)
+        assert [int(k) for k in factor.keys()] == [i, j]  # noqa: SIM118 (a gtsam KeyVector)
+
+
 def test_gnc_mapper_weighs_an_injected_false_closure_to_zero(
     extra: None, frames: list[Frame]
 ) -> None:

@@ -83,6 +83,13 @@ def _check_order(obj: object, low: str, high: str) -> None:
         )
 
 
+def _check_ranges(obj: object, *pairs: tuple[str, str]) -> None:
+    """Each ``(low, high)`` pair of fields: both positive, low <= high."""
+    for low, high in pairs:
+        check_positive(obj, low, high)
+        _check_order(obj, low, high)
+
+
 def _check_at_least(obj: object, name: str, minimum: float, why: str) -> None:
     value = check_finite(obj, name)
     if value < minimum:
@@ -147,8 +154,7 @@ class _DoorParams(CommonParams):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_positive(self, "door_width_min_m", "door_width_max_m")
-        _check_order(self, "door_width_min_m", "door_width_max_m")
+        _check_ranges(self, ("door_width_min_m", "door_width_max_m"))
         _check_at_least(self, "door_width_min_m", self.passage_m, "to let the robot through")
 
 
@@ -168,11 +174,9 @@ class CorridorsParams(CommonParams):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_positive(self, "corridor_width_min_m", "corridor_width_max_m")
-        _check_order(self, "corridor_width_min_m", "corridor_width_max_m")
+        _check_ranges(self, ("corridor_width_min_m", "corridor_width_max_m"))
         _check_at_least(self, "corridor_width_min_m", self.passage_m, "to let the robot through")
-        check_positive(self, "junction_spacing_min_m", "junction_spacing_max_m")
-        _check_order(self, "junction_spacing_min_m", "junction_spacing_max_m")
+        _check_ranges(self, ("junction_spacing_min_m", "junction_spacing_max_m"))
         _check_at_least(
             self,
             "junction_spacing_min_m",
@@ -198,8 +202,7 @@ class RoomsParams(_DoorParams):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_positive(self, "room_size_min_m", "room_size_max_m")
-        _check_order(self, "room_size_min_m", "room_size_max_m")
+        _check_ranges(self, ("room_size_min_m", "room_size_max_m"))
         _check_at_least(
             self,
             "room_size_min_m",
@@ -261,13 +264,11 @@ class OfficeParams(_DoorParams):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_positive(self, "corridor_width_min_m", "corridor_width_max_m")
-        _check_order(self, "corridor_width_min_m", "corridor_width_max_m")
+        _check_ranges(self, ("corridor_width_min_m", "corridor_width_max_m"))
         _check_at_least(self, "corridor_width_min_m", self.passage_m, "to let the robot through")
-        check_positive(self, "room_depth_min_m", "room_depth_max_m")
-        _check_order(self, "room_depth_min_m", "room_depth_max_m")
-        check_positive(self, "room_width_min_m", "room_width_max_m")
-        _check_order(self, "room_width_min_m", "room_width_max_m")
+        _check_ranges(
+            self, ("room_depth_min_m", "room_depth_max_m"), ("room_width_min_m", "room_width_max_m")
+        )
         small = self.door_width_max_m + self.wall_thickness_m + 1.0
         _check_at_least(self, "room_width_min_m", small, "(a door must fit in a room wall)")
         _check_at_least(self, "room_depth_min_m", small, "(a door must fit in a room wall)")
@@ -320,15 +321,14 @@ class Fig6Params(_DoorParams):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for low, high in (
+        _check_ranges(
+            self,
             ("corridor_width_min_m", "corridor_width_max_m"),
             ("room_depth_min_m", "room_depth_max_m"),
             ("room_width_min_m", "room_width_max_m"),
             ("hall_depth_min_m", "hall_depth_max_m"),
             ("cross_offset_min_m", "cross_offset_max_m"),
-        ):
-            check_positive(self, low, high)
-            _check_order(self, low, high)
+        )
         _check_at_least(self, "corridor_width_min_m", self.passage_m, "to let the robot through")
         small = self.door_width_max_m + self.wall_thickness_m + 1.0
         _check_at_least(self, "room_width_min_m", small, "(a door must fit in a room wall)")

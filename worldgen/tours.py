@@ -156,22 +156,11 @@ def _loop(
     radius_fraction: float = _LOOP_RADIUS_FRACTION,
 ) -> list[int]:
     """Visit far-apart places in turn around their centre, then return to the start."""
-    dist = nx.single_source_dijkstra_path_length(graph, s, weight="weight")
-    ids = np.array(sorted(dist), dtype=np.int64)
-    reach = np.array([dist[v] for v in ids])
-    radius = _place_radius(radius_fraction, min_length_m)
-    candidates = ids[reach <= radius]
-    places = _spread_places(nodes, candidates, s, _LOOP_PLACES, rng)
     walk = [s]
+    places = _places_in_turn(graph, nodes, s, rng, _place_radius(radius_fraction, min_length_m))
     if places:
-        centre = nodes[candidates].mean(axis=0)
-        rel = nodes[places] - centre
-        angle = np.arctan2(rel[:, 1], rel[:, 0])
-        start_angle = np.arctan2(*(nodes[s] - centre)[::-1])
-        turn = 1.0 if rng.random() < 0.5 else -1.0
-        ahead = np.mod(turn * (angle - start_angle), 2.0 * np.pi)
-        for place in np.asarray(places)[np.argsort(ahead, kind="stable")]:
-            walk += _path(graph, walk[-1], int(place))[1:]
+        for place in places:
+            walk += _path(graph, walk[-1], place)[1:]
         walk += _path(graph, walk[-1], s)[1:]
     while _walk_length(nodes, walk) < min_length_m:
         found = _far_place(graph, walk, rng, _PLACE_MIN_M)
@@ -179,6 +168,27 @@ def _loop(
             break
         walk = _splice_excursion(walk, found[1])
     return _repeat_until(nodes, walk, min_length_m)
+
+
+def _places_in_turn(
+    graph: nx.Graph, nodes: np.ndarray, s: int, rng: np.random.Generator, radius_m: float
+) -> list[int]:
+    """Up to ``_LOOP_PLACES`` far-apart places within ``radius_m`` of ``s`` by road, in
+    the order met going round their centre from ``s`` (one way or the other, at random)."""
+    dist = nx.single_source_dijkstra_path_length(graph, s, weight="weight")
+    ids = np.array(sorted(dist), dtype=np.int64)
+    reach = np.array([dist[v] for v in ids])
+    candidates = ids[reach <= radius_m]
+    places = _spread_places(nodes, candidates, s, _LOOP_PLACES, rng)
+    if not places:
+        return []
+    centre = nodes[candidates].mean(axis=0)
+    rel = nodes[places] - centre
+    angle = np.arctan2(rel[:, 1], rel[:, 0])
+    start_angle = np.arctan2(*(nodes[s] - centre)[::-1])
+    turn = 1.0 if rng.random() < 0.5 else -1.0
+    ahead = np.mod(turn * (angle - start_angle), 2.0 * np.pi)
+    return [int(v) for v in np.asarray(places)[np.argsort(ahead, kind="stable")]]
 
 
 def _place_radius(fraction: float, length_m: float) -> float:
@@ -318,22 +328,10 @@ def _circuit(
     core: nx.Graph[int] = nx.Graph(
         graph.subgraph(nx.node_connected_component(graph.subgraph(core_nodes), entry))
     )
-    core_dist = nx.single_source_dijkstra_path_length(core, entry, weight="weight")
-    ids = np.array(sorted(core_dist), dtype=np.int64)
-    reach = np.array([core_dist[v] for v in ids])
-    radius = _place_radius(radius_fraction, min_length_m)
-    candidates = ids[reach <= radius]
-    places = _spread_places(nodes, candidates, entry, _LOOP_PLACES, rng)
     lap = [entry]
+    places = _places_in_turn(core, nodes, entry, rng, _place_radius(radius_fraction, min_length_m))
     if places:
-        centre = nodes[candidates].mean(axis=0)
-        rel = nodes[places] - centre
-        angle = np.arctan2(rel[:, 1], rel[:, 0])
-        start_angle = np.arctan2(*(nodes[entry] - centre)[::-1])
-        turn = 1.0 if rng.random() < 0.5 else -1.0
-        ahead = np.mod(turn * (angle - start_angle), 2.0 * np.pi)
-        order = [int(v) for v in np.asarray(places)[np.argsort(ahead, kind="stable")]]
-        for place in [*order, entry]:
+        for place in [*places, entry]:
             if place != lap[-1]:
                 lap += _onward_path(core, lap, place)[1:]
     if len(lap) < 2:  # no place apart from the entry: go round the nearest cycle

@@ -94,6 +94,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"albot2d {args.command}: interrupted", file=sys.stderr)
         return 130
+    except SystemError as exc:
+        if not _interrupted(exc):
+            raise
+        print(f"albot2d {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` is a Ctrl-C (or SIGTERM) in disguise: an interrupt that arrived
+    while a compiled kernel was being called comes out of numba's dispatcher as a
+    ``SystemError`` ("returned a result with an exception set") caused by it."""
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
 
 
 def _quiet_closed_stdout() -> None:

@@ -19,21 +19,31 @@ import sys
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, NoReturn
 
 from albot2d.atomic import atomic_paths
 from albot2d.cli.options import positive_int, positive_number, world_params
 from albot2d.errors import InputError
+
+if TYPE_CHECKING:
+    from tqdm import tqdm
+
+    from albot2d.evaluation.run.experiment import ExperimentResult
+    from albot2d.evaluation.run.scoring import EvaluationParams
+    from albot2d.evaluation.run.setup import RunSpec
+
 
 __all__ = [
     "Choices",
     "add_albot1_keys_to_help",
     "add_export_option",
     "add_json_option",
+    "add_mapper_option",
+    "add_noise_options",
+    "add_out_option",
     "add_run_options",
     "add_scoring_options",
     "choices",
-    "defaults_of",
     "differences",
     "finish",
     "prepare_out_dir",
@@ -78,11 +88,23 @@ def choices() -> Choices:
     )
 
 
-def defaults_of(cls: type) -> dict[str, Any]:
-    """A dataclass's field defaults by name (what --help says an option not given means)."""
-    return {
-        f.name: f.default for f in dataclasses.fields(cls) if f.default is not dataclasses.MISSING
-    }
+def add_noise_options(
+    group: argparse.ArgumentParser | argparse._ArgumentGroup,
+    *,
+    profile: str,
+    noise: str,
+    laser_noise: str,
+) -> None:
+    """``--profile``, ``--noise`` and ``--laser-noise``, their help naming the given
+    defaults (a run's and a fuzzing campaign's differ)."""
+    names = choices()
+    group.add_argument("--profile", help=f"{', '.join(names.profiles)} (default {profile})")
+    group.add_argument(
+        "--noise", help=f"odometry noise preset: {', '.join(names.noises)} (default {noise})"
+    )
+    group.add_argument(
+        "--laser-noise", help=f"{' or '.join(names.laser_noises)} (default {laser_noise})"
+    )
 
 
 # Fields two reports of the same run may differ in: file lists, the version, and a fuzzing
@@ -95,8 +117,8 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     from albot2d.evaluation.run.setup import RunSpec
     from worldgen.tours import TOUR_LENGTH_TOLERANCE
 
-    names, default = choices(), defaults_of(RunSpec)
-    world = p.add_argument_group(f"world (default: --kind {default['kind']} --seed 0)")
+    names, default = choices(), RunSpec()
+    world = p.add_argument_group(f"world (default: --kind {default.kind} --seed 0)")
     world.add_argument("--world", metavar="world.json", help="a world file (albot2d world)")
     world.add_argument("--kind", help=f"generate a world: {', '.join(names.world_kinds)}")
     world.add_argument("--seed", metavar="N", help="world and run seed (default 0)")
@@ -109,22 +131,14 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
         help="a generator parameter, e.g. door_width_min_m=0.9 (repeatable)",
     )
     drive = p.add_argument_group("driving")
-    drive.add_argument(
-        "--profile", help=f"{', '.join(names.profiles)} (default {default['profile']})"
-    )
-    drive.add_argument(
-        "--noise",
-        help=f"odometry noise preset: {', '.join(names.noises)} (default {default['noise']})",
-    )
-    drive.add_argument(
-        "--laser-noise",
-        help=f"{' or '.join(names.laser_noises)} (default {default['laser_noise']})",
+    add_noise_options(
+        drive, profile=default.profile, noise=default.noise, laser_noise=default.laser_noise
     )
     drive.add_argument(
         "--tour-kind",
         "--tour",
         dest="tour_kind",
-        help=f"{', '.join(names.tour_kinds)} (default {default['tour_kind']}), or explore: "
+        help=f"{', '.join(names.tour_kinds)} (default {default.tour_kind}), or explore: "
         "a frontier explorer drives until it has seen everything it can reach or for 30 "
         "simulated minutes",
     )
@@ -132,7 +146,7 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
         "--tour-length",
         metavar="METRES",
         help=f"tour length: the tour is METRES to {1 + TOUR_LENGTH_TOLERANCE:g}×METRES long "
-        f"(default {default['tour_length_m']:g})",
+        f"(default {default.tour_length_m:g})",
     )
     drive.add_argument(
         "--min-tour-length",
@@ -143,7 +157,7 @@ def add_run_options(p: argparse.ArgumentParser) -> None:
     drive.add_argument("--max-frames", metavar="N", help="stop after N views")
 
 
-def spec_from_args(args: argparse.Namespace) -> Any:
+def spec_from_args(args: argparse.Namespace) -> RunSpec:
     """The RunSpec of ``run``'s (and ``simulate``'s) options; options not given take
     RunSpec's defaults."""
     from albot2d.evaluation.run.setup import RunSpec
@@ -151,29 +165,29 @@ def spec_from_args(args: argparse.Namespace) -> Any:
     params = world_params(args)
     if args.world is not None and (args.kind is not None or params):
         raise InputError("give --world, or --kind with its parameters, not both")
-    given: dict[str, Any] = {
-        "seed": positive_int(args.seed, "--seed", allow_zero=True),
-        "world_params": params,
-        "profile": args.profile or None,
-        "noise": args.noise or None,
-        "laser_noise": args.laser_noise or None,
-        "tour_kind": args.tour_kind or None,
-        "tour_length_m": positive_number(args.tour_length, "--tour-length"),
-        "tour_length_is_minimum": None,
-        "mappers": tuple(getattr(args, "mapper", None) or ()) or None,
-        "max_frames": positive_int(args.max_frames, "--max-frames"),
-    }
+    seed = positive_int(args.seed, "--seed", allow_zero=True)
+    length = positive_number(args.tour_length, "--tour-length")
+    max_frames = positive_int(args.max_frames, "--max-frames")
     minimum = positive_number(getattr(args, "min_tour_length", None), "--min-tour-length")
+    if minimum is not None and length is not None:
+        raise InputError("give --tour-length or --min-tour-length, not both")
     if minimum is not None:
-        if given["tour_length_m"] is not None:
-            raise InputError("give --tour-length or --min-tour-length, not both")
-        given |= {"tour_length_m": minimum, "tour_length_is_minimum": True}
-    if args.world is not None:
-        given |= {"kind": None, "world_file": args.world}
-    elif args.kind:
-        given["kind"] = args.kind
-    # "kind": None (a world file) is kept; every other option not given is left out
-    return RunSpec(**{k: v for k, v in given.items() if v is not None or k == "kind"})
+        length = minimum
+    default = RunSpec()  # what an option not given means
+    return RunSpec(
+        seed=default.seed if seed is None else seed,
+        kind=None if args.world is not None else args.kind or default.kind,
+        world_file=args.world,
+        world_params=params,
+        profile=args.profile or default.profile,
+        noise=args.noise or default.noise,
+        laser_noise=args.laser_noise or default.laser_noise,
+        tour_kind=args.tour_kind or default.tour_kind,
+        tour_length_m=default.tour_length_m if length is None else length,
+        tour_length_is_minimum=minimum is not None,
+        mappers=tuple(getattr(args, "mapper", None) or ()) or default.mappers,
+        max_frames=max_frames,
+    )
 
 
 def add_export_option(p: argparse.ArgumentParser, names: Sequence[str] | None = None) -> None:
@@ -204,6 +218,31 @@ def add_export_option(p: argparse.ArgumentParser, names: Sequence[str] | None = 
     )
 
 
+def add_mapper_option(p: argparse.ArgumentParser, builtins: str, default: str) -> None:
+    """``--mapper NAME ...`` (``builtins``, the built-in names the command takes; any
+    ``albot1[KEY=VALUE,...]``; a plugin ``module:Class``), with every albot1 key listed at
+    the end of ``--help``; ``default`` says what runs without it."""
+    p.add_argument(
+        "--mapper",
+        nargs="+",
+        action="extend",
+        metavar="NAME",
+        help=f"mappers: {builtins}, albot1[KEY=VALUE,...] (keys listed below) or "
+        f"module:Class ({default})",
+    )
+    add_albot1_keys_to_help(p)
+
+
+def add_out_option(p: argparse.ArgumentParser, no_figures: str | None = None) -> None:
+    """``--out DIR`` (required) and, where the command draws figures, ``--no-figures``
+    (its help: what is written then)."""
+    p.add_argument(
+        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
+    )
+    if no_figures is not None:
+        p.add_argument("--no-figures", action="store_true", help=no_figures)
+
+
 def add_json_option(
     p: argparse.ArgumentParser, help: str = "print report.json on stdout instead of the tables"
 ) -> None:
@@ -232,9 +271,10 @@ def add_scoring_options(p: argparse.ArgumentParser) -> None:
     )
 
 
-def scoring_params(args: argparse.Namespace, base: Any = None) -> Any:
+def scoring_params(
+    args: argparse.Namespace, base: EvaluationParams | None = None
+) -> EvaluationParams:
     """EvaluationParams from the scoring options (unset ones from ``base`` or defaults)."""
-    import dataclasses
 
     from albot2d.evaluation import EvaluationParams
 
@@ -281,7 +321,9 @@ def remove_if_empty(out: Path, created: bool) -> None:
             out.rmdir()  # only succeeds when nothing was left in it
 
 
-def _render(result: Any, no_figures: bool, command: str, animate: bool = False) -> dict[str, bytes]:
+def _render(
+    result: ExperimentResult, no_figures: bool, command: str, animate: bool = False
+) -> dict[str, bytes]:
     if no_figures:
         return {}
     try:
@@ -310,7 +352,7 @@ def _render(result: Any, no_figures: bool, command: str, animate: bool = False) 
         return {}
 
 
-def _step_figure(result: Any, no_figures: bool) -> dict[str, bytes]:
+def _step_figure(result: ExperimentResult, no_figures: bool) -> dict[str, bytes]:
     if no_figures:
         return {}
     try:
@@ -323,7 +365,7 @@ def _step_figure(result: Any, no_figures: bool) -> dict[str, bytes]:
         return {}  # _render already said that matplotlib is missing
 
 
-def write_outputs(out: Path, report: Mapping[str, Any], figures: Mapping[str, bytes]) -> None:
+def write_outputs(out: Path, report: Mapping[str, object], figures: Mapping[str, bytes]) -> None:
     """Write the files (figures, exports) and report.json atomically; report.json is
     renamed into place last."""
     from albot2d.evaluation.run.report import REPORT_NAME, report_json
@@ -340,12 +382,12 @@ def finish(
     out: Path,
     created: bool,
     command: str,
-    compute: Callable[[], Any],
+    compute: Callable[[], ExperimentResult],
     no_figures: bool,
     stage: Callable[[str], None] | None = None,
     animate: bool = False,
-    extra_exports: Callable[[Any], list[str]] | None = None,
-) -> Any:
+    extra_exports: Callable[[ExperimentResult], list[str]] | None = None,
+) -> ExperimentResult:
     """Run ``compute`` (→ ExperimentResult), draw the figures, export the trajectories and
     maps, write everything; on any failure remove the output directory again if this
     command created it. ``extra_exports(result)`` writes the ``--export`` files itself
@@ -375,7 +417,7 @@ def finish(
     return result
 
 
-def progress_bar(total: float | None, unit: str, desc: str) -> Any:
+def progress_bar(total: float | None, unit: str, desc: str) -> tqdm[NoReturn]:
     from tqdm import tqdm
 
     return tqdm(
@@ -389,7 +431,7 @@ def progress_bar(total: float | None, unit: str, desc: str) -> Any:
     )
 
 
-def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
+def print_tables(result: ExperimentResult, out: Path, as_json: bool = False) -> None:
     """The result tables on stdout, or (``--json``) the report itself."""
     from albot2d.evaluation.run.report import (
         REPORT_NAME,
@@ -417,7 +459,7 @@ def print_tables(result: Any, out: Path, as_json: bool = False) -> None:
     )
 
 
-def differences(a: Any, b: Any, path: str = "") -> list[str]:
+def differences(a: object, b: object, path: str = "") -> list[str]:
     """Dotted paths (``mappers.albot1.rpe``) where two JSON values differ."""
     if isinstance(a, dict) and isinstance(b, dict):
         out: list[str] = []
@@ -433,7 +475,7 @@ def differences(a: Any, b: Any, path: str = "") -> list[str]:
     return [] if a == b else [path]
 
 
-def report_differences(recorded: Mapping[str, Any], report: Mapping[str, Any]) -> list[str]:
+def report_differences(recorded: Mapping[str, object], report: Mapping[str, object]) -> list[str]:
     """Where ``report`` differs from the ``recorded`` one (a report.json or a fuzzing
     reproducer), apart from wall-clock timings, file lists and the version."""
     from albot2d.evaluation.run.report import without_timings
@@ -444,7 +486,7 @@ def report_differences(recorded: Mapping[str, Any], report: Mapping[str, Any]) -
     )
 
 
-def add_albot1_keys_to_help(parser: Any) -> None:
+def add_albot1_keys_to_help(parser: argparse.ArgumentParser) -> None:
     """``parser --help`` ends with every ``albot1[KEY=VALUE]`` key, generated from the
     ``Albot1Params`` dataclasses when help is asked for (not at every start-up)."""
     plain = parser.format_help
@@ -455,4 +497,5 @@ def add_albot1_keys_to_help(parser: Any) -> None:
         parser.epilog = option_help()
         return str(plain())
 
-    parser.format_help = format_help
+    # (help is generated on demand: a method replaced on this one parser)
+    parser.format_help = format_help  # type: ignore[method-assign]

@@ -20,7 +20,7 @@ import signal
 import threading
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from types import FrameType
 
 from albot2d.errors import InputError
 
@@ -60,7 +60,7 @@ def check_environment(command: str) -> None:
         _check_data_folder()
 
 
-def _raise_interrupt(signum: int, frame: Any) -> None:
+def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
     raise KeyboardInterrupt
 
 

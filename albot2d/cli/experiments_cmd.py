@@ -26,10 +26,15 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, NoReturn
 
 from albot2d.errors import InputError
 from albot2d.limits import MAX_SEEDS as _MAX_SEEDS
+
+if TYPE_CHECKING:
+    from tqdm import tqdm
+
+    from albot2d.evaluation.paper.campaign import ExperimentsData, ExperimentsOutcome
 
 __all__ = ["parse_seeds", "register", "run"]
 
@@ -38,7 +43,7 @@ FULL_SEEDS = "0-19"
 QUICK_SEEDS = "0-1"
 
 
-def register(subparsers: Any) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = subparsers.add_parser(
         "experiments", help="the paper's experiments regenerated beside its numbers",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -147,32 +152,32 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _progress(total: int) -> Any:
+def _progress(total: int) -> tqdm[NoReturn]:
     from tqdm import tqdm
 
     return tqdm(total=total, unit="run", desc="experiments", file=sys.stderr,
                 disable=None, dynamic_ncols=True)  # fmt: skip
 
 
-def _tick(bar: Any, run_name: str, seed: int) -> None:
+def _tick(bar: tqdm[NoReturn] | None, run_name: str, seed: int) -> None:
     if bar is not None:
         bar.set_postfix_str(f"{run_name} seed {seed}", refresh=False)
         bar.update(1)
 
 
-def _write(out: Path, outcome: Any, *, figures: bool) -> None:
+def _write(out: Path, outcome: ExperimentsOutcome, *, figures: bool) -> None:
     """Figures first, then the page, experiments.json last (atomically)."""
     from albot2d.atomic import atomic_write_text
     from albot2d.viz.paper_page import PAGE_NAME, render_page
 
     out.mkdir(parents=True, exist_ok=True)
-    written: dict[str, list[dict[str, Any]]] = {}
+    written: dict[str, list[dict[str, object]]] = {}
     if figures:
         from albot2d.viz.paper import save_figure
 
         for name, specs in outcome.figures.items():
             for spec in specs:
-                save_figure(spec, out / spec["file"])
+                save_figure(dict(spec), out / spec["file"])  # the viz layer reads plain dicts
             written[name] = [{"file": s["file"], "caption": s["caption"], "plot": s["plot"]}
                              for s in specs]  # fmt: skip
     else:
@@ -184,7 +189,7 @@ def _write(out: Path, outcome: Any, *, figures: bool) -> None:
     )
 
 
-def _print_summary(data: dict[str, Any], out: Path) -> None:
+def _print_summary(data: ExperimentsData, out: Path) -> None:
     width = max(len(n) for n in data["verdicts"])
     by_reading = data.get("verdicts_by_reading") or {
         n: {"default": v} for n, v in data["verdicts"].items()

@@ -21,14 +21,23 @@ import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from albot2d.errors import InputError
+
+if TYPE_CHECKING:
+    import argparse
+
+    from albot2d.evaluation.run.experiment import ExperimentResult
+    from albot2d.frames import Frame
+    from albot2d.logs.rosbag_writer import BagStorage
+    from worldgen.world import World
 
 __all__ = [
     "EXPORTERS",
     "ROSBAG1_NAME",
     "ROSBAG2_NAME",
+    "ExportOptions",
     "ExportSource",
     "Exporter",
     "export_names",
@@ -41,15 +50,24 @@ ROSBAG2_NAME = "log_ros2"
 DEFAULT_MAP_RESOLUTION_M = 0.05
 
 
+@dataclass(frozen=True)
+class ExportOptions:
+    """The exporters' options: the ROS 2 bag's storage (``--bag-storage``; ``None``: MCAP)
+    and the occupancy maps' cell size (``--map-resolution``; ``None``: the default)."""
+
+    bag_storage: BagStorage | None = None
+    map_resolution_m: float | None = None
+
+
 @dataclass(frozen=True, eq=False)
 class ExportSource:
     """What a run leaves to export: its frames (with true poses in simulation), its world,
     the mappers' result (``albot2d run``; ``None`` for ``simulate``) and the options."""
 
-    frames: Sequence[Any]
-    world: Any = None
-    result: Any = None
-    options: Mapping[str, Any] = field(default_factory=dict)
+    frames: Sequence[Frame]
+    world: World | None = None
+    result: ExperimentResult | None = None
+    options: ExportOptions = field(default_factory=ExportOptions)
 
 
 @dataclass(frozen=True)
@@ -68,12 +86,12 @@ class Exporter:
 def _rosbag(version: int) -> Callable[[ExportSource, Path], None]:
     def write(source: ExportSource, directory: Path) -> None:
         from albot2d import __version__
-        from albot2d.logs.rosbag_writer import BagStorage, write_bag
+        from albot2d.logs.rosbag_writer import write_bag
 
         if version == 1:
             write_bag(directory / ROSBAG1_NAME, source.frames, ros_version=1)
         else:
-            storage: BagStorage = source.options.get("bag_storage") or "mcap"
+            storage: BagStorage = source.options.bag_storage or "mcap"
             write_bag(
                 directory / ROSBAG2_NAME, source.frames, ros_version=2, storage=storage,
                 metadata={"albot2d_version": __version__},
@@ -91,7 +109,7 @@ def _occupancy(source: ExportSource, directory: Path) -> None:
     from albot2d.evaluation.run.map_exports import WORLD_MAP_NAME, occupancy_files, world_grid
     from albot2d.logs.map_server import map_server_files
 
-    resolution = source.options.get("map_resolution_m") or DEFAULT_MAP_RESOLUTION_M
+    resolution = source.options.map_resolution_m or DEFAULT_MAP_RESOLUTION_M
     if source.result is not None:  # every mapper's map, and the world's in simulation
         _write_files(directory, occupancy_files(source.result, resolution))
     elif source.world is not None:
@@ -102,7 +120,8 @@ def _occupancy(source: ExportSource, directory: Path) -> None:
 def _g2o(source: ExportSource, directory: Path) -> None:
     from albot2d.evaluation.run.map_exports import g2o_files
 
-    _write_files(directory, g2o_files(source.result))
+    if source.result is not None:  # (export_options refuses g2o where there is none)
+        _write_files(directory, g2o_files(source.result))
 
 
 EXPORTERS: dict[str, Exporter] = {
@@ -118,7 +137,7 @@ EXPORTERS: dict[str, Exporter] = {
 }
 
 
-def export_options(args: Any) -> dict[str, Any]:
+def export_options(args: argparse.Namespace) -> ExportOptions:
     """The exporters' options from ``args`` (``--bag-storage``, ``--map-resolution``),
     refused where unused; ``--export g2o`` refused where no mapper keeps a pose graph."""
     from albot2d.cli.options import positive_number
@@ -141,7 +160,7 @@ def export_options(args: Any) -> dict[str, Any]:
         mappers = [str(m) for m in args.mapper or ()]
         if not any(m.split("[")[0] == "slam" or ":" in m for m in mappers):
             raise InputError("--export g2o writes the slam mapper's pose graph: add --mapper slam")
-    return {"bag_storage": storage, "map_resolution_m": resolution}
+    return ExportOptions(storage, resolution)
 
 
 def export_names() -> list[str]:

@@ -7,11 +7,26 @@ from __future__ import annotations
 
 import argparse
 import math
-from typing import Any
+from typing import TYPE_CHECKING, TypeAlias
 
 from albot2d.errors import InputError
 
-__all__ = ["parse_param", "positive_int", "positive_number", "seed_value", "world_params"]
+if TYPE_CHECKING:
+    # argparse names the type of ``add_subparsers()``'s result only privately
+    Subcommands: TypeAlias = argparse._SubParsersAction[argparse.ArgumentParser]
+
+__all__ = [
+    "ParamValue",
+    "Subcommands",
+    "parse_param",
+    "positive_int",
+    "positive_number",
+    "seed_value",
+    "world_params",
+]
+
+#: A ``--param NAME=VALUE`` value, as ``parse_param`` reads it.
+ParamValue: TypeAlias = int | float | bool | str
 
 
 def positive_number(text: str | None, option: str, *, allow_zero: bool = False) -> float | None:
@@ -55,7 +70,7 @@ def seed_value(text: str | None, option: str = "--seed") -> int | None:
     return seed
 
 
-def parse_param(text: str) -> tuple[str, Any]:
+def parse_param(text: str) -> tuple[str, ParamValue]:
     """``NAME=VALUE`` → (name, value); the value becomes an int, float, bool or string."""
     name, sep, raw = text.partition("=")
     name = name.strip()
@@ -79,18 +94,18 @@ def parse_param(text: str) -> tuple[str, Any]:
     return name, raw
 
 
-def world_params(args: argparse.Namespace) -> dict[str, Any]:
+def world_params(args: argparse.Namespace) -> dict[str, ParamValue]:
     """Generator parameters from ``--param NAME=VALUE`` and ``--width``/``--height``."""
-    params: dict[str, Any] = {}
+    params: dict[str, ParamValue] = {}
     for text in getattr(args, "param", None) or []:
         name, value = parse_param(text)
         if name in params:
             raise InputError(f"--param {name} given twice")
         params[name] = value
     for option, name in (("--width", "width_m"), ("--height", "height_m")):
-        value = positive_number(getattr(args, option[2:]), option)
-        if value is not None:
+        size = positive_number(getattr(args, option[2:]), option)
+        if size is not None:
             if name in params:
                 raise InputError(f"give {option} or --param {name}, not both")
-            params[name] = value
+            params[name] = size
     return params

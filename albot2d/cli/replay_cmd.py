@@ -25,12 +25,13 @@ import argparse
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from albot2d.cli.common import (
-    add_albot1_keys_to_help,
     add_export_option,
     add_json_option,
+    add_mapper_option,
+    add_out_option,
     add_scoring_options,
     finish,
     prepare_out_dir,
@@ -41,6 +42,11 @@ from albot2d.cli.common import (
 from albot2d.cli.options import positive_int
 from albot2d.cli.viewer import add_viewer_options, check_viewer_options, open_viewer
 from albot2d.errors import InputError
+
+if TYPE_CHECKING:
+    from albot2d.cli.options import Subcommands
+    from albot2d.evaluation.run.experiment import ExperimentResult
+    from albot2d.frames import Frame
 
 __all__ = ["DATA_ENV", "find_log", "register", "run"]
 
@@ -64,7 +70,7 @@ def find_log(text: str, data: str | None) -> Path:
     raise InputError(f"{text}: no such log file; tried {', '.join(tried)}{hint}")
 
 
-def register(subparsers: Any) -> None:
+def register(subparsers: Subcommands) -> None:
     p = subparsers.add_parser(
         "replay", help="run the mappers on a CARMEN log or ROS bag and score them against its "
         "relations",
@@ -94,22 +100,14 @@ def register(subparsers: Any) -> None:
         metavar="FILE",
         help="Kümmerle relations file (default: found beside the log)",
     )
-    p.add_argument(
-        "--mapper",
-        nargs="+",
-        action="extend",
-        metavar="NAME",
-        help="mappers: albot1, naive, slam and scan_odometry ([slam] extra), "
-        "albot1[KEY=VALUE,...] (keys listed below) or module:Class "
-        "(default: albot1 naive; truth needs a simulated run)",
+    add_mapper_option(
+        p,
+        "albot1, naive, slam and scan_odometry ([slam] extra)",
+        "default: albot1 naive; truth needs a simulated run",
     )
-    add_albot1_keys_to_help(p)
     p.add_argument("--max-frames", metavar="N", help="use only the first N laser scans")
     add_scoring_options(p)
-    p.add_argument(
-        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
-    )
-    p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    add_out_option(p, no_figures="write report.json only")
     p.add_argument(
         "--strict",
         action="store_true",
@@ -145,10 +143,10 @@ def run(args: argparse.Namespace) -> int:
     viewer = open_viewer(args, f"albot2d replay {log.name}")
     bar = progress_bar(max_frames, " views", "replay")
 
-    def exports(result: Any) -> list[str]:  # --export: a log has no world
+    def exports(result: ExperimentResult) -> list[str]:  # --export: a log has no world
         return write_exports(out, names, ExportSource([], None, result, options))
 
-    def frame(f: Any, travelled: float) -> None:
+    def frame(f: Frame, travelled: float) -> None:
         if viewer is not None:
             viewer.on_frame(f, travelled)
         bar.set_postfix_str(f"{travelled:.0f} m", refresh=False)

@@ -9,49 +9,61 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+from typing import TYPE_CHECKING
 
 from albot2d.errors import InputError
+
+if TYPE_CHECKING:
+    from multiprocessing.connection import Connection
+
+    from albot2d.evaluation.fuzz.record import EpisodeRecord, JsonObject
+    from albot2d.evaluation.fuzz.reproducer import Reproducer
 
 __all__ = ["reproduce_failure", "reproducer_document"]
 
 
-def _failure_lines(record: dict[str, Any]) -> list[str]:
-    if record.get("status") == "crash":
-        error = record.get("error") or {}
-        return [f"crash: {error.get('type')}: {error.get('message')}"]
+def _failure_lines(record: EpisodeRecord) -> list[str]:
+    if record.status == "crash":
+        error = record.error
+        return [f"crash: {error and error.type}: {error and error.message}"]
     return [
         f"{name} violated: {messages[0]}"
         + (f" (+{len(messages) - 1} more)" if len(messages) > 1 else "")
-        for name, messages in (record.get("violations") or {}).items()
+        for name, messages in record.violations.items()
     ] or ["?"]
 
 
-def _replay_isolated(doc: dict[str, Any], where: str) -> tuple[int | None, dict[str, Any] | None]:
+def _replay_isolated(reproducer: Reproducer, where: str) -> tuple[int | None, EpisodeRecord | None]:
     """Run the episode in a child process (its worker died: it may kill this one too);
     returns the child's exit code and, when it lived, the new record."""
     import multiprocessing
 
+    from albot2d.evaluation.fuzz.record import EpisodeRecord
+
     context = multiprocessing.get_context("spawn")
     receive, send = context.Pipe(duplex=False)
-    child = context.Process(target=_replay_child, args=(doc, where, send), daemon=True)
+    child = context.Process(
+        target=_replay_child, args=(reproducer.report, where, send), daemon=True
+    )
     child.start()
     send.close()
     try:
-        record = receive.recv()
+        record = EpisodeRecord.from_json(receive.recv(), where)
     except EOFError:
         record = None
     child.join()
     return child.exitcode, record
 
 
-def _replay_child(doc: dict[str, Any], where: str, send: Any) -> None:
-    from albot2d.evaluation.fuzz.reproducer import reproduce_episode
+def _replay_child(doc: JsonObject, where: str, send: Connection) -> None:
+    """In the child: the new record goes back as plain data."""
+    from albot2d.evaluation.fuzz.reproducer import Reproducer, reproduce_episode
 
-    send.send(reproduce_episode(doc, where=where)[0].record)
+    outcome = reproduce_episode(Reproducer.from_json(doc, where), where=where)[0]
+    send.send(outcome.record.to_json())
 
 
-def reproducer_document(path: str) -> dict[str, Any] | None:
+def reproducer_document(path: str) -> JsonObject | None:
     """The fuzzing reproducer at ``path``; ``None`` when it is anything else (a report,
     or not readable: ``read_report`` then says what is wrong)."""
     from albot2d.inputfiles import read_json_file
@@ -63,19 +75,22 @@ def reproducer_document(path: str) -> dict[str, Any] | None:
     return doc if isinstance(doc, dict) and isinstance(doc.get("reproducer"), dict) else None
 
 
-def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
+def reproduce_failure(args: argparse.Namespace, doc: JsonObject) -> int:
     """``albot2d run --reproduce REPRODUCER``: run the failing episode again with every
     invariant check, write its report and figures to ``--out`` (unless it crashes), say
     whether the run and the failure came out the same; exit 1 when it still fails."""
     from albot2d.cli import common
-    from albot2d.evaluation.fuzz.reproducer import reproduce_episode, reproducer_spec
+    from albot2d.evaluation.fuzz.reproducer import Reproducer, reproduce_episode
 
     where = args.reproduce
-    recorded = doc["reproducer"].get("episode")
-    if not isinstance(recorded, dict) or recorded.get("status") not in ("violation", "crash"):
+    section = doc["reproducer"]
+    episode = section.get("episode") if isinstance(section, dict) else None
+    if not isinstance(episode, dict) or episode.get("status") not in ("violation", "crash"):
         raise InputError(f"{where}: not a fuzzing reproducer (no failing episode in it)")
+    reproducer = Reproducer.from_json(doc, where)
+    recorded = reproducer.episode
     try:
-        spec = reproducer_spec(doc, where=where)
+        spec = reproducer.spec(where)
     except InputError:
         raise
     except Exception as exc:  # the episode cannot even be drawn: that is the failure
@@ -88,16 +103,16 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     out, created = common.prepare_out_dir(args.out)
     result = None
     try:
-        if (recorded.get("error") or {}).get("type") == "WorkerDiedError":
-            code, record = _replay_isolated(doc, where)
-            if record is None:
+        if recorded.error is not None and recorded.error.type == "WorkerDiedError":
+            code, isolated = _replay_isolated(reproducer, where)
+            if isolated is None:
                 print(
                     f"reproduce: the episode killed its process again (exit code {code}); "
                     f"recorded: {_failure_lines(recorded)[0]}"
                 )
                 common.remove_if_empty(out, created)
                 return 1
-        outcome, result = reproduce_episode(doc, where=where)
+        outcome, result = reproduce_episode(reproducer, where=where)
         if result is not None:
             common.finish(out, created, "run", lambda: result, args.no_figures)
         else:
@@ -109,13 +124,13 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     if result is not None:
         common.print_tables(result, out)
         diff = common.report_differences(doc, result.report)
-        if recorded["status"] != "crash":
+        if recorded.status != "crash":
             verdict = "identical to" if not diff else f"differs at {', '.join(diff[:5])} from"
             print(f"reproduce: run {verdict} {where} (apart from wall-clock timings)")
     else:
-        print((record["error"] or {}).get("traceback", ""), file=sys.stderr, end="")
-    checked = len(record["checked"])
-    if record["status"] == "ok":
+        print((record.error and record.error.traceback) or "", file=sys.stderr, end="")
+    checked = len(record.checked)
+    if record.status == "ok":
         print(
             f"reproduce: every invariant holds ({checked} checked); the recorded failure "
             f"does not reproduce: {_failure_lines(recorded)[0]}"
@@ -124,9 +139,9 @@ def reproduce_failure(args: argparse.Namespace, doc: dict[str, Any]) -> int:
     for line in _failure_lines(record):
         print(f"reproduce: {line}")
     same = (
-        record["status"] == recorded["status"]
-        and sorted(record["violations"]) == sorted(recorded.get("violations") or {})
-        and (record["error"] or {}).get("type") == (recorded.get("error") or {}).get("type")
+        record.status == recorded.status
+        and sorted(record.violations) == sorted(recorded.violations)
+        and (record.error and record.error.type) == (recorded.error and recorded.error.type)
     )
     print(
         "reproduce: the recorded failure reproduces"

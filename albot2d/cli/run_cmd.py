@@ -18,12 +18,13 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, TypeVar
 
 from albot2d.cli.common import (
-    add_albot1_keys_to_help,
     add_export_option,
     add_json_option,
+    add_mapper_option,
+    add_out_option,
     add_run_options,
     add_scoring_options,
     finish,
@@ -37,7 +38,15 @@ from albot2d.cli.common import (
 from albot2d.cli.viewer import add_viewer_options, check_viewer_options, open_viewer
 from albot2d.errors import InputError
 
+if TYPE_CHECKING:
+    from albot2d.cli.options import Subcommands
+    from albot2d.evaluation.run.experiment import ExperimentResult
+    from albot2d.frames import Frame
+    from worldgen.world import Tour, World
+
 __all__ = ["register", "run"]
+
+T = TypeVar("T")
 
 # Options that describe the run itself; --reproduce takes them from the report instead.
 _RUN_OPTIONS = (
@@ -62,32 +71,24 @@ _RUN_OPTIONS = (
 )
 
 
-def register(subparsers: Any) -> None:
+def register(subparsers: Subcommands) -> None:
     p = subparsers.add_parser(
         "run", help="run the main experiment: world → tour → every mapper → report + figures",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
     add_run_options(p)
-    p.add_argument(
-        "--mapper",
-        nargs="+",
-        action="extend",
-        metavar="NAME",
-        help="mappers: albot1, naive, truth, slam and scan_odometry ([slam] extra), "
-        "albot1[KEY=VALUE,...] (keys listed below) or "
-        "module:Class (default: albot1 naive truth)",
+    add_mapper_option(
+        p,
+        "albot1, naive, truth, slam and scan_odometry ([slam] extra)",
+        "default: albot1 naive truth",
     )
-    add_albot1_keys_to_help(p)
     add_scoring_options(p)
     p.add_argument(
         "--reproduce",
         metavar="report.json",
         help="re-run the run recorded in a report (give only --out with it)",
     )
-    p.add_argument(
-        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
-    )
-    p.add_argument("--no-figures", action="store_true", help="write report.json only")
+    add_out_option(p, no_figures="write report.json only")
     p.add_argument(
         "--animate",
         action="store_true",
@@ -105,12 +106,12 @@ def register(subparsers: Any) -> None:
     p.set_defaults(handler=run)
 
 
-def _profiled(path: str | None, compute: Callable[[], Any]) -> Callable[[], Any]:
+def _profiled(path: str | None, compute: Callable[[], T]) -> Callable[[], T]:
     """``compute`` run under cProfile, its pstats written to ``path`` (``--cprofile``)."""
     if path is None:
         return compute
 
-    def profiled() -> Any:
+    def profiled() -> T:
         import cProfile
 
         profiler = cProfile.Profile()
@@ -129,8 +130,8 @@ def _keeps_frames(names: list[str]) -> bool:
 
 
 def _exporting(
-    args: argparse.Namespace, frames: list[Any]
-) -> Callable[[Path], Callable[[Any], list[str]]] | None:
+    args: argparse.Namespace, frames: list[Frame]
+) -> Callable[[Path], Callable[[ExperimentResult], list[str]]] | None:
     """``finish``'s hook writing the ``--export`` files of a finished run (its options
     checked now), given the output directory; None without ``--export``."""
     from albot2d.cli.exporters import ExportSource, export_options, write_exports
@@ -140,8 +141,8 @@ def _exporting(
     if not names:
         return None
 
-    def hook(out: Path) -> Callable[[Any], list[str]]:
-        def write(result: Any) -> list[str]:
+    def hook(out: Path) -> Callable[[ExperimentResult], list[str]]:
+        def write(result: ExperimentResult) -> list[str]:
             source = ExportSource(frames, result.world, result, options)
             return write_exports(out, names, source)
 
@@ -174,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
         spec = spec_from_args(args)
         params = scoring_params(args)
     check_spec(spec)
-    kept: list[Any] = []  # the run's frames, for the exports that need them
+    kept: list[Frame] = []  # the run's frames, for the exports that need them
     extra = _exporting(args, kept)
     if args.cprofile is not None and not Path(args.cprofile).parent.is_dir():
         raise InputError(f"--cprofile {args.cprofile}: its directory does not exist")
@@ -182,21 +183,25 @@ def run(args: argparse.Namespace) -> int:
     out, created = prepare_out_dir(args.out)
     viewer = open_viewer(args, f"albot2d run {args.out}")
     bar = None
+    total = 0.0  # the bar's end: views, simulated seconds or metres
     keep = _keeps_frames(list(args.export or []))
 
-    def start(world: Any, tour: Any) -> None:
+    def start(world: World, tour: Tour) -> None:
         # With --max-frames the run ends after that many views, not at the tour's end.
-        nonlocal bar
+        nonlocal bar, total
         if viewer is not None:
             viewer.on_start(world, tour)
         if spec.max_frames is not None:
-            bar = progress_bar(spec.max_frames, " views", "run")
+            total = spec.max_frames
+            bar = progress_bar(total, " views", "run")
         elif tour.kind == "explore":  # no tour to measure by: simulated time
-            bar = progress_bar(DEFAULT_MAX_TIME_S, " s", "explore")
+            total = DEFAULT_MAX_TIME_S
+            bar = progress_bar(total, " s", "explore")
         else:
-            bar = progress_bar(round(tour.length_m, 1), "m", "run")
+            total = round(tour.length_m, 1)
+            bar = progress_bar(total, "m", "run")
 
-    def frame(f: Any, travelled: float) -> None:
+    def frame(f: Frame, travelled: float) -> None:
         if keep:
             kept.append(f)
         if viewer is not None:
@@ -204,13 +209,13 @@ def run(args: argparse.Namespace) -> int:
         if bar is None:
             return
         if spec.max_frames is None and spec.tour_kind == "explore":
-            bar.n = round(min(f.timestamp, bar.total), 1)
+            bar.n = round(min(f.timestamp, total), 1)
             bar.set_postfix_str(f"{f.index + 1} views, {travelled:.0f} m", refresh=False)
         elif spec.max_frames is not None:
             bar.n = f.index + 1
             bar.set_postfix_str(f"{travelled:.0f} m", refresh=False)
         else:
-            bar.n = round(min(travelled, bar.total), 1)
+            bar.n = round(min(travelled, total), 1)
             bar.set_postfix_str(f"{f.index + 1} views", refresh=False)
         bar.update(0)
 

@@ -18,21 +18,27 @@ import contextlib
 import itertools
 import shutil
 import sys
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from albot2d.atomic import atomic_write_bytes
 from albot2d.errors import InputError
 
+if TYPE_CHECKING:
+    from albot2d.cli.options import Subcommands
+    from albot2d.frames import Frame
+    from worldgen.world import World
+
 __all__ = ["PNG_NAME", "register", "run"]
 
 PNG_NAME = "paths.png"
 
 
-def register(subparsers: Any) -> None:
-    from albot2d.cli.common import add_export_option, add_run_options
+def register(subparsers: Subcommands) -> None:
+    from albot2d.cli.common import add_export_option, add_out_option, add_run_options
 
     p = subparsers.add_parser(
         "simulate",
@@ -40,9 +46,7 @@ def register(subparsers: Any) -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )  # fmt: skip
     add_run_options(p)
-    p.add_argument(
-        "--out", metavar="DIR", required=True, help="output directory (created if missing)"
-    )
+    add_out_option(p)
     p.add_argument("--no-png", action="store_true", help=f"do not draw {PNG_NAME}")
     add_export_option(p)
     p.set_defaults(handler=run)
@@ -55,7 +59,7 @@ def _out_dir(text: str) -> Path:
     return out
 
 
-def _frames(frames: Any, total: int | None, show_progress: bool) -> list[Any]:
+def _frames(frames: Iterable[Frame], total: int | None, show_progress: bool) -> list[Frame]:
     from tqdm import tqdm
 
     with tqdm(
@@ -69,11 +73,13 @@ def _frames(frames: Any, total: int | None, show_progress: bool) -> list[Any]:
         return list(bar)
 
 
-def _render_png(world: Any, frames: list[Any], title: str) -> bytes | None:
+def _render_png(world: World, frames: list[Frame], title: str) -> bytes | None:
     try:
         from albot2d.viz.paths import render_paths_png
 
-        true_xy = np.array([[f.true_pose.x, f.true_pose.y] for f in frames])
+        truth = [f.true_pose for f in frames]
+        assert all(t is not None for t in truth)  # the simulator's frames carry their truth
+        true_xy = np.array([[t.x, t.y] for t in truth if t is not None])
         odom_xy = np.array([[f.odom_pose.x, f.odom_pose.y] for f in frames])
         collided = np.array([f.collided for f in frames], dtype=bool)
         return render_paths_png(
@@ -113,13 +119,7 @@ def run(args: argparse.Namespace) -> int:
         "profile": profile.name,
         "odometry_preset": spec.noise,
         "laser_noise_preset": spec.laser_noise,
-        "tour": {
-            "kind": tour.kind,
-            "requested_length_m": spec.tour_length_m,
-            "requested_as": "minimum" if spec.tour_length_is_minimum else "length",
-            "length_m": tour.length_m,
-            "waypoints": len(tour.waypoints),
-        },
+        "tour": spec.tour_record(tour),
         "max_frames": spec.max_frames,
         **sim.params(),
     }

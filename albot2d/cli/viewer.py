@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from albot2d.errors import InputError
+
+if TYPE_CHECKING:
+    from albot2d.viz.rerun_log import RerunLog
 
 __all__ = ["add_viewer_options", "check_viewer_options", "open_viewer"]
 
@@ -61,7 +64,7 @@ def check_viewer_options(args: argparse.Namespace) -> bool:
     return True
 
 
-def open_viewer(args: argparse.Namespace, name: str) -> Any:
+def open_viewer(args: argparse.Namespace, name: str) -> RerunLog | None:
     """A ``RerunLog`` for the (checked) viewer options, or None."""
     if not check_viewer_options(args):
         return None

@@ -9,13 +9,17 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, TypedDict
 
 from albot2d.atomic import atomic_paths
 from albot2d.cli.common import choices
-from albot2d.cli.options import parse_param, positive_number, seed_value, world_params
+from albot2d.cli.options import ParamValue, parse_param, positive_number, seed_value, world_params
 from albot2d.errors import InputError
 from worldgen.tours import TOUR_KINDS, TOUR_LENGTH_TOLERANCE
+
+if TYPE_CHECKING:
+    from albot2d.cli.options import Subcommands
+    from worldgen.world import Tour, World
 
 __all__ = ["parse_param", "register", "run", "summary"]
 
@@ -23,7 +27,7 @@ DEFAULT_TOUR_LENGTH_M = 100.0
 HOUSEEXPO_PARAMS = ("robot_radius_m", "clearance_margin_m")
 
 
-def register(subparsers: Any) -> None:
+def register(subparsers: Subcommands) -> None:
     p = subparsers.add_parser(
         "world",
         help="generate a world (or import a HouseExpo plan) and save it as JSON",
@@ -58,19 +62,43 @@ def register(subparsers: Any) -> None:
     p.set_defaults(handler=run)
 
 
-def _build_world(args: argparse.Namespace, seed: int | None, params: dict[str, Any]) -> Any:
+class _HouseExpoSizes(TypedDict, total=False):
+    """The ``--param`` values ``--from-houseexpo`` takes (``HOUSEEXPO_PARAMS``)."""
+
+    robot_radius_m: float
+    clearance_margin_m: float
+
+
+def _houseexpo_sizes(params: dict[str, ParamValue]) -> _HouseExpoSizes:
+    """The robot's sizes given for an imported plan: numbers (metres), nothing else."""
+    unknown = sorted(set(params) - set(HOUSEEXPO_PARAMS))
+    if unknown:
+        raise InputError(
+            f"--from-houseexpo takes only {', '.join(HOUSEEXPO_PARAMS)}; "
+            f"got {', '.join(unknown)} (size comes from the plan)"
+        )
+    metres: dict[str, float] = {}
+    for name, value in params.items():
+        if isinstance(value, bool | str):
+            raise InputError(f"--param {name} must be a number of metres, got {value!r}")
+        metres[name] = value
+    sizes = _HouseExpoSizes()
+    if "robot_radius_m" in metres:
+        sizes["robot_radius_m"] = metres["robot_radius_m"]
+    if "clearance_margin_m" in metres:
+        sizes["clearance_margin_m"] = metres["clearance_margin_m"]
+    return sizes
+
+
+def _build_world(
+    args: argparse.Namespace, seed: int | None, params: dict[str, ParamValue]
+) -> World:
     import worldgen
 
     if args.from_houseexpo is not None:
         if args.kind is not None:
             raise InputError("give --kind or --from-houseexpo, not both")
-        unknown = sorted(set(params) - set(HOUSEEXPO_PARAMS))
-        if unknown:
-            raise InputError(
-                f"--from-houseexpo takes only {', '.join(HOUSEEXPO_PARAMS)}; "
-                f"got {', '.join(unknown)} (size comes from the plan)"
-            )
-        return worldgen.from_houseexpo(args.from_houseexpo, seed=seed, **params)
+        return worldgen.from_houseexpo(args.from_houseexpo, seed=seed, **_houseexpo_sizes(params))
     if args.kind is None:
         raise InputError("give --kind KIND or --from-houseexpo PLAN.json")
     from albot2d.evaluation.run.setup import RunSpec, build_world
@@ -98,7 +126,7 @@ def _tour_options(args: argparse.Namespace) -> tuple[str, float, bool] | None:
     return args.tour_kind, float(length or DEFAULT_TOUR_LENGTH_M), False
 
 
-def _plan_tour(world: Any, options: tuple[str, float, bool] | None) -> Any:
+def _plan_tour(world: World, options: tuple[str, float, bool] | None) -> Tour | None:
     if options is None:
         return None
     from worldgen.tours import plan_tour
@@ -115,7 +143,7 @@ def _write_together(outputs: dict[Path, bytes]) -> None:
             tmp.write_bytes(outputs[path])
 
 
-def summary(world: Any, tour: Any, out: Path) -> str:
+def summary(world: World, tour: Tour | None, out: Path) -> str:
     seed = "-" if world.seed is None else world.seed
     line = (
         f"{world.kind} seed {seed}: {world.width_m:.1f} x {world.height_m:.1f} m, "

@@ -33,8 +33,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from albot2d.control.grid_search import dilate, nearest_goal_path, segment_clear, simplify_path
+from albot2d.control.grid_search import dilate
 from albot2d.control.knowledge import GridSpec, KnowledgeGrid
+from albot2d.control.navigation import (
+    blocked_ahead,
+    cost_grid,
+    plan_path,
+    search_seeds,
+    steer,
+)
 from albot2d.frames import Scan
 from albot2d.geometry import Pose, wrap_angle
 from albot2d.validation import check_non_negative, check_positive
@@ -121,15 +128,10 @@ class FrontierExplorer:
             self._backing_s = self.params.back_off_s
         if scan is None:
             return np.zeros(0, dtype=np.intp)
-        if self._path is not None and self._blocked_ahead(scan):
+        stop_m = self.params.stop_distance_m
+        if self._path is not None and blocked_ahead(scan, self.radius_m, stop_m):
             self._replan = True
         return self.knowledge.integrate(pose, scan)
-
-    def _blocked_ahead(self, scan: Scan) -> bool:
-        """A return inside the strip the disc would sweep in the next ``stop_distance_m``."""
-        pts = scan.points()
-        ahead = (pts[:, 0] > 0.0) & (pts[:, 0] < self.radius_m + self.params.stop_distance_m)
-        return bool((ahead & (np.abs(pts[:, 1]) < self.radius_m)).any())
 
     # -- acting ------------------------------------------------------------------------
 
@@ -167,16 +169,12 @@ class FrontierExplorer:
         self._path, self._goal, self._replan = None, None, True
 
     def _costs(self) -> FloatArray:
-        p, k = self.params, self.knowledge
-        r = self.spec.resolution_m
-        occupied = k.occupied
-        # An occupied cell's wall may lie anywhere in it: up to half a diagonal nearer.
-        hard = dilate(occupied, (self.radius_m + p.wall_margin_m) / r + math.sqrt(0.5))
-        hard |= dilate(k.unknown, self.radius_m / r)
-        soft = dilate(occupied, (self.radius_m + p.wall_margin_m + p.comfort_margin_m) / r)
-        cost = np.where(soft, p.comfort_cost, 1.0)
-        cost[hard] = np.inf
-        return cost
+        p = self.params
+        return cost_grid(
+            self.knowledge, self.radius_m, wall_margin_m=p.wall_margin_m,
+            comfort_margin_m=p.comfort_margin_m, comfort_cost=p.comfort_cost,
+            unknown_passable=False,
+        )  # fmt: skip
 
     def _goals(self, passable: NDArray[np.bool_]) -> NDArray[np.bool_]:
         k = self.knowledge
@@ -203,84 +201,32 @@ class FrontierExplorer:
             self.finished = True
             self._path = None
             return
-        seeds, seed_dist = self._seeds(pose, passable)
+        seeds, seed_dist = search_seeds(self.knowledge, pose, self.radius_m, passable)
         if len(seeds) == 0:
             self.finished = True
             self._path = None
             return
-        found = nearest_goal_path(cost, goals, seeds, seed_dist)
-        if found is None:
+        path = plan_path(self.spec, cost, goals, seeds, seed_dist, pose)
+        if path is None:
             self.finished = True
             self._path = None
             return
-        cells, _ = found
-        corners = simplify_path(cells, passable)
-        r = self.spec.resolution_m
-        xy = np.column_stack(
-            [self.spec.origin_x_m + (corners[:, 1] + 0.5) * r,
-             self.spec.origin_y_m + (corners[:, 0] + 0.5) * r]
-        )  # fmt: skip
-        goal = (float(xy[-1, 0]), float(xy[-1, 1]))
+        goal = (float(path[-1, 0]), float(path[-1, 1]))
         if self._goal is None or math.hypot(goal[0] - self._goal[0], goal[1] - self._goal[1]) > 0.5:
             self._best_goal_dist, self._progress_s = math.inf, time_s
         self._goal = goal
-        # The first cell is the robot's own (skip it) or, when that was impassable, the
-        # passable cell the search started from: drive there first, clear of the wall.
-        iy, ix = self.spec.cell_of(pose.x, pose.y)
-        own = int(corners[0, 0]) == iy and int(corners[0, 1]) == ix
-        self._path = xy[1:] if own and len(xy) > 1 else xy
-
-    def _seeds(
-        self, pose: Pose, passable: NDArray[np.bool_]
-    ) -> tuple[NDArray[np.int64], FloatArray]:
-        """The passable cells the search starts from: the robot's own, or when that is
-        impassable (hard against a wall), the passable cells within one radius of it."""
-        iy, ix = self.spec.cell_of(pose.x, pose.y)
-        if passable[iy, ix]:
-            return np.array([iy * self.spec.nx + ix]), np.zeros(1)
-        r = self.spec.resolution_m
-        k = math.ceil(2.0 * self.radius_m / r)
-        y0, y1 = max(iy - k, 0), min(iy + k + 1, self.spec.ny)
-        x0, x1 = max(ix - k, 0), min(ix + k + 1, self.spec.nx)
-        yy, xx = np.mgrid[y0:y1, x0:x1]
-        d = np.hypot(yy - iy, xx - ix)
-        ok = passable[y0:y1, x0:x1] & (d <= k)
-        clear = ~self.knowledge.occupied
-        here = np.array([iy, ix], dtype=np.float64)
-        sy, sx = yy[ok], xx[ok]
-        sight = np.array(
-            [
-                segment_clear(clear, here, np.array([y, x], dtype=np.float64))
-                for y, x in zip(sy, sx, strict=True)
-            ],
-            dtype=bool,
-        )
-        sy, sx = sy[sight], sx[sight]
-        return (sy * self.spec.nx + sx).astype(np.int64), d[ok][sight] * 4.0
+        self._path = path
 
     def _follow(self, pose: Pose) -> tuple[float, float]:
         p = self.params
-        path = self._path
-        assert path is not None
-        # Drop corners reached (the last one is the goal). Corners are driven to, not cut:
-        # the straight legs between them are what the plan checked.
-        while (
-            len(path) > 1
-            and math.hypot(path[0, 0] - pose.x, path[0, 1] - pose.y) < p.corner_tolerance_m
-        ):
-            path = path[1:]
-        self._path = path
-        gx, gy = path[0]
-        dist = math.hypot(gx - pose.x, gy - pose.y)
-        if len(path) == 1 and dist < p.goal_tolerance_m:
+        assert self._path is not None
+        step = steer(
+            self._path, pose, speed_mps=p.speed_mps, turn_rate_radps=p.turn_rate_radps,
+            corner_tolerance_m=p.corner_tolerance_m, goal_tolerance_m=p.goal_tolerance_m,
+            turn_in_place_rad=p.turn_in_place_rad, heading_gain=p.heading_gain,
+        )  # fmt: skip
+        self._path = step.path
+        if step.arrived:
             # Arrived: if its frontier is still there next plan, the goal is given up.
             self._give_up()
-            return 0.0, 0.0
-        err = float(wrap_angle(math.atan2(gy - pose.y, gx - pose.x) - pose.theta))
-        omega = float(np.clip(p.heading_gain * err, -p.turn_rate_radps, p.turn_rate_radps))
-        if abs(err) > p.turn_in_place_rad:
-            return 0.0, omega
-        v = p.speed_mps * math.cos(err)
-        if len(path) == 1:
-            v = min(v, max(0.1, dist))  # slow down into the goal
-        return v, omega
+        return step.command

@@ -11,6 +11,7 @@ on a ``GridSpec`` (cells whose centre lies inside), that the laser has shown.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import shapely
@@ -39,9 +40,11 @@ class ReachableFloor:
     def area_m2(self) -> float:
         return float(self.polygon.area)
 
-    @property
+    @cached_property
     def cells(self) -> int:
-        return int(self.mask.sum())
+        # Cached: coverage is read every step, and a sum over the whole grid would make a
+        # step's cost follow the building's size instead of what the laser reaches.
+        return int(np.count_nonzero(self.mask))
 
     def coverage(self, seen: NDArray[np.bool_]) -> float:
         """The fraction of the reachable floor's cells in ``seen`` (a mask over ``spec``)."""

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from albot2d.compiled import compiled_kernel
 from albot2d.frames import Scan
 from albot2d.geometry import Pose
 from albot2d.validation import check_positive
@@ -32,6 +33,7 @@ __all__ = [
     "UNKNOWN",
     "GridSpec",
     "KnowledgeGrid",
+    "fan_cells",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -101,6 +103,42 @@ class GridSpec:
         return self.origin_x_m + (ix + 0.5) * r, self.origin_y_m + (iy + 0.5) * r
 
 
+def fan_cells(
+    laser_x: float,
+    laser_y: float,
+    laser_theta: float,
+    angles: FloatArray,
+    reach: FloatArray,
+    origin_x_m: float,
+    origin_y_m: float,
+    resolution_m: float,
+    ix0: int,
+    ix1: int,
+    iy0: int,
+    iy1: int,
+    nx: int,
+    margin_m: float,
+) -> NDArray[np.intp]:
+    """The flat indices (row-major, ``nx`` columns) of the cells of the window
+    ``[iy0, iy1) × [ix0, ix1)`` whose centre lies inside the fan a scan swept: between two
+    neighbouring beams (``angles`` ascending, in the laser's frame at ``laser_theta``) and
+    nearer the laser than both their ``reach`` less ``margin_m``. The numpy reference;
+    ``knowledge_numba.fan_cells`` is the compiled kernel, tested equal to it."""
+    r = resolution_m
+    dx = (origin_x_m + (np.arange(ix0, ix1) + 0.5) * r - laser_x)[None, :]
+    dy = (origin_y_m + (np.arange(iy0, iy1) + 0.5) * r - laser_y)[:, None]
+    rho = np.hypot(dx, dy)
+    phi = np.arctan2(dy, dx) - laser_theta
+    phi = (phi - angles[0] + math.pi) % (2.0 * math.pi) - math.pi + angles[0]
+    j = np.searchsorted(angles, phi, side="right") - 1
+    inside = (j >= 0) & (j < len(angles) - 1)
+    jc = np.clip(j, 0, len(angles) - 2)
+    limit = np.minimum(reach[jc], reach[jc + 1])
+    fan = inside & (rho < limit - margin_m)
+    wy, wx = np.nonzero(fan)
+    return ((wy + iy0) * nx + (wx + ix0)).astype(np.intp)
+
+
 class KnowledgeGrid:
     """Free / occupied / unknown cells and the cells seen, built from scans (see module)."""
 
@@ -141,18 +179,11 @@ class KnowledgeGrid:
         iy1 = min(math.floor((max(ey.max(), laser.y) - spec.origin_y_m) / r) + 1, spec.ny)
         new = np.zeros(0, dtype=np.intp)
         if ix1 > ix0 and iy1 > iy0:
-            dx = (spec.origin_x_m + (np.arange(ix0, ix1) + 0.5) * r - laser.x)[None, :]
-            dy = (spec.origin_y_m + (np.arange(iy0, iy1) + 0.5) * r - laser.y)[:, None]
-            rho = np.hypot(dx, dy)
-            phi = np.arctan2(dy, dx) - laser.theta
-            phi = (phi - angles[0] + math.pi) % (2.0 * math.pi) - math.pi + angles[0]
-            j = np.searchsorted(angles, phi, side="right") - 1
-            inside = (j >= 0) & (j < len(angles) - 1)
-            jc = np.clip(j, 0, len(angles) - 2)
-            limit = np.minimum(reach[jc], reach[jc + 1])
-            fan = inside & (rho < limit - self._pass_margin_m)
-            wy, wx = np.nonzero(fan)
-            flat = (wy + iy0) * spec.nx + (wx + ix0)
+            window = (spec.origin_x_m, spec.origin_y_m, r, ix0, ix1, iy0, iy1, spec.nx)
+            kernel = compiled_kernel("albot2d.control.knowledge_numba", "fan_cells")
+            fan = kernel if kernel is not None else fan_cells
+            flat = fan(laser.x, laser.y, laser.theta, angles, reach, *window,
+                       self._pass_margin_m)  # fmt: skip
             seen = self.seen.reshape(-1)
             new = flat[~seen[flat]]
             seen[flat] = True

@@ -31,7 +31,7 @@ from albot2d.sim.laser import laser_noise_preset
 from albot2d.sim.odometry import noise_preset
 from worldgen.world import World
 
-__all__ = ["POSE_BOUND_M", "AlbotEnv", "pose_space"]
+__all__ = ["POSE_BOUND_M", "AlbotEnv", "clip_to_pose_space", "pose_space"]
 
 _SEED_BOUND = 2**31 - 1
 #: Bound of the pose observations' x and y (m): far beyond any building, but finite.
@@ -55,7 +55,7 @@ def _finite_action(action: Any) -> tuple[float, float]:
     return float(arr[0]), float(arr[1])
 
 
-def _clipped(pose: NDArray[np.float64]) -> NDArray[np.float64]:
+def clip_to_pose_space(pose: NDArray[np.float64]) -> NDArray[np.float64]:
     """A pose inside ``pose_space`` (theta is wrapped already; x, y beyond the bound only
     after kilometres of odometry drift)."""
     return np.clip(pose, -np.array([POSE_BOUND_M, POSE_BOUND_M, math.pi]),
@@ -128,7 +128,7 @@ class AlbotEnv(gymnasium.Env[dict[str, NDArray[Any]], NDArray[np.float32]]):
                 0.0, self.laser_params.max_range_m,
             ).astype(np.float32)  # fmt: skip
         odom = self._start.between(obs.odom_pose).as_array()
-        return {"ranges": self._ranges.copy(), "odometry": _clipped(odom)}
+        return {"ranges": self._ranges.copy(), "odometry": clip_to_pose_space(odom)}
 
     def _info(self, obs: Observation) -> dict[str, Any]:
         return {

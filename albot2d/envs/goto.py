@@ -8,6 +8,9 @@ drifts as a real robot's would. Reward: the decrease of the true distance to the
 (m) per step, minus ``collision_penalty`` on a collision, plus ``success_reward`` on
 arrival. Terminated on arrival: the true position within ``goal_tolerance_m`` and heading
 within ``heading_tolerance_rad`` of the goal. The registered id truncates after 1200 steps.
+
+The baseline policy is ``albot2d.control.GoalSeeker`` (``baseline_policy``): it plans on
+what its laser showed, in its odometry frame, and never reads the truth in ``info``.
 """
 
 from __future__ import annotations
@@ -19,12 +22,14 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from albot2d.envs.base import AlbotEnv, _clipped, pose_space
+from albot2d.control.goal_seeker import GoalSeeker, GoalSeekerParams
+from albot2d.control.knowledge import GridSpec
+from albot2d.envs.base import AlbotEnv, clip_to_pose_space, pose_space
 from albot2d.errors import InputError
 from albot2d.geometry import Pose, wrap_angle
 from albot2d.sim.commands import Observation
 
-__all__ = ["GoToEnv"]
+__all__ = ["GoToEnv", "baseline_policy"]
 
 
 class GoToEnv(AlbotEnv):
@@ -67,7 +72,7 @@ class GoToEnv(AlbotEnv):
 
     def _observation(self, obs: Observation) -> dict[str, NDArray[Any]]:
         out = super()._observation(obs)
-        out["goal"] = _clipped(obs.odom_pose.between(self.goal).as_array())
+        out["goal"] = clip_to_pose_space(obs.odom_pose.between(self.goal).as_array())
         return out
 
     def _draw_goal(self) -> Pose:
@@ -117,3 +122,30 @@ class GoToEnv(AlbotEnv):
 
     def _render_layers(self) -> dict[str, Any]:
         return {"goal": self.goal}
+
+
+def baseline_policy(env: GoToEnv, params: GoalSeekerParams | None = None) -> Any:
+    """The goal seeker as a policy for ``env`` (after its ``reset``): a callable
+    ``policy(observation, info) -> action`` that reads the observation's odometry and goal,
+    the latest scan and the bumper (``collided``), never the true pose."""
+    if env.world is None or env.last is None:
+        raise RuntimeError("reset the environment before making its baseline policy")
+    params = params if params is not None else GoalSeekerParams()
+    # The odometry frame's grid: the goal lies within max_goal_m; detours and drift within
+    # a sensing range more.
+    half_m = env.max_goal_m + params.sensing_range_m
+    spec = GridSpec.covering(-half_m, -half_m, half_m, half_m, params.resolution_m)
+    seeker = GoalSeeker(spec, env.robot_params.radius_m, params)
+
+    def policy(observation: dict[str, NDArray[Any]], info: dict[str, Any]) -> NDArray[np.float32]:
+        last = env.last
+        assert last is not None
+        pose = Pose.from_array(observation["odometry"])
+        seeker.observe(pose, last.scan, last.collided)
+        goal = pose.compose(Pose.from_array(observation["goal"]))
+        v, w = seeker.command(pose, goal, last.time_s)
+        return np.clip(
+            np.array([v, w], dtype=np.float32), env.action_space.low, env.action_space.high
+        )
+
+    return policy

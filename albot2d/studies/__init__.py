@@ -1,6 +1,8 @@
 """Studies: one-off measurements with their own command lines (``python -m
 albot2d.studies.NAME``), kept out of the library's core.
 
+- ``heading_calibration``: the heading bound's error model against Albot₁'s real link
+  heading errors on fuzzing episodes;
 - ``link_errors``: Albot₁'s error budget, each route-map link's error by how it was made;
 - ``sensitivity``: start–stop homing against odometry noise, moves per update by region.
 

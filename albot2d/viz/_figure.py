@@ -16,11 +16,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 __all__ = [
     "colour_buckets",
     "figure_batch",
+    "figure_of",
     "line_segments",
     "nan_lines",
     "new_figure",
@@ -39,6 +41,14 @@ def new_figure(width_in: float, height_in: float, *, layout: Layout = "constrain
 
     fig = Figure(figsize=(width_in, height_in), layout=layout)
     FigureCanvasAgg(fig)
+    return fig
+
+
+def figure_of(ax: Axes) -> Figure:
+    """The ``Figure`` that ``ax`` is drawn on."""
+    # ``Axes.figure`` is typed ``Figure | SubFigure``; the axes drawn here sit on a Figure.
+    fig = ax.get_figure(root=True)
+    assert fig is not None  # an Axes always belongs to a figure
     return fig
 
 

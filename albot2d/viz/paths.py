@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from albot2d.viz._figure import png_bytes
-from albot2d.viz.world import DEFAULT_DPI, PLOT_MARGIN_FRACTION, _figure_of, plot_world
+from albot2d.viz._figure import figure_of, png_bytes
+from albot2d.viz.world import DEFAULT_DPI, PLOT_MARGIN_FRACTION, plot_world
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -142,4 +142,4 @@ def render_paths_png(
 ) -> bytes:
     """The paths picture (see ``plot_paths``) as PNG bytes, made in memory."""
     ax = plot_paths(world, true_xy=true_xy, odom_xy=odom_xy, collided=collided, title=title)
-    return png_bytes(_figure_of(ax), dpi)
+    return png_bytes(figure_of(ax), dpi)

@@ -257,6 +257,8 @@ class RerunLog:
     def _log_mapper(
         self, name: str, mapper: Any, travelled_m: float, paths_due: bool, maps_due: bool
     ) -> None:
+        from albot2d.mapping.albot1 import Albot1
+
         rr, rec, color = self.rr, self.rec, self.colors[name]
         pose = self._anchored_pose(mapper)
         rec.log(f"mappers/{name}/pose", self._arrow(pose, color))
@@ -269,8 +271,7 @@ class RerunLog:
             return
         rec.log(f"mappers/{name}/view", rr.LineStrips2D(_strips(transform_segments(pose,
                 view.segments)), colors=(255, 160, 0), radii=0.04))  # fmt: skip
-        # The tracker's state is Albot1's own (no public accessor): what it still tracks.
-        tracked = getattr(mapper, "_tracked", None)
+        tracked = mapper.tracked if isinstance(mapper, Albot1) else None
         if tracked is not None:
             rec.log(f"mappers/{name}/tracked", rr.LineStrips2D(_strips(transform_segments(pose,
                     tracked.current.segments)), colors=(220, 20, 120), radii=0.05))  # fmt: skip

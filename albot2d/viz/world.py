@@ -14,11 +14,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from albot2d.atomic import atomic_write_bytes
-from albot2d.viz._figure import line_segments, new_figure, png_bytes
+from albot2d.viz._figure import figure_of, line_segments, new_figure, png_bytes
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
-    from matplotlib.figure import Figure
 
     from worldgen.world import Tour, World
 
@@ -206,7 +205,7 @@ def _draw_legend(ax: Axes, world: World, tour: Tour | None, show_roadmap: bool) 
 def render_world_png(world: World, *, tour: Tour | None = None, dpi: int = DEFAULT_DPI) -> bytes:
     """The world picture (see ``plot_world``) as PNG bytes, made in memory."""
     ax = plot_world(world, tour=tour)
-    return png_bytes(_figure_of(ax), dpi)
+    return png_bytes(figure_of(ax), dpi)
 
 
 def save_world_png(
@@ -218,10 +217,3 @@ def save_world_png(
 ) -> None:
     """Write the world picture to ``path`` as PNG, atomically (no partial file on failure)."""
     atomic_write_bytes(path, render_world_png(world, tour=tour, dpi=dpi))
-
-
-def _figure_of(ax: Axes) -> Figure:
-    # ``Axes.figure`` is typed ``Figure | SubFigure``; the axes drawn here sit on a Figure.
-    fig = ax.get_figure(root=True)
-    assert fig is not None  # an Axes always belongs to a figure
-    return fig

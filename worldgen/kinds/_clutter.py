@@ -14,8 +14,9 @@ import shapely
 from numpy.typing import NDArray
 
 from worldgen.kinds._plan import boxes
+from worldgen.params import CommonParams
 
-__all__ = ["furnish_rects", "furnish_region", "pillar_grid", "rect_gaps"]
+__all__ = ["furnish_hall", "furnish_rects", "furnish_region", "pillar_grid", "rect_gaps"]
 
 FloatArray = NDArray[np.float64]
 
@@ -312,3 +313,29 @@ def pillar_grid(
         for r in rects
     ]
     return polys, rects
+
+
+def furnish_hall(
+    hall: shapely.Polygon,
+    rng: np.random.Generator,
+    p: CommonParams,
+    *,
+    pillar_spacing_m: float,
+    pillar_size_m: float,
+    avoid: FloatArray | None = None,
+) -> tuple[list[shapely.Polygon], list[shapely.Polygon]]:
+    """A hall's pillars (``pillar_grid``), then its free-standing furniture
+    (``furnish_region`` at ``p``'s clutter density), clear of the pillars and of the
+    ``avoid`` rectangles; returns (pillars, furniture)."""
+    pillars, pillar_rects = pillar_grid(
+        hall, rng, spacing_m=pillar_spacing_m, size_m=pillar_size_m, passage_m=p.passage_m
+    )
+    furniture = furnish_region(
+        hall,
+        rng,
+        per_10m2=p.clutter_per_10m2,
+        passage_m=p.passage_m,
+        avoid=np.zeros((0, 4)) if avoid is None else avoid,
+        placed=pillar_rects,
+    )
+    return pillars, furniture

@@ -38,7 +38,7 @@ import numpy as np
 import shapely
 
 from worldgen.kinds import WorldKind
-from worldgen.kinds._clutter import furnish_rects, furnish_region, pillar_grid
+from worldgen.kinds._clutter import furnish_hall, furnish_rects
 from worldgen.kinds._plan import JAMB_M, Layout, boxes, partition_1d, shrink
 from worldgen.params import Fig6Params
 
@@ -174,20 +174,12 @@ def layout_fig6(rect: np.ndarray, p: Fig6Params, rng: np.random.Generator) -> La
     )
     # the hall's furniture keeps clear of the top corridor's line (the route)
     hall_poly = shapely.box(hall_in[0], cyt + _HALL_ROUTE_CLEAR_M, hall_in[2], hall_in[3])
-    pillars, pillar_rects = pillar_grid(
+    pillars, furniture = furnish_hall(
         hall_poly,
         rng,
-        spacing_m=_HALL_PILLAR_SPACING_M,
-        size_m=_HALL_PILLAR_SIZE_M,
-        passage_m=p.passage_m,
-    )
-    furniture = furnish_region(
-        hall_poly,
-        rng,
-        per_10m2=p.clutter_per_10m2,
-        passage_m=p.passage_m,
-        avoid=np.zeros((0, 4)),
-        placed=pillar_rects,
+        p,
+        pillar_spacing_m=_HALL_PILLAR_SPACING_M,
+        pillar_size_m=_HALL_PILLAR_SIZE_M,
     )
     clutter += pillars + furniture
 

@@ -15,7 +15,7 @@ import numpy as np
 import shapely
 
 from worldgen.kinds import WorldKind
-from worldgen.kinds._clutter import furnish_rects, furnish_region, pillar_grid
+from worldgen.kinds._clutter import furnish_hall, furnish_rects
 from worldgen.kinds._doors import door_links, hall_links
 from worldgen.kinds._plan import (
     JAMB_M,
@@ -219,20 +219,13 @@ def layout_office(rect: np.ndarray, p: OfficeParams, rng: np.random.Generator) -
     )
     for k, hall in enumerate(hall_in):
         poly = shapely.box(*hall)
-        pillars, pillar_rects = pillar_grid(
+        pillars, furniture = furnish_hall(
             poly,
             rng,
-            spacing_m=_HALL_PILLAR_SPACING_M,
-            size_m=_HALL_PILLAR_SIZE_M,
-            passage_m=p.passage_m,
-        )
-        furniture = furnish_region(
-            poly,
-            rng,
-            per_10m2=p.clutter_per_10m2,
-            passage_m=p.passage_m,
+            p,
+            pillar_spacing_m=_HALL_PILLAR_SPACING_M,
+            pillar_size_m=_HALL_PILLAR_SIZE_M,
             avoid=o_zone,
-            placed=pillar_rects,
         )
         clutter += pillars + furniture
         links.append(_hall_links(poly, pillars + furniture, hall_pts[hall_adj.i == k], p))

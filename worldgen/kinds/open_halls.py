@@ -12,7 +12,7 @@ import numpy as np
 import shapely
 
 from worldgen.kinds import WorldKind
-from worldgen.kinds._clutter import furnish_region, pillar_grid
+from worldgen.kinds._clutter import furnish_hall
 from worldgen.kinds._plan import Layout, boxes
 from worldgen.params import OpenParams
 from worldgen.roadmap import BUFFER_SLACK_M
@@ -142,16 +142,8 @@ def open_features(hall: shapely.Geometry, pillars: int, partitions: int) -> dict
 def layout_open(rect: np.ndarray, p: OpenParams, rng: np.random.Generator) -> Layout:
     hall = irregular_hall(rect, p, rng)
     hall, partitions = _partitions(hall, p.partition_walls, p, rng)
-    pillars, pillar_rects = pillar_grid(
-        hall, rng, spacing_m=p.pillar_spacing_m, size_m=p.pillar_size_m, passage_m=p.passage_m
-    )
-    furniture = furnish_region(
-        hall,
-        rng,
-        per_10m2=p.clutter_per_10m2,
-        passage_m=p.passage_m,
-        avoid=np.zeros((0, 4)),
-        placed=pillar_rects,
+    pillars, furniture = furnish_hall(
+        hall, rng, p, pillar_spacing_m=p.pillar_spacing_m, pillar_size_m=p.pillar_size_m
     )
     layout = Layout(floor=[hall], clutter=[*pillars, *furniture], links=None)
     layout.features.update(open_features(hall, len(pillars), partitions))

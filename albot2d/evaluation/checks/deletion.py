@@ -30,13 +30,15 @@ from albot2d.mapping.albot1.deletion import GlobalMapParams
 from albot2d.mapping.albot1.global_map import UpdateReport
 from albot2d.mapping.albot1.mapper import Albot1
 
-__all__ = ["check_update_deleted_facing_overlap"]
+__all__ = ["ahead_square", "check_update_deleted_facing_overlap", "facing_mask", "visible_mask"]
 
 FloatArray = NDArray[np.float64]
 
 
 # -- algorithm #5 ---------------------------------------------------------------------------
-def _facing(segs: FloatArray, robot: Pose, test: str) -> NDArray[np.bool_]:
+def facing_mask(segs: FloatArray, robot: Pose, test: str) -> NDArray[np.bool_]:
+    """The surfaces on the robot's facing side by the rule's facing ``test``
+    (``any_endpoint``, ``both_endpoints`` or, otherwise, the midpoint) ahead of its pose."""
     c, s = math.cos(robot.theta), math.sin(robot.theta)
     fwd0 = c * (segs[:, 0] - robot.x) + s * (segs[:, 1] - robot.y)
     fwd1 = c * (segs[:, 2] - robot.x) + s * (segs[:, 3] - robot.y)
@@ -59,7 +61,7 @@ def _facing_front(segs: FloatArray, robot: Pose, test: str, front: bool) -> NDAr
             np.ascontiguousarray(segs), float(robot.x), float(robot.y),
             math.cos(robot.theta), math.sin(robot.theta), _FACING_TESTS.index(test), front,
         )  # fmt: skip
-    out = _facing(segs, robot, test)
+    out = facing_mask(segs, robot, test)
     if front:
         d = segs[:, 2:] - segs[:, :2]
         r = np.array([robot.x, robot.y]) - segs[:, :2]
@@ -67,7 +69,7 @@ def _facing_front(segs: FloatArray, robot: Pose, test: str, front: bool) -> NDAr
     return out
 
 
-def _ahead(robot: Pose, big: float) -> shapely.Geometry:
+def ahead_square(robot: Pose, big: float) -> shapely.Geometry:
     """The square ``x >= 0`` of the robot's frame, ``big`` a side, in the map's frame: the
     corners moved as ``shapely.affinity.affine_transform`` moves them (the same floats),
     without its per-geometry overhead."""
@@ -99,7 +101,7 @@ def _view_polygon(
     poly = poly.buffer(enlarge_m)
     if mode == "forward":  # keep x >= 0 in the robot frame
         big = 10.0 * (1.0 + float(np.abs(pts - o).max()) + enlarge_m)
-        poly = poly.intersection(_ahead(robot, big))
+        poly = poly.intersection(ahead_square(robot, big))
     return poly
 
 
@@ -115,7 +117,7 @@ def _seen_samples(
     the sight line through the point meets a view surface, the nearest meeting at most
     ``beyond_m`` short of the point (or beyond it). A surface whose sight lines meet the
     view at fewer than ``least_share`` of its points cannot reach that share seen, and is
-    left all unseen without the second test. (Every point is asked; ``_visible`` asks only
+    left all unseen without the second test. (Every point is asked; ``visible_mask`` asks only
     the points that can still change a surface's verdict.)"""
     sight = _SightLines(segs, view, robot, beyond_m, samples)
     every = np.arange(len(sight.dist))
@@ -233,7 +235,7 @@ _MARGIN_M = 1e-6
 _MARGIN_RAD = 1e-6
 
 
-def _visible(
+def visible_mask(
     segs: FloatArray,
     view: FloatArray,
     robot: Pose,
@@ -394,7 +396,7 @@ def check_update_deleted_facing_overlap(
     seeable = _facing_front(segs, robot, params.facing_test, params.seen_side == "front")
     if params.could_see == "visible" and seeable.any():
         idx = np.flatnonzero(seeable)
-        seeable[idx] = _visible(
+        seeable[idx] = visible_mask(
             segs[idx], view, robot, params.enlarge_m, params.visible_samples,
             params.min_visible_share,
         )  # fmt: skip

@@ -94,7 +94,7 @@ def possible_points(segs, vsegs, ox, oy, beyond_m, samples, need, margin_m, marg
 def facing_front(segs, ox, oy, c, s, test, front):
     """``(N,)``: the surfaces on the facing side (``test`` 0: any endpoint in front of the
     robot, 1: both, 2: their mean) and, with ``front``, seen from their front (the robot on
-    the left of the directed surface): ``_facing`` and the seen-side test of the numpy
+    the left of the directed surface): ``facing_mask`` and the seen-side test of the numpy
     path, in the same float operations."""
     n = segs.shape[0]
     out = np.zeros(n, np.bool_)

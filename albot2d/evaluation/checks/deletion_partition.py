@@ -10,7 +10,7 @@ The recomputation is plain and independent of the mapper's deletion code (no spa
 index, no quick touching test, no compiled kernels): P built with shapely from its
 definition, every live surface asked against it, the
 facing and seen-side tests, the visible share decided by shapely sight lines
-(``deletion_invariant._visible``, itself checked against the definition asked point by
+(``checks.deletion.visible_mask``, itself checked against the definition asked point by
 point), Expand's groups from the affected ids, the current map's rule and ``keep_if_all``.
 What the map deleted is read through the view-based mapper protocol only: the map right
 before the update and right after it (``global_map(at_update=…)``); surfaces are never
@@ -26,7 +26,7 @@ import shapely
 from numpy.typing import NDArray
 
 from albot2d.errors import InvariantError, fail
-from albot2d.evaluation.checks.deletion import _ahead, _facing, _visible
+from albot2d.evaluation.checks.deletion import ahead_square, facing_mask, visible_mask
 from albot2d.geometry import Pose
 from albot2d.mapping.albot1.deletion import GlobalMapParams
 from albot2d.mapping.albot1.global_map import UpdateReport
@@ -96,7 +96,7 @@ def view_polygon(view: FloatArray, robot: Pose, params: GlobalMapParams) -> shap
             poly = poly.buffer(grow)
     if params.enlarge == "forward":
         big = 10.0 * (1.0 + float(np.abs(pts - o).max()) + grow)
-        poly = poly.intersection(_ahead(robot, big))
+        poly = poly.intersection(ahead_square(robot, big))
     return poly
 
 
@@ -132,7 +132,7 @@ def expected_deletions(
         )
         ray = shapely.LineString([(robot.x, robot.y), tip])
         touch |= np.asarray(shapely.intersects(ray, lines), bool)
-    seeable = _facing(segs, robot, p.facing_test)
+    seeable = facing_mask(segs, robot, p.facing_test)
     if p.seen_side == "front":
         d = segs[:, 2:] - segs[:, :2]
         r = np.array([robot.x, robot.y]) - segs[:, :2]
@@ -142,7 +142,7 @@ def expected_deletions(
     could_see = touch & seeable
     if p.could_see == "visible" and could_see.any() and len(view):
         idx = np.flatnonzero(could_see)
-        could_see[idx] = _visible(
+        could_see[idx] = visible_mask(
             segs[idx], view, robot, p.enlarge_m, p.visible_samples, p.min_visible_share,
             backend="numpy",
         )  # fmt: skip

@@ -6,21 +6,33 @@ frame in between by path integration from its local map. Each link contributes i
 error, and errors of successive links add up as a random walk:
 
 - a **triangulation** link takes its heading from the directions of the surfaces tracked
-  from one view to the other (``albot2d.mapping.albot1.triangulation``). A surface's direction is
-  a line fit of its ``n`` laser points over its length ``L``, with per-point error
-  ``σ_p`` across the line from the laser's range noise, range resolution and angular
-  jitter at the surface's range: ``σ_dir = σ_p √(12 / n) / L``; a surface's heading is
-  the difference of two such fits (``σ² = σ_local² + σ_current²``), and ``m`` of them are
-  averaged with inverse-variance weights (``1/σ² = Σ 1/σ_i²``). Which surfaces were used is
-  not recorded, so the bound takes the ``m`` *least* precise of the surfaces seen in both
-  views (found here with the true relative pose) — ``m`` the link's recorded tracked count:
-  no ``m``-subset does worse.
+  from one view to the other (``albot2d.mapping.albot1.triangulation``). A surface's
+  direction is a line fit of its ``n`` laser points over its length ``L``, with two
+  independent errors. The laser's noise: per-point error ``σ_p`` across the line from
+  its range noise, range resolution and angular jitter at the surface's range,
+  ``σ_dir = σ_p √(12 / n) / L`` (``direction_sigma``). The laser's discrete sampling,
+  which remains with exact ranges: a beam of the next face within extraction's split
+  distance ``e`` of the line joins the fit at an end, at most ``δ_max = e / (1 - h)`` off
+  the wall (``h`` the end beam's leverage), tilting it by ``g δ``,
+  ``g = 6 (n-1) / (n (n+1) L)``; where the corner falls between two beams is uniform, so
+  the offset is uniform over the beam spacing ``s = r Δφ`` at that end's range, and kept
+  only within ``δ_max``: ``σ_disc² = g² Σ_ends min(s, δ_max)³ / (3 s)``
+  (``discretisation_sigma``; ``n`` is the beams the laser's angular resolution ``Δφ`` puts
+  on ``L`` at that range and incidence).
+  A surface's heading is the difference of two such fits (``σ² = σ_local² +
+  σ_current²``, each ``σ_dir² + σ_disc²``), and ``m`` of them are
+  averaged with inverse-variance weights (``1/σ² = Σ 1/σ_i²``). The surfaces are those
+  the mapper reports for the link (``used``: Albot1's ``on_localise`` hook, recorded by the
+  fuzz episode and by ``ReferenceLinks``); given none, the bound takes the ``m`` *least*
+  precise of the surfaces seen in both views (found here with the true relative pose) —
+  ``m`` the link's recorded tracked count: no ``m``-subset does worse.
 - a **path-integration** link has odometry's error over that link only: ``k`` standard
   deviations of its random heading error over the true motion of the link, plus its
   systematic part at full strength (``odometry_heading_envelope``).
 - a frame between local maps adds odometry's error from its local map's view to it.
 
-The bound at a frame is ``floor + k √(Σ var) + Σ systematic`` over its chain. A mapper
+The bound at a frame is ``floor + k √(Σ var) + Σ systematic`` over its chain (the floor:
+float rounding only). A mapper
 that reports a route map (``ViewBasedMapper``) is held to its own links; any other mapper
 that reports a trajectory has no links of its own to claim, and is held to the links a
 view-based localiser (Albot1, run alongside on the same frames: ``ReferenceLinks``) finds
@@ -32,6 +44,7 @@ mapper that corrects odometry by the laser stays inside it.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -41,8 +54,9 @@ from numpy.typing import NDArray
 from albot2d.errors import fail
 from albot2d.frames import Frame
 from albot2d.geometry import between_arrays, segment_angles, wrap_angle
-from albot2d.mapping.albot1.mapper import Albot1
+from albot2d.mapping.albot1.mapper import Albot1, Localisation
 from albot2d.mapping.albot1.route_map import RouteMap
+from albot2d.perception.extraction import ExtractionParams
 from albot2d.perception.surfaces import Surfaces
 from albot2d.perception.tracking import TrackingParams, trackable_mask
 from albot2d.sim.driving import DrivingProfile
@@ -57,9 +71,11 @@ __all__ = [
     "check_heading_error_bound",
     "common_surfaces",
     "direction_sigma",
+    "discretisation_sigma",
     "heading_error_bound",
     "heading_errors",
     "link_errors",
+    "link_heading_variance",
     "odometry_heading_envelope",
 ]
 
@@ -76,14 +92,17 @@ class HeadingBoundParams:
       run of up to 1000 links with probability ≤ 0.5 % (a random walk against its own
       ``k √t`` boundary: 0.12 % at 50 links, 0.15 % at 200, 0.21 % at 1000; derivation
       in ``docs/invariants.md``).
-    - ``floor_deg``: added everywhere (extraction's own approximation with exact ranges).
+    - ``floor_deg``: added everywhere: float rounding only (composing thousands of
+      relative poses in float64 rounds a heading by ~1e-13 rad; 1e-6° is 1.7e-8 rad).
+      Line extraction's own error with exact ranges is modelled, per surface
+      (``discretisation_sigma``), not floored: the previous 1° floor stood in for it.
     - ``match_angle_deg`` / ``match_distance_m``: two surfaces of two views, placed by the
       true relative pose, are the same physical surface when their directions differ by
       less and the ends of the shorter lie this close to the other's line (RTSV's gates).
     """
 
     sigmas: float = 4.0
-    floor_deg: float = 1.0
+    floor_deg: float = 1e-6
     match_angle_deg: float = 5.0
     match_distance_m: float = 0.2
 
@@ -163,6 +182,58 @@ def direction_sigma(surfaces: Surfaces, laser: LaserNoise) -> FloatArray:
     return sigma_p * np.sqrt(12.0 / spread) / length
 
 
+# Both ends of a surface may carry a beam of another face (``discretisation_sigma``).
+_ENDS = 2
+
+
+def _end_leverage(n: FloatArray) -> FloatArray:
+    """The leverage of an end beam in a least-squares line through ``n`` evenly spread
+    beams: ``1/n + (L/2)² / S_xx`` with ``S_xx = L² n (n+1) / (12 (n-1))``."""
+    return 1.0 / n + 3.0 * (n - 1.0) / (n * (n + 1.0))
+
+
+def discretisation_sigma(surfaces: Surfaces, split_distance_m: float) -> FloatArray:
+    """``(N,)``: the standard deviation (rad) of each surface's fitted direction from the
+    laser's discrete sampling alone, with exact ranges (derivation in ``docs/invariants.md``).
+
+    With exact ranges every beam of the surface's own wall lies on its line; a fit errs
+    only when a beam of another face joins it at an end: the split beam at a corner (it
+    belongs to both halves) or the next face's first beams, or at a run's end a piece too
+    short to stand alone (fewer than ``min_points`` beams) grown back into the surface.
+    Extraction keeps such a beam while its residual from the fitted line is at most the
+    split distance ``e``. Alone among ``n`` beams spread evenly over length ``L`` (the
+    laser's angular resolution, the range and the incidence set ``n`` for a given ``L``),
+    a beam at offset ``δ`` at an end has residual ``δ (1 - h)``, ``h`` its leverage
+    (``_end_leverage``), and tilts the line by ``g δ``, ``g = 6 (n-1) / (n (n+1) L)``; so
+    ``δ ≤ δ_max = e / (1 - h)``. Where a corner falls between two beams is uniform, so the
+    offset of the first beam past it is uniform over the beam spacing ``s``: taken as the
+    arc between two beams at that end's range, ``s = r Δφ``, with the laser's angle between
+    beams ``Δφ`` read from the surface itself (the bearings of its end beams over its
+    ``n - 1`` steps). Kept only when within ``δ_max``, its second moment is
+    ``E[δ²] = min(s, δ_max)³ / (3 s)``. A stray is assumed at both ends, whichever kind of
+    end (the view need not show the neighbouring face): ``σ² = g² (E[δ²]_0 + E[δ²]_1)``.
+    Surfaces not from a scan (no beams): 0; fewer than three beams: a
+    line through two beams fits any stray, so ``inf``."""
+    beams = surfaces.beams
+    from_scan = beams[:, 0] >= 0
+    n = np.where(from_scan, beams[:, 1] - beams[:, 0] + 1, 3).astype(np.float64)
+    fits = n >= 3.0
+    n = np.maximum(n, 3.0)
+    length = np.maximum(surfaces.lengths_m, 1e-9)
+    offset = split_distance_m / (1.0 - _end_leverage(n))
+    gain = 6.0 * (n - 1.0) / (n * (n + 1.0) * length)
+    # The laser's angle between beams, from the bearings of the surface's end beams.
+    ends = surfaces.segments.reshape(-1, 2, 2)
+    bearing = np.arctan2(ends[..., 1], ends[..., 0])
+    step = np.abs(np.asarray(wrap_angle(bearing[:, 1] - bearing[:, 0]))) / (n - 1.0)
+    spacing = np.hypot(ends[..., 0], ends[..., 1]) * step[:, None]  # (N, 2): r Δφ per end
+    spacing = np.maximum(spacing, 1e-12)
+    kept = np.minimum(spacing, offset[:, None])
+    second_moment = (kept**3 / (3.0 * spacing)).sum(axis=1)
+    sigma = gain * np.sqrt(second_moment)
+    return np.where(from_scan, np.where(fits, sigma, np.inf), 0.0)
+
+
 def common_surfaces(
     earlier: Surfaces,
     later: Surfaces,
@@ -227,6 +298,7 @@ def _triangulation_variance(
     laser: LaserNoise,
     tracking: TrackingParams,
     params: HeadingBoundParams,
+    split_distance_m: float,
 ) -> float:
     """The heading variance of a triangulation link that used ``used`` surfaces: the
     inverse-variance mean of the ``used`` least precise trackable surfaces seen in both
@@ -234,7 +306,8 @@ def _triangulation_variance(
     heading then rests on surfaces the views do not share)."""
     ta = np.flatnonzero(trackable_mask(earlier, tracking))
     tb = np.flatnonzero(trackable_mask(later, tracking))
-    sa, sb = direction_sigma(earlier, laser), direction_sigma(later, laser)
+    sa = np.hypot(direction_sigma(earlier, laser), discretisation_sigma(earlier, split_distance_m))
+    sb = np.hypot(direction_sigma(later, laser), discretisation_sigma(later, split_distance_m))
     i, j = common_surfaces(earlier.select(ta), later.select(tb), relative_pose, params)
     if len(i):
         var = sa[ta[i]] ** 2 + sb[tb[j]] ** 2
@@ -245,7 +318,25 @@ def _triangulation_variance(
         var = 2.0 * sb[pool] ** 2
     worst = np.sort(var)[::-1][: max(1, min(int(used), len(var)))]
     worst = np.maximum(worst, 1e-30)
-    return float(1.0 / np.sum(1.0 / worst))
+    with np.errstate(divide="ignore"):  # every surface unbounded (inf): so is the link
+        return float(1.0 / np.sum(1.0 / worst))
+
+
+def link_heading_variance(
+    local: Surfaces, current: Surfaces, laser: LaserNoise, split_distance_m: float
+) -> float:
+    """The heading variance (rad²) of a link triangulated from the surface pairs it reported
+    (``local[i]`` in the local map, ``current[i]`` in the view): each pair's heading is the
+    difference of its two fits (the laser's noise and its discrete sampling in each), the
+    pairs averaged with inverse-variance weights."""
+    split = split_distance_m
+    var = (
+        direction_sigma(local, laser) ** 2 + discretisation_sigma(local, split) ** 2
+        + direction_sigma(current, laser) ** 2 + discretisation_sigma(current, split) ** 2
+    )  # fmt: skip
+    var = np.maximum(var, 1e-30)
+    with np.errstate(divide="ignore"):
+        return float(1.0 / np.sum(1.0 / var))
 
 
 def _rows_of(frame_indices: IntArray, wanted: IntArray) -> IntArray:
@@ -262,24 +353,34 @@ def link_errors(
     laser: LaserNoise,
     tracking: TrackingParams | None = None,
     params: HeadingBoundParams | None = None,
+    extraction: ExtractionParams | None = None,
+    used: Sequence[tuple[Surfaces, Surfaces]] | None = None,
 ) -> LinkErrors:
     """Each local map's link error from the error model (module docstring).
-    ``odometry``: ``odometry_heading_envelope``'s prefix sums over the same rows."""
+    ``odometry``: ``odometry_heading_envelope``'s prefix sums over the same rows; ``used``:
+    per local map after the first, the surface pairs (local map, view) the mapper
+    reported localising it from (``Albot1.on_localise``); without them (or when they do
+    not match the route), the least precise of the surfaces both views share."""
     p = params or HeadingBoundParams()
     tracking = tracking or TrackingParams()
+    split = (extraction or ExtractionParams()).split_distance_m
     var_odo, sys_odo = odometry
     n = len(route)
     rows = _rows_of(np.asarray(frame_indices), np.array([lm.frame_index for lm in route], np.int64))
     var = np.zeros(n)
     sys = np.zeros(n)
     truth = np.asarray(true_poses, dtype=np.float64)
+    if used is not None and len(used) != max(n - 1, 0):
+        used = None
     for k in range(1, n):
         lm, prev = route[k], route[k - 1]
         a, b = int(rows[k - 1]), int(rows[k])
-        if lm.method == "triangulation":
+        if lm.method == "triangulation" and used is not None and len(used[k - 1][0]):
+            var[k] = link_heading_variance(*used[k - 1], laser, split)
+        elif lm.method == "triangulation":
             rel = between_arrays(truth[a], truth[b])
             var[k] = _triangulation_variance(
-                prev.view, lm.view, rel, max(lm.tracked, 1), laser, tracking, p
+                prev.view, lm.view, rel, max(lm.tracked, 1), laser, tracking, p, split
             )
         else:  # path integration (or anything else): odometry over this link only
             var[k] = var_odo[b] - var_odo[a]
@@ -296,13 +397,15 @@ def heading_error_bound(
     laser: LaserNoise,
     tracking: TrackingParams | None = None,
     params: HeadingBoundParams | None = None,
+    extraction: ExtractionParams | None = None,
+    used: Sequence[tuple[Surfaces, Surfaces]] | None = None,
 ) -> FloatArray:
     """The largest heading error (rad, relative to the start) the model allows at each row
     of a run whose frames are placed on ``route`` (module docstring)."""
     p = params or HeadingBoundParams()
     frame_indices = np.asarray(frame_indices, dtype=np.int64)
     odo = odometry_heading_envelope(true_poses, noise, profile)
-    links = link_errors(route, frame_indices, true_poses, odo, laser, tracking, p)
+    links = link_errors(route, frame_indices, true_poses, odo, laser, tracking, p, extraction, used)
     var_chain = np.cumsum(links.variance)
     sys_chain = np.cumsum(links.systematic)
     # Each row's local map: the last one remembered at or before its frame.
@@ -339,10 +442,21 @@ def check_heading_error_bound(
 class ReferenceLinks:
     """An ``on_frame``-style hook running Albot1 (default parameters) on the same frames,
     so a mapper without a route map of its own is held to the links a view-based
-    localiser finds on that run (``route``)."""
+    localiser finds on that run (``route``) and the surfaces it localised each from
+    (``used``)."""
 
     def __init__(self, mapper: Albot1 | None = None) -> None:
         self.mapper = mapper if mapper is not None else Albot1()
+        self.used: list[tuple[Surfaces, Surfaces]] = []
+        self._chained = self.mapper.on_localise
+        self.mapper.on_localise = self._localised
+
+    def _localised(self, localisation: Localisation) -> None:
+        """The surface pairs each local map was localised from (``used``), then any hook
+        the mapper already had."""
+        self.used.append((localisation.tracked.local, localisation.tracked.current))
+        if self._chained is not None:
+            self._chained(localisation)
 
     def __call__(self, frame: Frame, travelled_m: float = 0.0) -> None:
         self.mapper.observe(frame)

@@ -1,5 +1,7 @@
 """Fuzzing: campaigns of many small random episodes, their records and their summaries.
 
+- ``record``: what an episode is and what is kept of it, as typed values (its spec,
+  metrics, check outcome, record and outcome), plain JSON only across a process or a file;
 - ``episode``: one episode — its seed, random world and tour, the run, the checks;
   ``episode_metrics``: the numbers a campaign keeps of it;
 - ``campaign``: ``run_campaign`` — episodes on a backend, streamed to disk, resumable;
@@ -14,11 +16,21 @@ May import: everything below evaluation, ``albot2d.evaluation.run``, ``.metrics`
 """
 
 from albot2d.evaluation.fuzz.campaign import CampaignParams, read_campaign, run_campaign
-from albot2d.evaluation.fuzz.episode import EpisodeOutcome, EpisodeSpec, run_episode
+from albot2d.evaluation.fuzz.episode import run_episode
+from albot2d.evaluation.fuzz.record import (
+    CheckOutcome,
+    EpisodeMetrics,
+    EpisodeOutcome,
+    EpisodeRecord,
+    EpisodeSpec,
+)
 
 __all__ = [
     "CampaignParams",
+    "CheckOutcome",
+    "EpisodeMetrics",
     "EpisodeOutcome",
+    "EpisodeRecord",
     "EpisodeSpec",
     "read_campaign",
     "run_campaign",

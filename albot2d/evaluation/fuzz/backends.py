@@ -28,9 +28,9 @@ import socket
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 from urllib.parse import urlsplit
 
 from albot2d.errors import InputError
@@ -57,6 +57,9 @@ _PARENT_POLL_S = 0.25
 _ORPHAN_EXIT_CODE = 75
 
 
+R = TypeVar("R")
+
+
 class Backend(Protocol):
     """Runs ``fn(*args, item)`` for each item; yields ``(item, result)`` as they finish, the
     result being the exception instead when the task could not finish (a dead worker)."""
@@ -64,8 +67,8 @@ class Backend(Protocol):
     workers: int
 
     def map_unordered(
-        self, fn: Callable[..., Any], items: Iterable[int], *args: Any
-    ) -> Iterator[tuple[int, Any]]: ...
+        self, fn: Callable[..., R], items: Iterable[int], *args: object
+    ) -> Iterator[tuple[int, R | BaseException]]: ...
 
     def close(self) -> None: ...
 
@@ -128,15 +131,15 @@ class LocalBackend:
             self._pool = None
 
     def map_unordered(
-        self, fn: Callable[..., Any], items: Iterable[int], *args: Any
-    ) -> Iterator[tuple[int, Any]]:
+        self, fn: Callable[..., R], items: Iterable[int], *args: object
+    ) -> Iterator[tuple[int, R | BaseException]]:
         if self.workers == 1:
             for item in items:
                 yield item, fn(*args, item)
             return
         queue = iter(items)
         suspects: list[int] = []  # in flight when a worker died: rerun one at a time
-        pending: dict[Any, int] = {}
+        pending: dict[Future[R], int] = {}
         window = self.workers * _IN_FLIGHT_PER_WORKER
         isolating = False
         try:
@@ -237,7 +240,7 @@ class DaskBackend:
             raise InputError(
                 "--backend dask needs dask.distributed: pip install 'albot2d[dask]'"
             ) from None
-        self._cluster: Any = None
+        self._cluster: Any = None  # a dask LocalCluster: dask ships no types
         if address is not None:
             _check_reachable(address)
             try:
@@ -258,12 +261,12 @@ class DaskBackend:
         self.workers = max(1, sum(self._client.nthreads().values()))
 
     def map_unordered(
-        self, fn: Callable[..., Any], items: Iterable[int], *args: Any
-    ) -> Iterator[tuple[int, Any]]:
+        self, fn: Callable[..., R], items: Iterable[int], *args: object
+    ) -> Iterator[tuple[int, R | BaseException]]:
         from dask.distributed import wait as dask_wait
 
         queue = iter(items)
-        pending: dict[Any, int] = {}
+        pending: dict[Any, int] = {}  # dask Futures: dask ships no types
         window = self.workers * _IN_FLIGHT_PER_WORKER
         try:
             while True:

@@ -37,21 +37,35 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
-from typing import Any
+from types import FrameType
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
 
 from albot2d.atomic import atomic_write_text
 from albot2d.errors import InputError
-from albot2d.evaluation.fuzz.episode import EpisodeOutcome, EpisodeSpec, crash_outcome, run_episode
+from albot2d.evaluation.fuzz.episode import crash_outcome, run_episode
 from albot2d.evaluation.fuzz.files import check_campaign_values
 from albot2d.evaluation.fuzz.lock import CampaignLock
+from albot2d.evaluation.fuzz.record import (
+    EpisodeError,
+    EpisodeOutcome,
+    EpisodeRecord,
+    EpisodeSpec,
+    Json,
+    JsonObject,
+)
 from albot2d.evaluation.fuzz.stream import EpisodeLog, read_episodes, scan_episodes
-from albot2d.evaluation.fuzz.summary import summarise
+from albot2d.evaluation.fuzz.summary import CampaignSummary, summarise
 from albot2d.inputfiles import read_json_file
 from albot2d.limits import MAX_CAMPAIGN_EPISODES, MAX_TOUR_LENGTH_M
 from albot2d.validation import check_at_most
 from worldgen.params import MAX_WORLD_SIZE_M
+
+if TYPE_CHECKING:
+    from tqdm import tqdm
+
+    from albot2d.evaluation.fuzz.backends import Backend
 
 __all__ = [
     "CAMPAIGN_NAME",
@@ -145,26 +159,26 @@ class CampaignParams:
         check_at_most(self, "world_size_max_m", MAX_WORLD_SIZE_M, "the world generator's cap")
         check_at_most(self, "tour_length_max_m", MAX_TOUR_LENGTH_M, "a cap on the work")
 
-    def to_dict(self) -> dict[str, Any]:
-        out = asdict(self)
+    def to_dict(self) -> JsonObject:
+        out: JsonObject = asdict(self)
         out["kinds"] = list(self.kinds)
         return out
 
     @classmethod
-    def from_dict(cls, values: Mapping[str, Any], where: str = "campaign") -> CampaignParams:
+    def from_dict(cls, values: Mapping[str, Json], where: str = "campaign") -> CampaignParams:
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(values) - known)
         if unknown:
             raise InputError(f"{where}: unknown campaign parameter(s) {', '.join(unknown)}")
-        data = dict(values)
-        if "kinds" in data:
-            data["kinds"] = tuple(data["kinds"])
+        data: dict[str, object] = dict(values)
+        if isinstance(data.get("kinds"), list):
+            data["kinds"] = tuple(values["kinds"])  # type: ignore[arg-type]
         try:
-            return cls(**data)
+            return cls(**data)  # type: ignore[arg-type]  # each value is checked in __post_init__
         except (TypeError, InputError) as exc:
             raise InputError(f"{where}: {exc}") from None
 
-    def identity(self) -> dict[str, Any]:
+    def identity(self) -> JsonObject:
         """Everything but the episode count: what a resumed campaign must share."""
         out = self.to_dict()
         del out["episodes"]
@@ -184,15 +198,9 @@ class CampaignInterrupted(KeyboardInterrupt):
         self.total = total
 
 
-def _crash_outcome(params: Mapping[str, Any], index: int, exc: BaseException) -> EpisodeOutcome:
+def _crash_outcome(params: Mapping[str, Json], index: int, exc: BaseException) -> EpisodeOutcome:
     """A crash outside ``run_episode`` (drawing the episode, a dead worker)."""
-    import traceback
-
-    error = {
-        "type": type(exc).__name__,
-        "message": str(exc),
-        "traceback": "".join(traceback.format_exception(exc)),
-    }
+    error = EpisodeError.of(exc)
     try:
         spec = EpisodeSpec.draw(CampaignParams.from_dict(params), index)
     except Exception:  # the episode cannot even be drawn: the campaign says which it is
@@ -216,13 +224,15 @@ def _longest_first(indices: list[int], params: CampaignParams) -> list[int]:
     return sorted(indices, key=lambda k: (-cost(k), k))
 
 
-def _episode_task(params: dict[str, Any], index: int) -> EpisodeOutcome:
-    """What a worker runs: everything is rebuilt from the parameters and the index."""
+def _episode_task(params: JsonObject, index: int) -> JsonObject:
+    """What a worker runs: everything is rebuilt from the parameters and the index; the
+    outcome goes back as plain data (``EpisodeOutcome.to_json``)."""
     try:
         with _heap_frozen():
-            return run_episode(EpisodeSpec.draw(CampaignParams.from_dict(params), index))
+            outcome = run_episode(EpisodeSpec.draw(CampaignParams.from_dict(params), index))
     except Exception as exc:  # still a finding, not a dead worker
-        return _crash_outcome(params, index, exc)
+        outcome = _crash_outcome(params, index, exc)
+    return outcome.to_json()
 
 
 @contextlib.contextmanager
@@ -271,7 +281,9 @@ def read_campaign(out_dir: str | os.PathLike[str]) -> CampaignParams:
     return CampaignParams.from_dict(meta["params"], where=str(path))
 
 
-def _check_folder(out: Path, params: CampaignParams, resume: bool) -> tuple[dict[int, Any], int]:
+def _check_folder(
+    out: Path, params: CampaignParams, resume: bool
+) -> tuple[dict[int, EpisodeRecord], int]:
     """The records already there and the bytes of episodes.jsonl to keep (resume), or
     none; refuses a folder that is not this campaign's (resume) or holds one (no resume)."""
     meta_path, episodes_path = out / CAMPAIGN_NAME, out / EPISODES_NAME
@@ -301,13 +313,13 @@ def _check_folder(out: Path, params: CampaignParams, resume: bool) -> tuple[dict
         return {}, 0
     records, keep, _ = scan_episodes(episodes_path)
     for number, record in records:
-        k = record["episode"]
-        if record.get("seed") != {"entropy": params.seed, "spawn_key": [k]}:
+        k = record.episode
+        if record.entropy != params.seed or record.spawn_key != (k,):
             raise InputError(
                 f"{episodes_path}:{number}: episode {k} was not drawn from this "
                 f"campaign's seed {params.seed}; the file is not this campaign's"
             )
-    return {r["episode"]: r for _, r in records if r["episode"] < params.episodes}, keep
+    return {r.episode: r for _, r in records if r.episode < params.episodes}, keep
 
 
 def _remove_stale_temporaries(out: Path) -> None:
@@ -319,8 +331,12 @@ def _remove_stale_temporaries(out: Path) -> None:
                     path.unlink()
 
 
-def _write_json(path: Path, value: Any) -> None:
+def _write_json(path: Path, value: Mapping[str, object]) -> None:
     atomic_write_text(path, json.dumps(value, indent=2, allow_nan=False) + "\n")
+
+
+# What ``signal.signal`` takes and gives back.
+_Handler = Callable[[int, FrameType | None], object] | int | signal.Handlers | None
 
 
 class _Interrupts:
@@ -333,7 +349,7 @@ class _Interrupts:
         self._writing = False
         self._deferred = False
         self._note = on_note
-        self._previous: Any = None
+        self._previous: dict[int, _Handler] | None = None
 
     def __enter__(self) -> _Interrupts:
         if threading.current_thread() is threading.main_thread():
@@ -349,7 +365,7 @@ class _Interrupts:
             for signum, previous in self._previous.items():
                 signal.signal(signum, previous)
 
-    def _handler(self, signum: int, frame: Any) -> None:
+    def _handler(self, signum: int, frame: FrameType | None) -> None:
         self.count += 1
         if self.count == 1:
             if self._note is not None:
@@ -376,12 +392,12 @@ def run_campaign(
     params: CampaignParams,
     out_dir: str | os.PathLike[str],
     *,
-    backend: Any = None,
+    backend: Backend | None = None,
     resume: bool = False,
     progress: bool = False,
-    on_episode: Callable[[dict[str, Any]], None] | None = None,
+    on_episode: Callable[[EpisodeRecord], None] | None = None,
     on_note: Callable[[str], None] | None = None,
-) -> dict[str, Any]:
+) -> CampaignSummary:
     """Run the campaign into ``out_dir`` (created if missing) on ``backend`` (default: this
     process, one episode after another); returns the summary (also in summary.json).
     ``on_episode(record)`` is called as each episode is written down, ``on_note(line)``
@@ -413,17 +429,17 @@ def run_campaign(
         )
         todo = _longest_first([k for k in range(params.episodes) if k not in done], params)
         own_backend = backend is None
-        backend = backend or LocalBackend(1)
+        runner: Backend = backend or LocalBackend(1)
         try:
             wall = _run_episodes(
-                params, out, backend, todo, done, keep, progress, on_episode, on_note
+                params, out, runner, todo, done, keep, progress, on_episode, on_note
             )
         finally:
             if own_backend:
-                backend.close()
+                runner.close()
         records = [done[k] for k in sorted(done)]
         summary = summarise(
-            records, params.to_dict(), ran=len(todo), wall_time_s=wall, workers=backend.workers
+            records, params.to_dict(), ran=len(todo), wall_time_s=wall, workers=runner.workers
         )
         _write_json(out / SUMMARY_NAME, summary)
     return summary
@@ -432,17 +448,17 @@ def run_campaign(
 def _run_episodes(
     params: CampaignParams,
     out: Path,
-    backend: Any,
+    backend: Backend,
     todo: list[int],
-    done: dict[int, Any],
+    done: dict[int, EpisodeRecord],
     keep: int,
     progress: bool,
-    on_episode: Callable[[dict[str, Any]], None] | None,
+    on_episode: Callable[[EpisodeRecord], None] | None,
     on_note: Callable[[str], None] | None,
 ) -> float:
     """Run ``todo`` on ``backend``, writing each episode down; returns the wall time."""
     bar = _progress(params.episodes, len(done), progress)
-    failures = sum(r["status"] != "ok" for r in done.values())
+    failures = sum(r.failed for r in done.values())
     log = EpisodeLog(out / EPISODES_NAME, keep)
     t0 = time.perf_counter()
     with _Interrupts(on_note) as interrupts:
@@ -453,9 +469,9 @@ def _run_episodes(
                 if isinstance(result, BaseException) and not isinstance(result, Exception):
                     raise result  # an interrupt on a worker: stop, it is no finding
                 outcome = (
-                    result
-                    if isinstance(result, EpisodeOutcome)
-                    else _crash_outcome(params.to_dict(), index, result)
+                    _crash_outcome(params.to_dict(), index, result)
+                    if isinstance(result, BaseException)
+                    else EpisodeOutcome.from_json(result)
                 )
                 with interrupts.writing():
                     if outcome.reproducer is not None:
@@ -482,14 +498,14 @@ def _run_episodes(
     return time.perf_counter() - t0
 
 
-def _abort(backend: Any) -> None:
+def _abort(backend: Backend) -> None:
     """Stop the backend's running tasks now (a second Ctrl-C)."""
     abort = getattr(backend, "abort", None)
     if abort is not None:
         abort()
 
 
-def _progress(total: int, initial: int, enabled: bool) -> Any:
+def _progress(total: int, initial: int, enabled: bool) -> tqdm[NoReturn] | None:
     if not enabled:
         return None
     from tqdm import tqdm

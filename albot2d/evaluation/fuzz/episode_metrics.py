@@ -17,10 +17,10 @@ completely, as ``run_experiment`` would have: only failing episodes pay for it.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
 
 import numpy as np
 
+from albot2d.evaluation.fuzz.record import EpisodeMetrics, finite_or_none
 from albot2d.evaluation.metrics.map_quality import map_quality
 from albot2d.evaluation.run.experiment import ExperimentResult
 from albot2d.evaluation.run.results import HomingSummary
@@ -38,7 +38,7 @@ from albot2d.logs.relations import relations_from_truth
 __all__ = ["complete_scores", "episode_metrics"]
 
 
-def episode_metrics(result: ExperimentResult, params: EvaluationParams) -> dict[str, Any]:
+def episode_metrics(result: ExperimentResult, params: EvaluationParams) -> EpisodeMetrics:
     """The metrics of an episode's record: its (only) mapper's and raw odometry's scores,
     computed from the trace of ``result`` (a simulated run, scored or not)."""
     trace = result.trace
@@ -59,26 +59,27 @@ def episode_metrics(result: ExperimentResult, params: EvaluationParams) -> dict[
         segments, result.world.obstacle_segments, start_pose=Pose.from_array(trace.true_poses[0]),
         seen_points=trace.seen_points, params=params.map_quality,
     )  # fmt: skip
-    return {
-        "frames": trace.n_frames, "travelled_m": float(trace.travelled_m[-1]),
-        "collided_frames": int(np.asarray(trace.collided).sum()),
-        "local_maps": counts.local_maps, "triangulations": counts.triangulations,
-        "path_integrations": counts.path_integrations, "global_map_surfaces": len(segments),
-        "homing_stops": home.stops,
-        "homing_bearing_error_max_deg": home.bearing_abs_max_deg,
-        "homing_distance_error_max_m": home.distance_abs_max_m,
-        "rpe_trans_m": None if rpe is None else rpe.overall.trans_m_mean,
-        "rpe_rot_deg": None if rpe is None else rpe.overall.rot_deg_mean,
-        "odometry_rpe_trans_m": None if odo_rpe is None else odo_rpe.overall.trans_m_mean,
-        "odometry_rpe_rot_deg": None if odo_rpe is None else odo_rpe.overall.rot_deg_mean,
-        "end_trans_m": None if end is None else end.trans_m,
-        "end_rot_deg": None if end is None else end.rot_deg,
-        "odometry_end_trans_m": None if odo_end is None else odo_end.trans_m,
-        "odometry_end_rot_deg": None if odo_end is None else odo_end.rot_deg,
-        "map_accuracy_m": quality.accuracy_m_mean,
-        "map_accuracy_p95_m": quality.accuracy_m_p95,
-        "map_completeness": quality.completeness,
-    }  # fmt: skip
+    f = finite_or_none
+    return EpisodeMetrics(
+        frames=int(trace.n_frames), travelled_m=float(trace.travelled_m[-1]),
+        collided_frames=int(np.asarray(trace.collided).sum()),
+        local_maps=int(counts.local_maps), triangulations=int(counts.triangulations),
+        path_integrations=int(counts.path_integrations), global_map_surfaces=len(segments),
+        homing_stops=int(home.stops),
+        homing_bearing_error_max_deg=f(home.bearing_abs_max_deg),
+        homing_distance_error_max_m=f(home.distance_abs_max_m),
+        rpe_trans_m=None if rpe is None else f(rpe.overall.trans_m_mean),
+        rpe_rot_deg=None if rpe is None else f(rpe.overall.rot_deg_mean),
+        odometry_rpe_trans_m=None if odo_rpe is None else f(odo_rpe.overall.trans_m_mean),
+        odometry_rpe_rot_deg=None if odo_rpe is None else f(odo_rpe.overall.rot_deg_mean),
+        end_trans_m=None if end is None else f(end.trans_m),
+        end_rot_deg=None if end is None else f(end.rot_deg),
+        odometry_end_trans_m=None if odo_end is None else f(odo_end.trans_m),
+        odometry_end_rot_deg=None if odo_end is None else f(odo_end.rot_deg),
+        map_accuracy_m=f(quality.accuracy_m_mean),
+        map_accuracy_p95_m=f(quality.accuracy_m_p95),
+        map_completeness=f(quality.completeness),
+    )  # fmt: skip
 
 
 def complete_scores(result: ExperimentResult, params: EvaluationParams) -> ExperimentResult:

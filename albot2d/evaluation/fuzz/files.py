@@ -13,16 +13,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import TypeVar, cast
 
 from albot2d.errors import InputError
+from albot2d.evaluation.fuzz.record import STATUSES, JsonObject
 
 __all__ = ["OK_METRICS", "check_campaign_values", "check_episode_record"]
 
-#: Metrics every ``ok`` or ``violation`` record holds (``episode_metrics`` always writes them).
+T = TypeVar("T")
+
+#: Metrics every ``ok`` or ``violation`` record holds a number for (every other metric of
+#: ``EpisodeMetrics`` it holds too, a number or null: ``EpisodeRecord.from_json`` says so).
 OK_METRICS = ("frames", "travelled_m", "collided_frames")
 
-_STATUSES = ("ok", "violation", "crash")
 _PARAM_TYPES: dict[str, tuple[type, ...]] = {
     "episodes": (int,),
     "seed": (int,),
@@ -40,17 +43,17 @@ _PARAM_TYPES: dict[str, tuple[type, ...]] = {
 _SHORT = 60
 
 
-def _short(value: Any) -> str:
+def _short(value: object) -> str:
     text = repr(value)
     return text if len(text) <= _SHORT else text[: _SHORT - 3] + "..."
 
 
-def _kind(value: Any) -> str:
+def _kind(value: object) -> str:
     names = {dict: "an object", list: "a list", str: "a string", bool: "a boolean"}
     return names.get(type(value), "null" if value is None else "a number")
 
 
-def check_campaign_values(values: Any, where: str) -> dict[str, Any]:
+def check_campaign_values(values: object, where: str) -> JsonObject:
     """``campaign.json``'s ``params``: an object of the campaign's fields, each of its type
     (no booleans for numbers, a list of strings for ``kinds``); returns it."""
     if not isinstance(values, dict):
@@ -63,10 +66,10 @@ def check_campaign_values(values: Any, where: str) -> dict[str, Any]:
             raise InputError(f"{where}: params.{name} has the wrong type: {_short(value)}")
         if isinstance(value, list) and not all(isinstance(k, str) for k in value):
             raise InputError(f"{where}: params.kinds must be a list of names, got {_short(value)}")
-    return values
+    return cast(JsonObject, values)
 
 
-def _need(record: Mapping[str, Any], name: str, types: tuple[type, ...], where: str) -> Any:
+def _need(record: Mapping[str, object], name: str, types: tuple[type[T], ...], where: str) -> T:
     if name not in record:
         raise InputError(f"{where}: no {name}")
     value = record[name]
@@ -81,7 +84,7 @@ def _types(types: tuple[type, ...]) -> str:
     return " or ".join(names[t] for t in types)
 
 
-def _number_or_null(value: Any) -> bool:
+def _number_or_null(value: object) -> bool:
     if value is None:
         return True
     return (
@@ -91,7 +94,7 @@ def _number_or_null(value: Any) -> bool:
     )
 
 
-def check_episode_record(record: Any, where: str) -> dict[str, Any]:
+def check_episode_record(record: object, where: str) -> JsonObject:
     """One ``episodes.jsonl`` line (``where`` is ``file:line``): the fields the campaign and
     its summary read, with their types, and a status that agrees with them."""
     if not isinstance(record, dict):
@@ -100,9 +103,9 @@ def check_episode_record(record: Any, where: str) -> dict[str, Any]:
     if index < 0:
         raise InputError(f"{where}: episode must be >= 0, got {index}")
     status = _need(record, "status", (str,), where)
-    if status not in _STATUSES:
+    if status not in STATUSES:
         raise InputError(
-            f"{where}: status must be one of {', '.join(_STATUSES)}, got {_short(status)}"
+            f"{where}: status must be one of {', '.join(STATUSES)}, got {_short(status)}"
         )
     seed = _need(record, "seed", (dict,), where)
     if not isinstance(seed.get("spawn_key"), list):

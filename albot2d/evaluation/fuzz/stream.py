@@ -6,30 +6,26 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
 
 from albot2d.errors import InputError
 from albot2d.evaluation.fuzz.files import check_episode_record
+from albot2d.evaluation.fuzz.record import STATUSES, EpisodeRecord
 from albot2d.inputfiles import binary_lines
 from albot2d.limits import MAX_CAMPAIGN_EPISODES, MAX_EPISODE_RECORD_BYTES
 from albot2d.validation import parse_json
 
 __all__ = ["STATUSES", "EpisodeLog", "read_episodes", "scan_episodes"]
 
-#: An episode record's ``status``.
-STATUSES = ("ok", "violation", "crash")
 
-
-def scan_episodes(path: Path) -> tuple[list[tuple[int, dict[str, Any]]], int, int]:
+def scan_episodes(path: Path) -> tuple[list[tuple[int, EpisodeRecord]], int, int]:
     """(line number, record) of every whole line, the byte length of the whole part and the
     number of bytes after it (a damaged tail: a line cut off by a killed writer, or the
     zero bytes a crash can leave at the end of a file). Anything else that is not an
     episode record (``files.check_episode_record``), an episode twice, a line
     longer than ``MAX_EPISODE_RECORD_BYTES`` or more than ``MAX_CAMPAIGN_EPISODES`` lines
     is an error naming the line. Streamed: the file is never read whole."""
-    records: list[tuple[int, dict[str, Any]]] = []
+    records: list[tuple[int, EpisodeRecord]] = []
     lines_of: dict[int, int] = {}
     keep = offset = 0
     zero_lines: list[int] = []  # lines of zero bytes not (yet) known to be at the end
@@ -66,13 +62,14 @@ def scan_episodes(path: Path) -> tuple[list[tuple[int, dict[str, Any]]], int, in
                 )
             where = f"{path}:{number}"
             try:
-                record = check_episode_record(parse_json(line.decode("utf-8"), where), where)
+                data = check_episode_record(parse_json(line.decode("utf-8"), where), where)
+                record = EpisodeRecord.from_json(data, where)
             except (InputError, UnicodeDecodeError) as exc:
                 raise InputError(
                     f"{where}: not an episode record ({str(exc).removeprefix(where + ': ')}); "
                     "the file is damaged (move it away to start afresh)"
                 ) from None
-            index = record["episode"]
+            index = record.episode
             if index in lines_of:
                 raise InputError(
                     f"{path}:{number}: episode {index} again (first on line "
@@ -84,7 +81,7 @@ def scan_episodes(path: Path) -> tuple[list[tuple[int, dict[str, Any]]], int, in
     return records, keep, max(size - keep, 0)
 
 
-def read_episodes(path: str | os.PathLike[str]) -> tuple[dict[int, dict[str, Any]], int]:
+def read_episodes(path: str | os.PathLike[str]) -> tuple[dict[int, EpisodeRecord], int]:
     """The episode records in an ``episodes.jsonl`` and the byte length of its whole part.
 
     A damaged tail (a last line cut off by a killed writer) is left out, to be redone; a
@@ -94,7 +91,7 @@ def read_episodes(path: str | os.PathLike[str]) -> tuple[dict[int, dict[str, Any
     if not p.exists():
         return {}, 0
     records, keep, _ = scan_episodes(p)
-    return {r["episode"]: r for _, r in records}, keep
+    return {r.episode: r for _, r in records}, keep
 
 
 class EpisodeLog:
@@ -105,8 +102,8 @@ class EpisodeLog:
         self._file.truncate(keep_bytes)  # drop a line cut off by an interruption
         self._file.seek(keep_bytes)
 
-    def write(self, record: Mapping[str, Any]) -> None:
-        line = json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n"
+    def write(self, record: EpisodeRecord) -> None:
+        line = json.dumps(record.to_json(), allow_nan=False, separators=(",", ":")) + "\n"
         self._file.write(line.encode("utf-8"))
         self._file.flush()
         os.fsync(self._file.fileno())

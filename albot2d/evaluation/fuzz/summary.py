@@ -10,14 +10,20 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
+
+from albot2d.evaluation.fuzz.record import EpisodeRecord, Json, JsonObject
 
 __all__ = [
     "COMPARED_METRICS",
     "TIE_ATOL",
     "TIE_RTOL",
+    "CampaignSummary",
+    "Comparison",
+    "Distribution",
+    "FailingEpisode",
     "format_summary",
     "mapper_vs_odometry",
     "summarise",
@@ -36,40 +42,106 @@ COMPARED_METRICS = {
 # 1e-9 relative, or 1e-9 absolute (deg or m) near zero.
 TIE_RTOL = 1e-9
 TIE_ATOL = 1e-9
-_PERCENTILES = (10, 50, 90, 99)
 # Failing episodes listed in the summary (the rest are in episodes.jsonl).
 _LISTED_FAILURES = 50
 
 
-def _distribution(values: Sequence[float]) -> dict[str, Any]:
+class Distribution(TypedDict, total=False):
+    """A metric over the episodes that have it (only ``n`` when none has)."""
+
+    n: int
+    mean: float
+    min: float
+    p10: float
+    p50: float
+    p90: float
+    p99: float
+    max: float
+
+
+class Comparison(TypedDict):
+    """The mapper against raw odometry on one metric, episode by episode."""
+
+    episodes: int
+    mapper_mean: float
+    odometry_mean: float
+    mapper_better: int
+    mapper_worse: int
+    ties: int
+    mapper_better_share: float
+    mapper_worse_share: float
+    tie_share: float
+
+
+class FailingEpisode(TypedDict):
+    episode: int
+    status: str
+    kind: str | None
+    first: str
+
+
+class CampaignSummary(TypedDict):
+    """summary.json (a JSON document, so a dict: its metric names are the records')."""
+
+    format: str
+    params: JsonObject
+    episodes: int
+    ok: int
+    violations: int
+    crashes: int
+    failures_by_invariant: dict[str, int]
+    checked_by_invariant: dict[str, int]
+    crashes_by_type: dict[str, int]
+    kinds: dict[str, int]
+    ran: int
+    workers: int
+    wall_time_s: float
+    episodes_per_min: float | None
+    metrics: dict[str, Distribution]
+    mapper_vs_odometry: dict[str, Comparison]
+    failing_episodes: list[FailingEpisode]
+
+
+def _distribution(values: Sequence[float]) -> Distribution:
     a = np.asarray(values, dtype=np.float64)
     if len(a) == 0:
         return {"n": 0}
-    out: dict[str, Any] = {"n": len(a), "mean": float(a.mean()), "min": float(a.min())}
-    for q, v in zip(_PERCENTILES, np.percentile(a, _PERCENTILES), strict=True):
-        out[f"p{q}"] = float(v)
-    out["max"] = float(a.max())
-    return out
+    p10, p50, p90, p99 = (float(v) for v in np.percentile(a, (10, 50, 90, 99)))
+    return {
+        "n": len(a), "mean": float(a.mean()), "min": float(a.min()),
+        "p10": p10, "p50": p50, "p90": p90, "p99": p99, "max": float(a.max()),
+    }  # fmt: skip
 
 
-def _values(records: Sequence[Mapping[str, Any]], name: str) -> list[float]:
-    return [
-        float(r["metrics"][name])
-        for r in records
-        if isinstance(r.get("metrics", {}).get(name), int | float)
-        and not isinstance(r["metrics"][name], bool)
-    ]
+def _number(value: Json) -> float | None:
+    return None if isinstance(value, bool) or not isinstance(value, int | float) else value
 
 
-def mapper_vs_odometry(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+def _values(metrics: Sequence[Mapping[str, Json]], name: str) -> list[float]:
+    return [float(v) for m in metrics if (v := _number(m.get(name))) is not None]
+
+
+def mapper_vs_odometry(
+    records: Sequence[EpisodeRecord | Mapping[str, Json]],
+) -> dict[str, Comparison]:
     """For each of ``COMPARED_METRICS``: both means and the episodes where the mapper is
-    better than raw odometry, worse, or tied (equal to float rounding)."""
-    out = {}
+    better than raw odometry, worse, or tied (equal to float rounding). ``records`` are
+    typed or as episodes.jsonl has them (the figures read them from the file)."""
+    return _compare([_metrics_of(r) for r in records])
+
+
+def _metrics_of(record: EpisodeRecord | Mapping[str, Json]) -> Mapping[str, Json]:
+    if isinstance(record, EpisodeRecord):
+        return record.metrics_json()
+    metrics = record.get("metrics")
+    return metrics if isinstance(metrics, dict) else {}
+
+
+def _compare(metrics: Sequence[Mapping[str, Json]]) -> dict[str, Comparison]:
+    out: dict[str, Comparison] = {}
     for label, (mine, odo) in COMPARED_METRICS.items():
         pairs = [
-            (r["metrics"][mine], r["metrics"][odo])
-            for r in records
-            if r.get("metrics", {}).get(mine) is not None and r["metrics"].get(odo) is not None
+            (m[mine], m[odo]) for m in metrics if m.get(mine) is not None and m.get(odo) is not None
         ]
         if not pairs:
             continue
@@ -91,37 +163,37 @@ def mapper_vs_odometry(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     return out
 
 
+def _first_failure(r: EpisodeRecord) -> str:
+    if r.status == "crash":
+        assert r.error is not None  # a crash record has its error (files.check_episode_record)
+        return r.error.message
+    return next(f"{k}: {v[0]}" for k, v in r.violations.items())
+
+
 def summarise(
-    records: Sequence[Mapping[str, Any]],
-    params: Mapping[str, Any],
+    records: Sequence[EpisodeRecord],
+    params: JsonObject,
     *,
     ran: int,
     wall_time_s: float,
     workers: int,
-) -> dict[str, Any]:
+) -> CampaignSummary:
     """summary.json: ``ran`` episodes took ``wall_time_s`` here; ``records`` are all of them."""
-    status = Counter(r["status"] for r in records)
+    status = Counter(r.status for r in records)
     by_invariant: Counter[str] = Counter()
     checked: Counter[str] = Counter()
     for r in records:
-        by_invariant.update(r.get("violations", {}).keys())
-        checked.update(r.get("checked", []))
-    crashes = Counter(r["error"]["type"] for r in records if r["status"] == "crash")
-    names = sorted({k for r in records for k in r.get("metrics", {})})
-    failing = [
-        {
-            "episode": r["episode"],
-            "status": r["status"],
-            "kind": r.get("world", {}).get("kind"),
-            "first": (
-                r["error"]["message"]
-                if r["status"] == "crash"
-                else next(f"{k}: {v[0]}" for k, v in r["violations"].items())
-            ),
-        }
+        by_invariant.update(r.violations.keys())
+        checked.update(r.checked)
+    crashes = Counter(r.error.type for r in records if r.status == "crash" and r.error)
+    metrics = [r.metrics_json() for r in records]
+    names = sorted({k for m in metrics for k in m})
+    failing: list[FailingEpisode] = [
+        {"episode": r.episode, "status": r.status, "kind": r.kind, "first": _first_failure(r)}
         for r in records
-        if r["status"] != "ok"
+        if r.failed
     ]
+    kinds = Counter(r.kind for r in records if r.kind is not None)
     return {
         "format": "albot2d-campaign-summary",
         "params": dict(params),
@@ -132,26 +204,22 @@ def summarise(
         "failures_by_invariant": dict(sorted(by_invariant.items())),
         "checked_by_invariant": dict(sorted(checked.items())),
         "crashes_by_type": dict(sorted(crashes.items())),
-        "kinds": dict(
-            sorted(
-                Counter(r.get("world", {}).get("kind") for r in records if r.get("world")).items()
-            )
-        ),
+        "kinds": dict(sorted(kinds.items())),
         "ran": ran,
         "workers": workers,
         "wall_time_s": wall_time_s,
         "episodes_per_min": 60.0 * ran / wall_time_s if ran and wall_time_s > 0 else None,
-        "metrics": {name: _distribution(_values(records, name)) for name in names},
-        "mapper_vs_odometry": mapper_vs_odometry(records),
+        "metrics": {name: _distribution(_values(metrics, name)) for name in names},
+        "mapper_vs_odometry": _compare(metrics),
         "failing_episodes": failing[:_LISTED_FAILURES],
     }
 
 
-def _fmt(value: Any, spec: str) -> str:
+def _fmt(value: float | None, spec: str) -> str:
     return "-" if value is None else format(value, spec)
 
 
-def format_summary(summary: Mapping[str, Any]) -> str:
+def format_summary(summary: CampaignSummary) -> str:
     """A few lines: counts, throughput, failures by invariant, key metrics."""
     lines = [
         f"{summary['episodes']} episodes: {summary['ok']} ok, {summary['violations']} with "

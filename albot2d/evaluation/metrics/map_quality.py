@@ -364,6 +364,8 @@ def map_quality(
             completeness = float(np.mean(cover <= tol))
     if len(d) == 0:
         return MapQuality(None, None, None, completeness, 0)
+    if len(truth) == 0:  # nothing to be accurate against: accuracy is undefined, not inf
+        return MapQuality(None, None, None, completeness, len(segs_world))
     mean, largest = float(d.mean()), float(d.max())
     # The same partition as on a copy, done in place: ``d`` is not needed after this.
     p95 = float(np.percentile(d, 95, overwrite_input=True))

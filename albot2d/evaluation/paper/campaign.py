@@ -10,11 +10,13 @@ first seed's runs keep the map snapshots the figures are drawn from.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, NotRequired, TypedDict
 
 from albot2d.errors import InputError
+from albot2d.evaluation.paper.jobs import FigureRun, JobSummary, PlainObject
+from albot2d.evaluation.paper.outputs import ExperimentOutput, FigureSpec
 from albot2d.evaluation.paper.registry import EXPERIMENTS, PAPER_FIGURES, runs_needed
 from albot2d.evaluation.paper.runs import (
     ALBOT_X,
@@ -34,17 +36,78 @@ __all__ = [
     "run_experiments",
 ]
 
+if TYPE_CHECKING:
+    from albot2d.evaluation.fuzz.backends import Backend
+
 FORMAT_VERSION = 1
+
+
+class RunSeedInfo(TypedDict):
+    frames: int
+    travelled_m: float
+    tour_length_m: float | None
+    world_sha256: str
+
+
+class RunInfo(TypedDict):
+    spec: dict[str, object]
+    per_seed: dict[str, RunSeedInfo]
+
+
+class ExperimentsData(TypedDict):
+    """experiments.json (a JSON document: the page reads it as such)."""
+
+    command: str
+    format_version: int
+    seeds: list[int]
+    quick: bool
+    odometry_noise: str
+    albot_x: str | None
+    verdicts: dict[str, str]
+    experiments: dict[str, ExperimentOutput]
+    runs: dict[str, RunInfo]
+    wall_time_s: float
+    readings: NotRequired[dict[str, str]]
+    verdicts_by_reading: NotRequired[dict[str, dict[str, str]]]
 
 
 @dataclass(eq=False)
 class ExperimentsOutcome:
     """``data`` is experiments.json's content; ``figures`` per experiment the figure specs
-    (file, plot kind, caption, plain data) for the interface layer to draw."""
+    (file, plot kind, caption, plain data) for the interface layer to draw; ``runs`` the
+    job summaries they were computed from (run → one per seed)."""
 
-    data: dict[str, Any]
-    figures: dict[str, list[dict[str, Any]]]
-    runs: dict[str, list[dict[str, Any]]]
+    data: ExperimentsData
+    figures: dict[str, list[FigureSpec]]
+    runs: Mapping[str, Sequence[JobSummary]]
+
+
+class _FigureRuns(Mapping[str, FigureRun]):
+    """Each run's figure run (its first seed's, which keeps one), read when a figure asks."""
+
+    def __init__(self, by_run: Mapping[str, Sequence[JobSummary]]) -> None:
+        self._by_run = by_run
+
+    def __getitem__(self, run: str) -> FigureRun:
+        return self._by_run[run][0].need_figures()
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._by_run)
+
+    def __len__(self) -> int:
+        return len(self._by_run)
+
+
+def _captioned(spec: FigureSpec, caption: str) -> FigureSpec:
+    out = spec.copy()
+    out["caption"] = caption
+    return out
+
+
+def _renamed(spec: FigureSpec, file: str) -> FigureSpec:
+    out = spec.copy()
+    out["file"] = file
+    return out
 
 
 def plan_jobs(names: Sequence[str], seeds: Sequence[int]) -> list[tuple[str, int]]:
@@ -64,12 +127,15 @@ def _job(
     figure_seed: int,
     readings: tuple[str, ...],
     index: int,
-) -> dict[str, dict[str, Any]]:
+) -> dict[str, PlainObject]:
+    """What a worker runs: one (run, seed) under every reading; the summaries go back as
+    plain data (``JobSummary.to_plain``)."""
     run, seed = jobs[index]
-    return run_job_readings(
+    out = run_job_readings(
         run, seed, quick=quick, albot_x=albot_x, keep_figures=seed == figure_seed,
         readings=readings,
     )  # fmt: skip
+    return {reading: summary.to_plain() for reading, summary in out.items()}
 
 
 def check_readings(readings: Sequence[str]) -> tuple[str, ...]:
@@ -91,7 +157,7 @@ def run_experiments(
     seeds: Sequence[int],
     *,
     quick: bool = False,
-    backend: Any = None,
+    backend: Backend | None = None,
     on_job: Callable[[str, int], None] | None = None,
     readings: Sequence[str] = ("default",),
 ) -> ExperimentsOutcome:
@@ -108,15 +174,17 @@ def run_experiments(
     jobs = tuple(plan_jobs(names, seeds))
     readings = check_readings(readings)
     albot_x = albot_x_available()
-    backend = backend or LocalBackend(1)
-    results: dict[tuple[str, int], dict[str, dict[str, Any]]] = {}
-    for index, result in backend.map_unordered(
+    runner: Backend = backend or LocalBackend(1)
+    results: dict[tuple[str, int], dict[str, JobSummary]] = {}
+    for index, result in runner.map_unordered(
         _job, range(len(jobs)), jobs, quick, albot_x, seeds[0], readings
     ):
         if isinstance(result, BaseException):
             run, seed = jobs[index]
             raise RuntimeError(f"run {run} seed {seed} failed: {result!r}") from result
-        results[jobs[index]] = result
+        results[jobs[index]] = {
+            reading: JobSummary.from_plain(summary) for reading, summary in result.items()
+        }
         if on_job is not None:
             on_job(*jobs[index])
     runs = list(dict.fromkeys(r for r, _ in jobs))
@@ -130,7 +198,7 @@ def run_experiments(
 def compute_readings(
     names: Sequence[str],
     seeds: Sequence[int],
-    by_reading: dict[str, dict[str, list[dict[str, Any]]]],
+    by_reading: Mapping[str, Mapping[str, Sequence[JobSummary]]],
     *,
     quick: bool,
     albot_x: bool,
@@ -149,7 +217,7 @@ def compute_readings(
     }  # fmt: skip
     primary = outcomes[readings[0]]
     data = primary.data
-    figures: dict[str, list[dict[str, Any]]] = {}
+    figures: dict[str, list[FigureSpec]] = {}
     for name in names:
         result = data["experiments"][name]
         result["reading"] = readings[0]
@@ -164,7 +232,7 @@ def compute_readings(
             for reading, out in outcomes.items()
         }
         figures[name] = [
-            f | ({"caption": f"{reading}: {f['caption']}"} if len(readings) > 1 else {})
+            _captioned(f, f"{reading}: {f['caption']}") if len(readings) > 1 else f
             for reading, out in outcomes.items()
             for f in out.figures[name]
         ]
@@ -179,7 +247,7 @@ def compute_readings(
 def compute_experiments(
     names: Sequence[str],
     seeds: Sequence[int],
-    by_run: dict[str, list[dict[str, Any]]],
+    by_run: Mapping[str, Sequence[JobSummary]],
     *,
     quick: bool,
     albot_x: bool,
@@ -190,30 +258,28 @@ def compute_experiments(
     per seed, in seed order); figure files are named with ``figure_prefix`` first."""
     names, seeds = list(names), list(seeds)
     t0 = time.perf_counter() if started is None else started
-    figure_runs = {run: rows[0]["figures"] for run, rows in by_run.items()}
-    experiments: dict[str, Any] = {}
-    figures: dict[str, list[dict[str, Any]]] = {}
+    experiments: dict[str, ExperimentOutput] = {}
+    figures: dict[str, list[FigureSpec]] = {}
     for name in names:
         exp = EXPERIMENTS[name]
         result = exp.compute(by_run, seeds)
-        figures[name] = [
-            f | {"file": figure_prefix + f["file"]} for f in exp.figures(figure_runs, result)
-        ]
+        drawn = _FigureRuns(by_run)
+        figures[name] = [_renamed(f, figure_prefix + f["file"]) for f in exp.figures(drawn, result)]
         result["figures"] = [f["file"] for f in figures[name]]
         result["paper_figure"] = PAPER_FIGURES.get(name)
         result["figure_seed"] = seeds[0]
         experiments[name] = result
-    runs_info = {
+    runs_info: dict[str, RunInfo] = {
         run: {"spec": {k: v for k, v in vars(RUNS[run]).items() if k != "world_params"}
                       | {"world_params": dict(RUNS[run].world_params)},
-              "per_seed": {str(j["seed"]): {"frames": j["frames"],
-                                            "travelled_m": j["travelled_m"],
-                                            "tour_length_m": j["tour_length_m"],
-                                            "world_sha256": j["world_sha256"]}
+              "per_seed": {str(j.seed): {"frames": j.frames,
+                                         "travelled_m": j.travelled_m,
+                                         "tour_length_m": j.tour_length_m,
+                                         "world_sha256": j.world_sha256}
                            for j in rows}}
         for run, rows in by_run.items()
     }  # fmt: skip
-    data = {
+    data: ExperimentsData = {
         "command": "experiments",
         "format_version": FORMAT_VERSION,
         "seeds": seeds,

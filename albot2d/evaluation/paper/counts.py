@@ -8,8 +8,11 @@ The paper: dataset 1, S → E5: 795 views → 307 local maps; dataset 3, the who
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import cast
 
+from albot2d.evaluation.paper.jobs import FigureRun, JobSummary, MarkCounts
+from albot2d.evaluation.paper.outputs import ExperimentOutput, FigureSpec, OverSeeds
 from albot2d.evaluation.paper.stats import over_seeds, verdict_of
 
 __all__ = ["CLAIM", "NAME", "RUNS", "compute", "figures"]
@@ -33,17 +36,14 @@ RATIO_TOLERANCE = 0.25  # the issue: update-count ratios within ±25 % of the pa
 _PI_MARK = "E7"  # Fig. 16's route ends at E7
 
 
-def _counts_at(job: dict[str, Any], mark: str) -> dict[str, int] | None:
-    if mark == "end":
-        c = job["mapper_results"]["albot1"]["counts"]
-        return {k: c[k] for k in ("views", "local_maps", "path_integrations")}
-    snap = job["marks"].get(mark)
-    return None if snap is None else snap["counts"]["albot1"]
+def _counts_at(job: JobSummary, mark: str) -> MarkCounts | None:
+    return job.counts_at(mark)
 
 
-def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
-    ours: dict[str, Any] = {}
-    paper: dict[str, Any] = {}
+def compute(jobs: Mapping[str, Sequence[JobSummary]], seeds: Sequence[int]) -> ExperimentOutput:
+    ours: dict[str, object] = {}
+    paper: dict[str, object] = {}
+    pi_per_seed: dict[str, dict[str, float | None]] = {}
     checks = []
     for dataset, (run, mark, p_views, p_maps, p_pi) in _DATASETS.items():
         rows = [_counts_at(j, mark) for j in jobs[run]]
@@ -56,22 +56,23 @@ def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str
             )
             for j in jobs[run]
         ]
-        views = [None if r is None else r["views"] for r in rows]
-        maps = [None if r is None else r["local_maps"] for r in rows]
-        ratio = [
-            None if r is None or not r["views"] else r["local_maps"] / r["views"] for r in rows
-        ]
-        ours[dataset] = {
+        views = [None if r is None else r.views for r in rows]
+        maps = [None if r is None else r.local_maps for r in rows]
+        ratio = [None if r is None or not r.views else r.local_maps / r.views for r in rows]
+        ratio_stats = over_seeds(ratio, seeds)
+        pis = over_seeds([None if r is None else r.path_integrations for r in pi_rows], seeds)
+        pi_per_seed[dataset] = pis["per_seed"]
+        mine: dict[str, object] = {
             "counted_at": mark,
             "views": over_seeds(views, seeds),
             "local_maps": over_seeds(maps, seeds),
-            "local_maps_per_view": over_seeds(ratio, seeds),
-            "path_integrations": over_seeds(
-                [None if r is None else r["path_integrations"] for r in pi_rows], seeds),
+            "local_maps_per_view": ratio_stats,
+            "path_integrations": pis,
             "path_integrations_counted_at": _PI_MARK if dataset in ("dataset1", "dataset2")
             else mark,
         }  # fmt: skip
-        entry: dict[str, Any] = {}
+        ours[dataset] = mine
+        entry: dict[str, object] = {}
         if p_views is not None and p_maps is not None:
             entry |= {
                 "views": p_views,
@@ -81,15 +82,14 @@ def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str
         if p_pi is not None:
             entry["path_integrations"] = p_pi
         paper[dataset] = entry
-        mean_ratio = ours[dataset]["local_maps_per_view"]["mean"]
+        mean_ratio = ratio_stats["mean"]
         if p_views is not None and p_maps is not None and mean_ratio is not None:
             target = p_maps / p_views
             ok = abs(mean_ratio / target - 1.0) <= RATIO_TOLERANCE
-            ours[dataset]["ratio_within_25pct"] = ok
+            mine["ratio_within_25pct"] = ok
             checks.append(ok)
-    d1 = ours["dataset1"]["path_integrations"]["per_seed"]
-    d2 = ours["dataset2"]["path_integrations"]["per_seed"]
-    more = [d2[s] > d1[s] for s in d1 if d1[s] is not None and d2.get(s) is not None]
+    d1, d2 = pi_per_seed["dataset1"], pi_per_seed["dataset2"]
+    more = [b > a for s, a in d1.items() if a is not None and (b := d2.get(s)) is not None]
     share = sum(more) / len(more) if more else None
     ours["path_integrations_more_with_dataset2_share"] = share
     checks.append(share is not None and share > 0.5)
@@ -98,13 +98,12 @@ def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str
         for d, run in (("dataset1", "fig6_dataset1"), ("dataset2", "fig6_dataset2"))
     }
     ours["path_integration_causes"] = causes
-    same = [a["marks"].get(_PI_MARK, {}).get("true_path_sha256") is not None
-            and a["marks"][_PI_MARK]["true_path_sha256"]
-            == b["marks"].get(_PI_MARK, {}).get("true_path_sha256")
+    same = [_path_at(a) is not None and _path_at(a) == _path_at(b)
             for a, b in zip(jobs["fig6_dataset1"], jobs["fig6_dataset2"], strict=True)]  # fmt: skip
-    ours["same_true_path_datasets_1_and_2_share"] = sum(same) / len(same) if same else None
-    spec = next((j.get("reading_mapper") for j in jobs["fig6_dataset1"]), None) or "albot1"
-    reason = _pi_reason(causes, ours, spec)
+    same_share = sum(same) / len(same) if same else None
+    ours["same_true_path_datasets_1_and_2_share"] = same_share
+    spec = next((j.reading_mapper for j in jobs["fig6_dataset1"]), None) or "albot1"
+    reason = _pi_reason(causes, share, same_share, spec)
     return {
         "claim": CLAIM, "paper": paper, "ours": ours, "verdict": verdict_of(checks),
         "notes": [reason] if reason else [],
@@ -115,31 +114,37 @@ def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str
     }  # fmt: skip
 
 
-def _pi_causes(rows: list[dict[str, Any]], mark: str, seeds: list[int]) -> dict[str, Any]:
+def _path_at(job: JobSummary) -> str | None:
+    """The digest of the true path up to Fig. 16's end (if the run got there)."""
+    snap = job.marks.get(_PI_MARK)
+    return None if snap is None else snap.true_path_sha256
+
+
+def _pi_causes(rows: Sequence[JobSummary], mark: str, seeds: Sequence[int]) -> dict[str, OverSeeds]:
     """Why Albot₁ used path integration up to ``mark``: per seed, the path-integration
     updates with no tracked surface left vs with some left (the triangulation afforded no
     pose within its gates), those at the end of a turn, by region kind, and the runs of
     consecutive path-integration updates (a coarser count: one per stretch)."""
     keys = ("total", "no_tracked_surface", "tracked_but_no_pose", "after_a_turn",
             "in_corridor", "in_hall", "in_room", "runs", "updates")  # fmt: skip
-    per: dict[str, list[Any]] = {k: [] for k in keys}
+    per: dict[str, list[float | None]] = {k: [] for k in keys}
     for j in rows:
-        c = j.get("path_integration_causes")
-        snap = j["marks"].get(mark)
-        if c is None or snap is None:
+        c = j.path_integration_causes
+        snap = j.marks.get(mark)
+        if snap is None:
             for k in keys:
                 per[k].append(None)
             continue
-        last = snap["frame"]
-        pick = [k for k, f in enumerate(c["frames"]) if f <= last]
-        tracked = [c["tracked"][k] for k in pick]
-        regions = [c["regions"][k] for k in pick]
-        methods = [m for f, m in zip(c["update_frames"], c["update_methods"], strict=True)
+        last = snap.frame
+        pick = [k for k, f in enumerate(c.frames) if f <= last]
+        tracked = [c.tracked[k] for k in pick]
+        regions = [c.regions[k] for k in pick]
+        methods = [m for f, m in zip(c.update_frames, c.update_methods, strict=True)
                    if f <= last]  # fmt: skip
         runs = sum(1 for k, m in enumerate(methods)
                    if m == "path_integration" and (k == 0 or methods[k - 1] != m))  # fmt: skip
         values = (len(pick), tracked.count(0), sum(1 for t in tracked if t > 0),
-                  sum(1 for k in pick if c["turning"][k]), regions.count("corridor"),
+                  sum(1 for k in pick if c.turning[k]), regions.count("corridor"),
                   regions.count("hall"), regions.count("room"), runs, len(methods))  # fmt: skip
         for k, v in zip(keys, values, strict=True):
             per[k].append(v)
@@ -176,15 +181,22 @@ def _gate_text(spec: str) -> tuple[str, str]:
     return gate, after
 
 
-def _pi_reason(causes: dict[str, Any], ours: dict[str, Any], spec: str = "albot1") -> str | None:
-    """One sentence with the numbers, built from them (not written by hand)."""
+def _pi_reason(
+    causes: Mapping[str, Mapping[str, OverSeeds]],
+    share: float | None,
+    same: float | None,
+    spec: str = "albot1",
+) -> str | None:
+    """One sentence with the numbers, built from them (not written by hand); ``share``:
+    of the seeds, those with more path integrations with dataset 2; ``same``: those on
+    which both datasets drove the same true path."""
     c1, c2 = causes["dataset1"], causes["dataset2"]
     m = {d: {k: v["mean"] for k, v in c.items()} for d, c in causes.items()}
     if m["dataset1"]["total"] is None or m["dataset2"]["total"] is None:
         return None
-    t1, t2 = m["dataset1"], m["dataset2"]
-    share = ours.get("path_integrations_more_with_dataset2_share")
-    same = ours.get("same_true_path_datasets_1_and_2_share")
+    # every mean is known when the totals are (they count the same seeds)
+    t1 = {k: float(v or 0.0) for k, v in m["dataset1"].items()}
+    t2 = {k: float(v or 0.0) for k, v in m["dataset2"].items()}
     from albot2d.mapping.albot1.mapper import Albot1Params
     from albot2d.sim.driving import get_profile
 
@@ -197,7 +209,7 @@ def _pi_reason(causes: dict[str, Any], ours: dict[str, Any], spec: str = "albot1
 
     n1 = c1["no_tracked_surface"]["per_seed"]
     n2 = c2["no_tracked_surface"]["per_seed"]
-    pairs = [(n1[k], n2[k]) for k in n1 if n1[k] is not None and n2.get(k) is not None]
+    pairs = [(a, b) for k, a in n1.items() if a is not None and (b := n2.get(k)) is not None]
     more_none = sum(b > a for a, b in pairs)
     return (
         f"Up to {_PI_MARK}, Albot₁ placed {t1['total']:.0f} ± {c1['total']['sd']:.0f} local "
@@ -224,19 +236,20 @@ def _pi_reason(causes: dict[str, Any], ours: dict[str, Any], spec: str = "albot1
     )
 
 
-def figures(fig: dict[str, Any], result: dict[str, Any]) -> list[dict[str, Any]]:
+def figures(fig: Mapping[str, FigureRun], result: ExperimentOutput) -> list[FigureSpec]:
     """Local maps per view, ours (mean ± sd over seeds) beside the paper's."""
     bars = []
     for dataset, ours in result["ours"].items():
         if not isinstance(ours, dict) or "local_maps_per_view" not in ours:
             continue
-        r = ours["local_maps_per_view"]
+        r: OverSeeds = ours["local_maps_per_view"]
+        paper = cast("Mapping[str, float]", result["paper"][dataset])  # as compute wrote it
         bars.append(
             {
                 "label": dataset,
                 "ours": r["mean"],
                 "sd": r["sd"],
-                "paper": result["paper"][dataset].get("local_maps_per_view"),
+                "paper": paper.get("local_maps_per_view"),
             }
         )
     return [

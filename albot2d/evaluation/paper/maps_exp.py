@@ -13,24 +13,45 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from albot2d.evaluation.paper.figdata import LABELS, deleted_surfaces, map_panel
+from albot2d.evaluation.paper.jobs import FigureRun, JobSummary
+from albot2d.evaluation.paper.outputs import ExperimentOutput, FigureSpec
 from albot2d.evaluation.paper.runs import ALBOT_X
 from albot2d.evaluation.paper.stats import over_seeds, verdict_of
 
 __all__ = ["FIG7", "FIG10", "FIG11_12", "FIG13"]
 
 
-def _quality(job: dict[str, Any], mark: str, mapper: str, key: str = "accuracy_m_p95") -> Any:
-    return job["map_quality_at_marks"].get(mark, {}).get(mapper, {}).get(key)
+def _quality(job: JobSummary, mark: str, mapper: str) -> float | None:
+    """``mapper``'s anchored map accuracy (p95, m) at ``mark``, when scored there."""
+    q = job.quality(mark, mapper)
+    return None if q is None else q.accuracy_m_p95
 
 
-def _x_name(jobs: list[dict[str, Any]]) -> str:
+def _surfaces(job: JobSummary, mark: str, mapper: str) -> int | None:
+    q = job.quality(mark, mapper)
+    return None if q is None else q.surfaces
+
+
+def _x_name(jobs: Sequence[JobSummary]) -> str:
     """Albot_x: the slam mapper when the runs had it, else naive (said in the result)."""
-    return ALBOT_X if jobs and ALBOT_X in jobs[0]["mappers"] else "naive"
+    return ALBOT_X if jobs and ALBOT_X in jobs[0].mappers else "naive"
+
+
+def _x_drawn(f: FigureRun, mark: str) -> str:
+    """Albot_x in a figure run: the slam mapper when its map was kept at ``mark``."""
+    snap = f.snaps.get(mark)
+    return ALBOT_X if snap is not None and ALBOT_X in snap.maps else "naive"
+
+
+def _egocentric_p95(job: JobSummary) -> float | None:
+    """Albot₁'s egocentric map accuracy (p95, m) at the end (runs that score it)."""
+    ego = job.albot1.egocentric
+    return None if ego is None else ego.accuracy_m_p95
 
 
 # -- fig7 ---------------------------------------------------------------------------------
@@ -43,13 +64,13 @@ class FIG7:
     RUNS = ("fig6_dataset1",)
 
     @staticmethod
-    def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
+    def compute(jobs: Mapping[str, Sequence[JobSummary]], seeds: Sequence[int]) -> ExperimentOutput:
         runs = jobs["fig6_dataset1"]
         x = _x_name(runs)
         a_p95 = [_quality(j, "E5", "albot1") for j in runs]
         x_p95 = [_quality(j, "E5", x) for j in runs]
-        a_n = [_quality(j, "E5", "albot1", "surfaces") for j in runs]
-        x_n = [_quality(j, "E5", x, "surfaces") for j in runs]
+        a_n = [_surfaces(j, "E5", "albot1") for j in runs]
+        x_n = [_surfaces(j, "E5", x) for j in runs]
         ours = {
             "albot_x_mapper": x,
             "map_accuracy_p95_m": {
@@ -64,8 +85,8 @@ class FIG7:
         has_map = [n is not None and n >= 100 for n in a_n]
         checks = [
             x == ALBOT_X,
-            np.mean(better) > 0.5 if better else False,
-            np.mean(has_map) > 0.5 if has_map else False,
+            bool(np.mean(better) > 0.5) if better else False,
+            bool(np.mean(has_map) > 0.5) if has_map else False,
         ]
         return {"claim": FIG7.CLAIM, "paper": {"albot1_local_maps_at_E5": 307,
                                                "views_at_E5": 795},
@@ -75,9 +96,9 @@ class FIG7:
                         "keeps ≥ 100 surfaces there on most seeds"}  # fmt: skip
 
     @staticmethod
-    def figures(fig: dict[str, dict[str, Any]], result: dict[str, Any]) -> list[dict[str, Any]]:
+    def figures(fig: Mapping[str, FigureRun], result: ExperimentOutput) -> list[FigureSpec]:
         f = fig["fig6_dataset1"]
-        x = ALBOT_X if ALBOT_X in f["snaps"].get("E5", {"maps": {}})["maps"] else "naive"
+        x = _x_drawn(f, "E5")
         panels = [
             map_panel(f, "E5", x, f"(a) {LABELS[x]} {{at}}", place="at E5"),
             map_panel(f, "E5", "albot1", "(b) Albot₁ {at}", place="at E5"),
@@ -104,14 +125,14 @@ class FIG10:
     RUNS = ("fig6_dataset1",)
 
     @staticmethod
-    def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
+    def compute(jobs: Mapping[str, Sequence[JobSummary]], seeds: Sequence[int]) -> ExperimentOutput:
         runs = jobs["fig6_dataset1"]
         deleted = []
         revisit_deleted = []
         for j in runs:
-            rev = j["mapper_results"]["albot1"].get("revisits") or {}
-            revisit_deleted.append(rev.get("deleted_surfaces"))
-            deleted.append(j.get("fig10_deleted"))
+            rev = j.albot1.revisits
+            revisit_deleted.append(None if rev is None else rev.deleted_surfaces)
+            deleted.append(j.fig10_deleted)
         ours = {
             "old_surfaces_deleted_passing_S": over_seeds(deleted, seeds),
             "revisit_deleted_surfaces_whole_run": over_seeds(revisit_deleted, seeds),
@@ -127,11 +148,11 @@ class FIG10:
         }
 
     @staticmethod
-    def figures(fig: dict[str, dict[str, Any]], result: dict[str, Any]) -> list[dict[str, Any]]:
+    def figures(fig: Mapping[str, FigureRun], result: ExperimentOutput) -> list[FigureSpec]:
         f = fig["fig6_dataset1"]
-        if "E1#2" not in f["snaps"] or "E7" not in f["snaps"]:
+        if "E1#2" not in f.snaps or "E7" not in f.snaps:
             return []
-        gone = deleted_surfaces(f["snaps"]["E1#2"], f["snaps"]["E7"])
+        gone = deleted_surfaces(f.snaps["E1#2"], f.snaps["E7"])
         panels = [
             map_panel(f, "E1#2", "albot1", "(a) Albot₁ {at}, before passing S", place="back at E1"),
             map_panel(
@@ -165,16 +186,13 @@ class FIG11_12:  # noqa: N801
     RUNS = ("fig11_open",)
 
     @staticmethod
-    def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
+    def compute(jobs: Mapping[str, Sequence[JobSummary]], seeds: Sequence[int]) -> ExperimentOutput:
         runs = jobs["fig11_open"]
         x = _x_name(runs)
         at_x = [_quality(j, "half", "albot1") for j in runs]
         at_e = [_quality(j, "end", "albot1") for j in runs]
         x_e = [_quality(j, "end", x) for j in runs]
-        ego_e = [
-            (j["mapper_results"]["albot1"]["map"].get("egocentric") or {}).get("accuracy_m_p95")
-            for j in runs
-        ]
+        ego_e = [_egocentric_p95(j) for j in runs]
         ours = {
             "albot_x_mapper": x,
             "albot1_map_accuracy_p95_m": {
@@ -195,9 +213,9 @@ class FIG11_12:  # noqa: N801
                         "at E on most seeds"}  # fmt: skip
 
     @staticmethod
-    def figures(fig: dict[str, dict[str, Any]], result: dict[str, Any]) -> list[dict[str, Any]]:
+    def figures(fig: Mapping[str, FigureRun], result: ExperimentOutput) -> list[FigureSpec]:
         f = fig["fig11_open"]
-        x = ALBOT_X if ALBOT_X in f["snaps"].get("end", {"maps": {}})["maps"] else "naive"
+        x = _x_drawn(f, "end")
         panels = [
             map_panel(f, "half", "albot1", "(b) Albot₁ {at}", place="at X (half way)"),
             map_panel(f, "end", "albot1", "(c) Albot₁ {at}", place="at E (the end)"),
@@ -225,24 +243,18 @@ class FIG13:
     RUNS = ("fig6_dataset3", "fig6_dataset1")
 
     @staticmethod
-    def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
+    def compute(jobs: Mapping[str, Sequence[JobSummary]], seeds: Sequence[int]) -> ExperimentOutput:
         runs3, runs1 = jobs["fig6_dataset3"], jobs["fig6_dataset1"]
         x = _x_name(runs3)
 
-        def end_err(j: dict[str, Any], name: str) -> Any:
-            e = j["mapper_results"][name].get("end_pose_error") or {}
-            return e.get("trans_m")
+        def end_err(j: JobSummary, name: str) -> float | None:
+            e = j.mapper(name).end_pose_error
+            return None if e is None else e.trans_m
 
         x3 = [end_err(j, x) for j in runs3]
         x1 = [end_err(j, x) for j in runs1]
-        ego = [
-            (j["mapper_results"]["albot1"]["map"].get("egocentric") or {}).get("accuracy_m_p95")
-            for j in runs3
-        ]
-        hom = [
-            (j["mapper_results"]["albot1"].get("homing_summary") or {}).get("bearing_abs_max_deg")
-            for j in runs3
-        ]
+        ego = [_egocentric_p95(j) for j in runs3]
+        hom = [j.albot1.homing_summary.bearing_abs_max_deg for j in runs3]
         ours = {
             "albot_x_mapper": x,
             "albot_x_end_pose_error_m": {
@@ -266,9 +278,9 @@ class FIG13:
                         "each on most seeds"}  # fmt: skip
 
     @staticmethod
-    def figures(fig: dict[str, dict[str, Any]], result: dict[str, Any]) -> list[dict[str, Any]]:
+    def figures(fig: Mapping[str, FigureRun], result: ExperimentOutput) -> list[FigureSpec]:
         f = fig["fig6_dataset3"]
-        x = ALBOT_X if ALBOT_X in f["snaps"].get("end", {"maps": {}})["maps"] else "naive"
+        x = _x_drawn(f, "end")
         panels = [
             map_panel(
                 f, "end", x, f"(a) {LABELS[x]}, dataset 3, {{at}}", place="at the route's end"

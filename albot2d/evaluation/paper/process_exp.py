@@ -13,11 +13,14 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import Literal, TypedDict
 
 import numpy as np
 
 from albot2d.evaluation.paper.figdata import map_panel
+from albot2d.evaluation.paper.jobs import FigureRun, JobSummary, Updates
+from albot2d.evaluation.paper.outputs import ExperimentOutput, FigureSpec, OverSeeds
 from albot2d.evaluation.paper.stats import over_seeds, verdict_of
 
 __all__ = ["FIG14", "FIG15", "FIG16", "method_sequences", "room_exit_rows"]
@@ -32,16 +35,16 @@ class FIG14:
     RUNS = ("fig6_start_stop",)
 
     @staticmethod
-    def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
+    def compute(jobs: Mapping[str, Sequence[JobSummary]], seeds: Sequence[int]) -> ExperimentOutput:
         from albot2d.evaluation.metrics.updates import update_counts
 
         moves_by_kind: dict[str, list[list[int]]] = {}
         for j in jobs["fig6_start_stop"]:
-            u = j["updates"]
-            _, moves = update_counts(u["true_xy"], u["flags"], u["regions"])
+            u = _updates(j)
+            _, moves = update_counts(u.true_xy, u.flags, u.regions)
             for kind in ("corridor", "hall", "room"):
                 moves_by_kind.setdefault(kind, []).append(moves.get(kind, []))
-        ours: dict[str, Any] = {}
+        ours: dict[str, dict[str, OverSeeds]] = {}
         for kind, per_seed in moves_by_kind.items():
             means = [float(np.mean(m)) if m else None for m in per_seed]
             at_most_2 = [float(np.mean(np.asarray(m) <= 2)) if m else None for m in per_seed]
@@ -69,8 +72,10 @@ class FIG14:
         }
 
     @staticmethod
-    def figures(fig: dict[str, dict[str, Any]], result: dict[str, Any]) -> list[dict[str, Any]]:
+    def figures(fig: Mapping[str, FigureRun], result: ExperimentOutput) -> list[FigureSpec]:
         f = fig["fig6_start_stop"]
+        u = f.updates
+        assert u is not None  # the run keeps its updates
         return [
             {
                 "file": "fig14.png",
@@ -79,16 +84,22 @@ class FIG14:
                 "every global-map "
                 "update (coloured by region kind), with the moves since the previous update.",
                 "data": {
-                    "walls": f["world_walls"],
-                    "xy": f["true_poses"][:, :2],
-                    "flags": f["updates"]["flags"],
-                    "regions": f["updates"]["regions"],
+                    "walls": f.world_walls,
+                    "xy": f.true_poses[:, :2],
+                    "flags": list(u.flags),
+                    "regions": list(u.regions),
                 },
             }
         ]
 
 
-def method_sequences(methods: list[str]) -> list[tuple[int, int]]:
+def _updates(job: JobSummary) -> Updates:
+    if job.updates is None:
+        raise ValueError(f"run {job.run} kept no updates (PaperRun.steps)")
+    return job.updates
+
+
+def method_sequences(methods: Sequence[str]) -> list[tuple[int, int]]:
     """(row of the triangulation, number of path integrations right after it) for every
     triangulation followed by at least one path-integration update (rows without an
     update are skipped, as in the paper's sequence of updates)."""
@@ -107,13 +118,13 @@ def method_sequences(methods: list[str]) -> list[tuple[int, int]]:
     return out
 
 
-def room_exit_rows(update: dict[str, Any], after: int = 2) -> list[int]:
+def room_exit_rows(update: Updates, after: int = 2) -> list[int]:
     """Trace rows of the fig15 route from the arrival at R (in the room) until back at RD
     (the corridor in front of its door), and ``after`` rows more, by true distance along
     the route."""
-    xy = np.asarray(update["true_xy"], float)
+    xy = np.asarray(update.true_xy, float)
     along = np.r_[0.0, np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]
-    marks = update["waypoint_along_m"]
+    marks = update.waypoint_along_m or {}
     if "R" not in marks or len(marks.get("RD", [])) < 2:
         return []
     at_r, back = marks["R"][0] - 0.3, marks["RD"][1] + 0.3
@@ -124,21 +135,38 @@ def room_exit_rows(update: dict[str, Any], after: int = 2) -> list[int]:
     return list(range(rows[0], last + 1))
 
 
-def _exit_numbers(update: dict[str, Any]) -> dict[str, Any]:
+_Count = Literal[
+    "views", "updates", "triangulations", "path_integrations", "views_with_no_tracked_surface"
+]
+
+
+class _RoomExit(TypedDict):
+    rows: list[int]
+    methods: list[str]
+    tracked: list[int]
+    views: int
+    updates: int
+    triangulations: int
+    path_integrations: int
+    triangulation_then_2plus_pi: bool
+    views_with_no_tracked_surface: int
+
+
+def _exit_numbers(update: Updates) -> _RoomExit:
     rows = room_exit_rows(update)
-    methods = [update["methods"][r] for r in rows]
+    methods = [update.methods[r] for r in rows]
     used = [m for m in methods if m]
     seq = method_sequences(methods)
     return {
         "rows": rows,
         "methods": methods,
-        "tracked": [update["tracked"][r] for r in rows],
+        "tracked": [update.tracked[r] for r in rows],
         "views": len(rows),
         "updates": len(used),
         "triangulations": used.count("triangulation"),
         "path_integrations": used.count("path_integration"),
         "triangulation_then_2plus_pi": any(r >= 2 for _, r in seq),
-        "views_with_no_tracked_surface": sum(1 for r in rows if update["tracked"][r] == 0),
+        "views_with_no_tracked_surface": sum(1 for r in rows if update.tracked[r] == 0),
     }
 
 
@@ -152,14 +180,14 @@ class FIG15:
     RUNS = ("fig15_room", "fig6_start_stop")
 
     @staticmethod
-    def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
-        exits = [_exit_numbers(j["updates"]) for j in jobs["fig15_room"]]
-        n_seq = []
+    def compute(jobs: Mapping[str, Sequence[JobSummary]], seeds: Sequence[int]) -> ExperimentOutput:
+        exits = [_exit_numbers(_updates(j)) for j in jobs["fig15_room"]]
+        n_seq: list[float | None] = []
         for j in jobs["fig6_start_stop"]:
-            seq = method_sequences(j["updates"]["methods"])
+            seq = method_sequences(_updates(j).methods)
             n_seq.append(sum(1 for _, r in seq if r >= 2))
 
-        def col(key: str) -> list[Any]:
+        def col(key: _Count) -> list[float | None]:
             return [e[key] for e in exits]
 
         any_pi = [e["path_integrations"] > 0 for e in exits]
@@ -211,11 +239,11 @@ class FIG15:
         }
 
     @staticmethod
-    def figures(fig: dict[str, dict[str, Any]], result: dict[str, Any]) -> list[dict[str, Any]]:
+    def figures(fig: Mapping[str, FigureRun], result: ExperimentOutput) -> list[FigureSpec]:
         f = fig["fig15_room"]
-        u, views = f["updates"], f.get("views")
-        rows = room_exit_rows(u)
-        if not rows or not views:
+        u, views = f.updates, f.views
+        rows = [] if u is None else room_exit_rows(u)
+        if u is None or not rows or not views:
             return []
         rows = rows[:6]
         return [
@@ -227,14 +255,14 @@ class FIG15:
                 "origin facing right; its method and tracked surfaces); bottom, Albot₁'s "
                 "global map after it, in its own frame (arrow: its pose).",
                 "data": {
-                    "walls": f["world_walls"],
-                    "poses": f["true_poses"][rows],
+                    "walls": f.world_walls,
+                    "poses": f.true_poses[rows],
                     "rows": rows,
-                    "methods": [u["methods"][r] for r in rows],
-                    "tracked": [u["tracked"][r] for r in rows],
-                    "views": [views[r]["surfaces"] for r in rows],
-                    "maps": [views[r]["global_map"] for r in rows],
-                    "map_poses": [views[r]["pose_in_map"] for r in rows],
+                    "methods": [u.methods[r] for r in rows],
+                    "tracked": [u.tracked[r] for r in rows],
+                    "views": [views[r].surfaces for r in rows],
+                    "maps": [views[r].global_map for r in rows],
+                    "map_poses": [views[r].pose_in_map for r in rows],
                 },
             }
         ]
@@ -250,21 +278,14 @@ class FIG16:
     RUNS = ("fig6_dataset1", "fig6_dataset2")
 
     @staticmethod
-    def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
-        def p95(run: str, name: str) -> list[Any]:
-            return [
-                j["map_quality_at_marks"].get("E7", {}).get(name, {}).get("accuracy_m_p95")
-                for j in jobs[run]
-            ]
+    def compute(jobs: Mapping[str, Sequence[JobSummary]], seeds: Sequence[int]) -> ExperimentOutput:
+        def p95(run: str, name: str) -> list[float | None]:
+            return [None if (q := j.quality("E7", name)) is None else q.accuracy_m_p95
+                    for j in jobs[run]]  # fmt: skip
 
-        def pis(run: str) -> list[Any]:
-            return [
-                (j["marks"].get("E7") or {})
-                .get("counts", {})
-                .get("albot1", {})
-                .get("path_integrations")
-                for j in jobs[run]
-            ]
+        def pis(run: str) -> list[float | None]:
+            return [None if (c := j.counts_at("E7")) is None else c.path_integrations
+                    for j in jobs[run]]  # fmt: skip
 
         acc = {
             d: {
@@ -278,17 +299,18 @@ class FIG16:
             None if a is None or b is None or a == 0 else b / a for a, b in zip(a2, n2, strict=True)
         ]
         pi1, pi2 = pis("fig6_dataset1"), pis("fig6_dataset2")
-        ours: dict[str, Any] = {
+        ratio_stats = over_seeds(ratio, seeds)
+        ours: dict[str, object] = {
             "map_accuracy_p95_m": acc["dataset2"],
             "map_accuracy_p95_m_dataset1": acc["dataset1"],
-            "naive_over_albot1_p95_dataset2": over_seeds(ratio, seeds),
+            "naive_over_albot1_p95_dataset2": ratio_stats,
             "path_integrations": {
                 "dataset1": over_seeds(pi1, seeds),
                 "dataset2": over_seeds(pi2, seeds),
             },
             "measured_at": "E7",
         }
-        mean_ratio = ours["naive_over_albot1_p95_dataset2"]["mean"]
+        mean_ratio = ratio_stats["mean"]
         more = [a is not None and b is not None and b > a for a, b in zip(pi1, pi2, strict=True)]
         checks = [
             mean_ratio is not None and mean_ratio >= 3.0,
@@ -305,7 +327,7 @@ class FIG16:
         }
 
     @staticmethod
-    def figures(fig: dict[str, dict[str, Any]], result: dict[str, Any]) -> list[dict[str, Any]]:
+    def figures(fig: Mapping[str, FigureRun], result: ExperimentOutput) -> list[FigureSpec]:
         f1, f2 = fig["fig6_dataset1"], fig["fig6_dataset2"]
         panels = [
             map_panel(f1, "E7", "naive", "(a) naive, dataset 1, {at}"),

@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
-from typing import Any
+from typing import Literal, TypedDict
 
 import numpy as np
 
@@ -26,21 +26,49 @@ __all__ = ["main", "path_integration_counts"]
 
 _RUNS = {"dataset1": "fig16_dataset1", "dataset2": "fig16_dataset2"}
 
+Quantity = Literal["pi", "no_tracked", "tracked_no_pose", "local_maps", "views"]
+_QUANTITIES: tuple[Quantity, ...] = ("pi", "no_tracked", "tracked_no_pose", "local_maps", "views")
 
-def _one(job: tuple[str, int, tuple[str, ...]]) -> dict[str, Any]:
+
+class _Row(TypedDict):
+    """One reading's counts on one (run, seed), up to E7."""
+
+    pi: int
+    no_tracked: int
+    tracked_no_pose: int
+    local_maps: int
+    views: int
+
+
+class _Counted(TypedDict):
+    """A worker's result (plain data, across the process pool)."""
+
+    run: str
+    seed: int
+    rows: dict[str, _Row]
+
+
+class QuantityStats(TypedDict):
+    mean: float
+    sd: float
+    max: float
+    per_seed: dict[str, int]
+
+
+def _one(job: tuple[str, int, tuple[str, ...]]) -> _Counted:
     from albot2d.evaluation.paper.runs import run_job_readings
 
     run, seed, readings = job
     out = run_job_readings(run, seed, quick=False, albot_x=False, keep_figures=False,
                            readings=readings)  # fmt: skip
-    rows = {}
+    rows: dict[str, _Row] = {}
     for reading, summary in out.items():
-        causes = summary["path_integration_causes"]
-        mark = summary["marks"].get("E7")
-        last = mark["frame"] if mark else max(causes["update_frames"], default=0)
-        tracked = [t for f, t in zip(causes["frames"], causes["tracked"], strict=True)
+        causes = summary.path_integration_causes
+        mark = summary.marks.get("E7")
+        last = mark.frame if mark else max(causes.update_frames, default=0)
+        tracked = [t for f, t in zip(causes.frames, causes.tracked, strict=True)
                    if f <= last]  # fmt: skip
-        updates = sum(1 for f in causes["update_frames"] if f <= last)
+        updates = sum(1 for f in causes.update_frames if f <= last)
         rows[reading] = {"pi": len(tracked), "no_tracked": tracked.count(0),
                          "tracked_no_pose": len(tracked) - tracked.count(0),
                          "local_maps": updates, "views": int(last) + 1}  # fmt: skip
@@ -49,7 +77,7 @@ def _one(job: tuple[str, int, tuple[str, ...]]) -> dict[str, Any]:
 
 def path_integration_counts(
     seeds: Sequence[int], readings: Sequence[str], workers: int = 1
-) -> dict[str, dict[str, dict[str, Any]]]:
+) -> dict[str, dict[str, dict[Quantity, QuantityStats]]]:
     """dataset → reading → {quantity: {"mean", "sd", "per_seed"}}."""
     from albot2d.evaluation.paper.campaign import check_readings
 
@@ -60,13 +88,13 @@ def path_integration_counts(
             results = list(pool.map(_one, jobs))
     else:
         results = [_one(j) for j in jobs]
-    out: dict[str, dict[str, dict[str, Any]]] = {}
+    out: dict[str, dict[str, dict[Quantity, QuantityStats]]] = {}
     for dataset, run in _RUNS.items():
         mine = [r for r in results if r["run"] == run]
         out[dataset] = {}
         for reading in readings:
-            table: dict[str, Any] = {}
-            for q in ("pi", "no_tracked", "tracked_no_pose", "local_maps", "views"):
+            table: dict[Quantity, QuantityStats] = {}
+            for q in _QUANTITIES:
                 values = np.array([r["rows"][reading][q] for r in mine], dtype=float)
                 table[q] = {
                     "mean": float(values.mean()),

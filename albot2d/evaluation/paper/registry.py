@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from albot2d.evaluation.paper import counts, table1
 from albot2d.evaluation.paper.maps_exp import FIG7, FIG10, FIG11_12, FIG13
+from albot2d.evaluation.paper.outputs import Experiment
 from albot2d.evaluation.paper.process_exp import FIG14, FIG15, FIG16
 
 __all__ = ["EXPERIMENTS", "PAPER_FIGURES", "runs_needed"]
 
-EXPERIMENTS: dict[str, Any] = {
+EXPERIMENTS: dict[str, Experiment] = {
     "counts": counts,
     "table1": table1,
     "fig7": FIG7,

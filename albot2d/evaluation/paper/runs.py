@@ -16,13 +16,36 @@ the paper's "Albot_x without correcting sensor errors" of Fig. 16.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from albot2d.errors import InputError
+from albot2d.evaluation.paper.jobs import (
+    Albot1Result,
+    FigureRun,
+    FloatArray,
+    JobSummary,
+    MapAt,
+    MapperResult,
+    MapQualityAt,
+    MarkSummary,
+    PathIntegrationCauses,
+    Snapshot,
+    Updates,
+    ViewAt,
+)
+
+if TYPE_CHECKING:
+    from albot2d.evaluation.run.experiment import ExperimentResult
+    from albot2d.evaluation.run.setup import RunSpec
+    from albot2d.evaluation.run.trace import Trace
+    from albot2d.frames import Frame
+    from albot2d.mapping.albot1.mapper import Albot1, StepRecord
+    from albot2d.mapping.protocol import Mapper
+    from worldgen.world import Tour, World
 
 __all__ = [
     "ALBOT_X",
@@ -63,7 +86,7 @@ class PaperRun:
     route: str | None = None
     tour_kind: str = "loop"
     tour_length_m: float = 100.0
-    world_params: Mapping[str, Any] = field(default_factory=dict)
+    world_params: Mapping[str, float] = field(default_factory=dict)
     mappers: tuple[str, ...] = ()
     stop_every_m: float = 20.0
     marks: tuple[str, ...] = ()
@@ -115,10 +138,10 @@ def albot_x_available() -> bool:
     return True
 
 
-def _mark_targets(world: Any, run: PaperRun, tour_length_m: float) -> dict[str, float]:
+def _mark_targets(world: World, run: PaperRun, tour_length_m: float) -> dict[str, float]:
     """True distance along the tour at which each mark is taken."""
     targets: dict[str, float] = {}
-    along = {}
+    along: dict[str, list[float]] = {}
     if run.route is not None:
         from worldgen.routes import waypoint_arclength_m
 
@@ -138,26 +161,21 @@ def _mark_targets(world: Any, run: PaperRun, tour_length_m: float) -> dict[str, 
 
 
 def _snapshot(
-    mappers: Mapping[str, Any], true_pose: np.ndarray, travelled: float, frame_index: int
-) -> dict[str, Any]:
+    mappers: Mapping[str, Mapper], true_pose: FloatArray, travelled: float, frame_index: int
+) -> Snapshot:
     maps = {}
     for name, m in mappers.items():
         snap = m.global_map()
         counts = m.counts()
-        maps[name] = {
-            "segments": np.asarray(snap.segments, float).copy(),
-            "map_ids": np.asarray(snap.map_ids).copy(),
-            "pose": m.pose().as_array(),
-            "views": counts.views,
-            "local_maps": counts.local_maps,
-            "path_integrations": counts.path_integrations,
-        }
-    return {
-        "true_pose": true_pose,
-        "true_travelled_m": travelled,
-        "frame": frame_index,
-        "maps": maps,
-    }
+        maps[name] = MapAt(
+            segments=np.asarray(snap.segments, float).copy(),
+            map_ids=np.asarray(snap.map_ids).copy(),
+            pose=m.pose().as_array(),
+            views=counts.views,
+            local_maps=counts.local_maps,
+            path_integrations=counts.path_integrations,
+        )
+    return Snapshot(true_pose, travelled, frame_index, maps)
 
 
 #: named readings of the paper → the Albot₁ mapper spec each one runs (any other
@@ -198,13 +216,33 @@ def run_mappers(
 
 def run_job(
     run_name: str, seed: int, *, quick: bool, albot_x: bool, keep_figures: bool
-) -> dict[str, Any]:
+) -> JobSummary:
     """Run ``RUNS[run_name]`` on ``seed`` with the default Albot₁; the summary the
     experiments read (``run_job_readings`` for several readings in one run)."""
     return run_job_readings(
         run_name, seed, quick=quick, albot_x=albot_x, keep_figures=keep_figures,
         readings=("default",),
     )["default"]  # fmt: skip
+
+
+class _RunState:
+    """What a job keeps while its run goes: the mappers, the snapshots taken so far, the
+    marks' target distances, the true distance travelled, the views (figure runs)."""
+
+    def __init__(self, albot1_specs: Sequence[str]) -> None:
+        self.mappers: Mapping[str, Mapper] = {}
+        self.snaps: dict[str, Snapshot] = {}
+        self.targets: dict[str, float] = {}
+        self.travelled = 0.0
+        self.last: FloatArray | None = None
+        self.views: dict[str, list[ViewAt]] = {name: [] for name in albot1_specs}
+
+    def albot1(self, name: str) -> Albot1:
+        from albot2d.mapping.albot1.mapper import Albot1
+
+        mapper = self.mappers[name]
+        assert isinstance(mapper, Albot1)  # a reading's mapper is an Albot1 spec
+        return mapper
 
 
 def run_job_readings(
@@ -215,7 +253,7 @@ def run_job_readings(
     albot_x: bool,
     keep_figures: bool,
     readings: tuple[str, ...] = ("default",),
-) -> dict[str, dict[str, Any]]:
+) -> dict[str, JobSummary]:
     """Run ``RUNS[run_name]`` on ``seed`` with one Albot₁ per reading beside the run's
     other mappers, all on the same frames; per reading, the summary the experiments read,
     in which that reading's Albot₁ is ``"albot1"``.
@@ -239,35 +277,27 @@ def run_job_readings(
         max_frames=QUICK_MAX_FRAMES if quick and run.quick_cut else None,
     )  # fmt: skip
     params = EvaluationParams(homing=HomingParams(stop_every_m=run.stop_every_m))
-    state: dict[str, Any] = {
-        "mappers": {},
-        "snaps": {},
-        "targets": {},
-        "travelled": 0.0,
-        "last": None,
-        "views": {name: [] for name in albot1_specs},
-    }
+    state = _RunState(albot1_specs)
     keep_views = keep_figures and run.views
 
-    def on_start(world: Any, tour: Any) -> None:
-        state["targets"] = _mark_targets(world, run, tour.length_m)
+    def on_start(world: World, tour: Tour) -> None:
+        state.targets = _mark_targets(world, run, tour.length_m)
 
-    def on_mappers(made: Mapping[str, Any]) -> None:
-        state["mappers"] = made
+    def on_mappers(made: Mapping[str, Mapper]) -> None:
+        state.mappers = made
 
-    def on_frame(frame: Any, _travelled: float) -> None:
+    def on_frame(frame: Frame, _travelled: float) -> None:
+        assert frame.true_pose is not None  # the paper's runs are all simulated
         pose = frame.true_pose.as_array()
-        if state["last"] is not None:
-            state["travelled"] += math.hypot(*(pose[:2] - state["last"][:2]))
-        state["last"] = pose
+        if state.last is not None:
+            state.travelled += math.hypot(*(pose[:2] - state.last[:2]))
+        state.last = pose
         if keep_views:
             for name in albot1_specs:
-                state["views"][name].append(_view_record(state["mappers"][name], frame))
-        for mark, target in state["targets"].items():
-            if mark not in state["snaps"] and state["travelled"] >= target - 0.05:
-                state["snaps"][mark] = _snapshot(
-                    state["mappers"], pose, state["travelled"], frame.index
-                )
+                state.views[name].append(_view_record(state.albot1(name), frame))
+        for mark, target in state.targets.items():
+            if mark not in state.snaps and state.travelled >= target - 0.05:
+                state.snaps[mark] = _snapshot(state.mappers, pose, state.travelled, frame.index)
 
     result = run_experiment(
         spec, params, on_start=on_start, on_frame=on_frame, on_mappers=on_mappers, score=False
@@ -275,79 +305,71 @@ def run_job_readings(
     trace = result.trace
     truth, world = trace.true_poses, result.world
     assert truth is not None and world is not None  # the paper's runs are all simulated
-    end = _snapshot(state["mappers"], truth[-1], state["travelled"], int(trace.frame_indices[-1]))
+    end = _snapshot(state.mappers, truth[-1], state.travelled, int(trace.frame_indices[-1]))
     last_waypoint = _last_waypoint(world, run)
     cut = spec.max_frames is not None and trace.n_frames >= spec.max_frames
     for mark in run.marks:
         # The end; a --quick run cut short: the marks it never reached are taken at its
         # end (marked not reached, so figures say where it stopped); a route ending at
         # the mark's waypoint may stop a few cm short of it.
-        if mark not in state["snaps"] and (
+        if mark not in state.snaps and (
             mark == "end" or (quick and spec.max_frames) or mark == last_waypoint
         ):
             reached = not cut and (mark == "end" or mark == last_waypoint)
-            state["snaps"][mark] = end | {"reached": reached}
+            state.snaps[mark] = Snapshot(
+                end.true_pose, end.true_travelled_m, end.frame, end.maps, reached
+            )
     others = tuple(m for m in mappers if m not in albot1_specs)
-    shared = _mapper_results(trace, state["mappers"], others)
+    shared = _mapper_results(trace, state.mappers, others)
     x = ALBOT_X if albot_x else "naive"
     shared_quality = _quality_at_marks(
-        state["snaps"],
+        state.snaps,
         {mark: tuple(x if m == "x" else m for m in names if m != "albot1")
          for mark, names in run.quality.items()},
         world, truth[0],
     )  # fmt: skip
-    out: dict[str, dict[str, Any]] = {}
-    for reading, name in specs.items():
-        out[reading] = _reading_summary(
+    return {
+        reading: _reading_summary(
             run, seed, spec, result, state, name, others, shared, shared_quality,
-            albot_x=albot_x,
-            quick=quick, keep_figures=keep_figures, keep_views=keep_views,
-        )  # fmt: skip
-        out[reading]["reading"] = reading
-        out[reading]["reading_mapper"] = name
-    return out
+            albot_x=albot_x, quick=quick, keep_figures=keep_figures, keep_views=keep_views,
+            reading=reading,
+        )
+        for reading, name in specs.items()
+    }  # fmt: skip
 
 
 def _mapper_results(
-    trace: Any, made: Mapping[str, Any], names: tuple[str, ...]
-) -> dict[str, dict[str, Any]]:
+    trace: Trace, made: Mapping[str, Mapper], names: tuple[str, ...]
+) -> dict[str, MapperResult]:
     """Counts and end-pose error of each mapper in ``names``."""
     from albot2d.evaluation.run.scoring import counts_section, end_pose_error, trajectory_of
 
-    results: dict[str, dict[str, Any]] = {}
+    results: dict[str, MapperResult] = {}
     for name in names:
         poses = trajectory_of(name, made[name], trace.n_frames)
-        end_error = end_pose_error(trace, poses)
-        results[name] = {
-            "counts": counts_section(trace, made[name]).to_dict(),
-            "end_pose_error": None if end_error is None else end_error.to_dict(),
-        }
+        results[name] = MapperResult(
+            counts_section(trace, made[name]), end_pose_error(trace, poses)
+        )
     return results
-
-
-def _as_albot1(snap: dict[str, Any], name: str, others: tuple[str, ...]) -> dict[str, Any]:
-    """A snapshot in which the reading's mapper ``name`` is ``"albot1"`` (other readings
-    left out)."""
-    maps = {"albot1": snap["maps"][name]} | {o: snap["maps"][o] for o in others}
-    return snap | {"maps": maps}
 
 
 def _reading_summary(
     run: PaperRun,
     seed: int,
-    spec: Any,
-    result: Any,
-    state: dict[str, Any],
+    spec: RunSpec,
+    result: ExperimentResult,
+    state: _RunState,
     name: str,
     others: tuple[str, ...],
-    shared: dict[str, dict[str, Any]],
-    shared_quality: dict[str, dict[str, Any]],
+    shared: Mapping[str, MapperResult],
+    shared_quality: Mapping[str, Mapping[str, MapQualityAt]],
     *,
     albot_x: bool,
     quick: bool,
     keep_figures: bool,
     keep_views: bool,
-) -> dict[str, Any]:
+    reading: str,
+) -> JobSummary:
     """The job summary with the Albot₁ mapper ``name`` as ``"albot1"``."""
     from albot2d.evaluation.run.scoring import (
         REVISIT_GAP_MAPS,
@@ -359,102 +381,106 @@ def _reading_summary(
 
     trace = result.trace
     truth, world = trace.true_poses, result.world
-    snaps = {mark: _as_albot1(s, name, others) for mark, s in state["snaps"].items()}
+    assert truth is not None and world is not None  # the paper's runs are all simulated
+    snaps = {mark: s.as_albot1(name, others) for mark, s in state.snaps.items()}
     report = result.report
-    albot1 = state["mappers"][name]
-    results = {"albot1": _mapper_results(trace, state["mappers"], (name,))[name]} | shared
+    albot1 = state.albot1(name)
+    mine = _mapper_results(trace, state.mappers, (name,))[name]
     homing = homing_section(trace, name)
-    revisits = revisits_section(albot1, REVISIT_GAP_MAPS)
-    results["albot1"] |= {
-        "homing": [stop.to_dict() for stop in homing],
-        "homing_summary": homing_summary(homing).to_dict(),
-        "revisits": None if revisits is None else revisits.to_dict(),
-    }
+    ego = None
     if run.egocentric_end:
         ego = egocentric_at(trace, trace.final, name, world.obstacle_segments)
-        results["albot1"]["map"] = {"egocentric": None if ego is None else ego.to_dict()}
-    mappers = ("albot1", *others)
-    summary: dict[str, Any] = {
-        "run": run.name, "seed": seed, "quick": quick, "mappers": list(mappers),
-        "frames": report["run"]["frames"], "travelled_m": report["run"]["travelled_m"],
-        "true_travelled_m": report["run"]["true_travelled_m"],
-        "tour_length_m": result.tour.length_m if result.tour is not None else None,
-        "world_sha256": report["world"]["sha256"],
-        "mapper_results": results,
-        "marks": {mark: {"true_travelled_m": s["true_travelled_m"], "frame": s["frame"],
-                         "true_path_sha256": _path_digest(trace, s["frame"]),
-                         "counts": {n: {k: m[k] for k in ("views", "local_maps",
-                                                          "path_integrations")}
-                                    for n, m in s["maps"].items()}}
-                  for mark, s in snaps.items()},
+    albot1_result = Albot1Result(
+        mine.counts, mine.end_pose_error, homing=homing, homing_summary=homing_summary(homing),
+        revisits=revisits_section(albot1, REVISIT_GAP_MAPS), egocentric=ego,
+    )  # fmt: skip
+    marks = {
+        mark: MarkSummary(
+            s.true_travelled_m, s.frame, _path_digest(trace, s.frame),
+            {n: m.counts() for n, m in s.maps.items()},
+        )
+        for mark, s in snaps.items()
     }  # fmt: skip
+    updates = None
     if run.steps:
         from albot2d.evaluation.metrics.updates import albot1_update_flags, region_labels
 
-        flags = albot1_update_flags(albot1.steps, trace.frame_indices)
-        regions = region_labels(world, truth[:, :2])
-        summary["updates"] = {
-            "flags": flags.tolist(),
-            "regions": regions.tolist(),
-            "methods": _methods_per_row(albot1.steps, trace.frame_indices),
-            "tracked": _tracked_per_row(albot1.steps, trace.frame_indices),
-            "true_xy": truth[:, :2].tolist(),
-        }
+        along = None
         if run.route is not None:
             from worldgen.routes import waypoint_arclength_m
 
-            summary["updates"]["waypoint_along_m"] = waypoint_arclength_m(world, run.route)
-    summary["path_integration_causes"] = path_integration_causes(albot1, trace, world)
+            along = {k: tuple(v) for k, v in waypoint_arclength_m(world, run.route).items()}
+        updates = Updates(
+            flags=tuple(albot1_update_flags(albot1.steps, trace.frame_indices).tolist()),
+            regions=tuple(region_labels(world, truth[:, :2]).tolist()),
+            methods=tuple(_methods_per_row(albot1.steps, trace.frame_indices)),
+            tracked=tuple(_tracked_per_row(albot1.steps, trace.frame_indices)),
+            true_xy=tuple((x, y) for x, y in truth[:, :2].tolist()),
+            waypoint_along_m=along,
+        )
+    deleted = None
     if "E1#2" in snaps and "E7" in snaps:
         from albot2d.evaluation.paper.figdata import deleted_surfaces
 
-        summary["fig10_deleted"] = len(deleted_surfaces(snaps["E1#2"], snaps["E7"]))
+        deleted = len(deleted_surfaces(snaps["E1#2"], snaps["E7"]))
     x = ALBOT_X if albot_x else "naive"
     wanted = {mark: tuple(x if m == "x" else m for m in names)
               for mark, names in run.quality.items()}  # fmt: skip
-    mine = _quality_at_marks(
+    own = _quality_at_marks(
         snaps, {mark: ("albot1",) for mark, names in wanted.items() if "albot1" in names},
         world, truth[0],
     )  # fmt: skip
-    quality = {}
+    quality: dict[str, dict[str, MapQualityAt]] = {}
     for mark, names in wanted.items():
         if mark in snaps:
-            both = mine.get(mark, {}) | shared_quality.get(mark, {})
+            both = {**own.get(mark, {}), **shared_quality.get(mark, {})}
             quality[mark] = {n: both[n] for n in names if n in both}
-    summary["map_quality_at_marks"] = quality
+    figures = None
     if keep_figures:
-        summary["figures"] = {
-            "world_walls": np.asarray(world.walls),
-            "true_poses": truth,
-            "odom_poses": trace.odom_poses,
-            "snaps": snaps,
-            "waypoints": dict(world.features.get("waypoints", {})),
-            "updates": summary.get("updates"),
-            "views": state["views"][name] if keep_views else None,
-        }
-    return summary
+        figures = FigureRun(
+            world_walls=np.asarray(world.walls),
+            true_poses=truth,
+            odom_poses=trace.odom_poses,
+            snaps=snaps,
+            waypoints=dict(world.features.get("waypoints", {})),
+            updates=updates,
+            views=tuple(state.views[name]) if keep_views else None,
+        )
+    mappers = ("albot1", *others)
+    return JobSummary(
+        run=run.name, seed=seed, quick=quick, mappers=mappers,
+        frames=report["run"]["frames"], travelled_m=report["run"]["travelled_m"],
+        true_travelled_m=report["run"]["true_travelled_m"],
+        tour_length_m=result.tour.length_m if result.tour is not None else None,
+        world_sha256=report["world"]["sha256"],
+        albot1=albot1_result, others=dict(shared), marks=marks,
+        path_integration_causes=path_integration_causes(albot1, trace, world),
+        map_quality_at_marks=quality, reading=reading, reading_mapper=name,
+        updates=updates, fig10_deleted=deleted, figures=figures,
+    )  # fmt: skip
 
 
-def _view_record(albot1: Any, frame: Any) -> dict[str, Any]:
+def _view_record(albot1: Albot1, frame: Frame) -> ViewAt:
     """The view Albot₁ saw at ``frame`` (surfaces, robot frame) and its global map just
     after it (map frame), for the Fig. 15 panels."""
     from albot2d.perception.extraction import extract_surfaces
 
     view = extract_surfaces(frame.scan, albot1.perception())
-    return {
-        "surfaces": np.asarray(view.segments, float).copy(),
-        "global_map": np.asarray(albot1.global_map().segments, float).copy(),
-        "pose_in_map": albot1.pose().as_array(),
-    }
+    return ViewAt(
+        surfaces=np.asarray(view.segments, float).copy(),
+        global_map=np.asarray(albot1.global_map().segments, float).copy(),
+        pose_in_map=albot1.pose().as_array(),
+    )
 
 
-def path_integration_causes(albot1: Any, trace: Any, world: Any) -> dict[str, Any]:
+def path_integration_causes(albot1: Albot1, trace: Trace, world: World) -> PathIntegrationCauses:
     """Every local map Albot₁ placed by path integration: its frame, how many tracked
     surfaces were left (0: none to triangulate from; > 0: the triangulation afforded no
     pose within the gates), whether that view ended a turn, and the region kind there."""
     from albot2d.evaluation.metrics.updates import region_labels
     from albot2d.geometry import wrap_angle
 
+    assert trace.true_poses is not None  # a simulated run
     rows = {int(f): k for k, f in enumerate(np.asarray(trace.frame_indices).tolist())}
     pis = [m for m in albot1.route if m.method == "path_integration" and m.frame_index in rows]
     k = np.array([rows[m.frame_index] for m in pis], dtype=np.int64)
@@ -464,31 +490,32 @@ def path_integration_causes(albot1: Any, trace: Any, world: Any) -> dict[str, An
     dmove = np.hypot(*(odom[k, :2] - odom[prev, :2]).T)
     regions = region_labels(world, trace.true_poses[k, :2]) if len(k) else np.array([])
     updates = [m for m in albot1.route if m.frame_index in rows]
-    return {
-        "frames": [int(m.frame_index) for m in pis],
-        "tracked": [int(m.tracked) for m in pis],
-        "turning": [bool(t > 0.5 and d < 0.02) for t, d in zip(dturn, dmove, strict=True)],
-        "regions": [str(r) for r in regions],
-        "update_frames": [int(m.frame_index) for m in updates],
-        "update_methods": [str(m.method) for m in updates],
-    }
+    return PathIntegrationCauses(
+        frames=tuple(int(m.frame_index) for m in pis),
+        tracked=tuple(int(m.tracked) for m in pis),
+        turning=tuple(bool(t > 0.5 and d < 0.02) for t, d in zip(dturn, dmove, strict=True)),
+        regions=tuple(str(r) for r in regions),
+        update_frames=tuple(int(m.frame_index) for m in updates),
+        update_methods=tuple(str(m.method) for m in updates),
+    )
 
 
-def _path_digest(trace: Any, frame: int) -> str:
+def _path_digest(trace: Trace, frame: int) -> str:
     """SHA-256 of the true poses up to ``frame``: whether two runs drove the same path."""
     import hashlib
 
+    assert trace.true_poses is not None  # a simulated run
     rows = np.flatnonzero(np.asarray(trace.frame_indices) <= frame)
     return hashlib.sha256(np.ascontiguousarray(trace.true_poses[rows]).tobytes()).hexdigest()
 
 
-def _last_waypoint(world: Any, run: PaperRun) -> str | None:
+def _last_waypoint(world: World, run: PaperRun) -> str | None:
     if run.route is None:
         return None
     return str(world.features.get("routes", {}).get(run.route, [None])[-1])
 
 
-def _methods_per_row(steps: Any, frame_indices: np.ndarray) -> list[str]:
+def _methods_per_row(steps: Sequence[StepRecord], frame_indices: np.ndarray) -> list[str]:
     """Per trace row: how the view(s) remembered there were localised ('' if none)."""
     rows = {int(f): k for k, f in enumerate(np.asarray(frame_indices).tolist())}
     out = [""] * len(rows)
@@ -499,7 +526,7 @@ def _methods_per_row(steps: Any, frame_indices: np.ndarray) -> list[str]:
     return out
 
 
-def _tracked_per_row(steps: Any, frame_indices: np.ndarray) -> list[int]:
+def _tracked_per_row(steps: Sequence[StepRecord], frame_indices: np.ndarray) -> list[int]:
     rows = {int(f): k for k, f in enumerate(np.asarray(frame_indices).tolist())}
     out = [-1] * len(rows)
     for step in steps:
@@ -510,28 +537,28 @@ def _tracked_per_row(steps: Any, frame_indices: np.ndarray) -> list[int]:
 
 
 def _quality_at_marks(
-    snaps: Mapping[str, Any],
+    snaps: Mapping[str, Snapshot],
     wanted: Mapping[str, tuple[str, ...]],
-    world: Any,
-    true_start: np.ndarray,
-) -> dict[str, dict[str, Any]]:
+    world: World,
+    true_start: FloatArray,
+) -> dict[str, dict[str, MapQualityAt]]:
     """Anchored map accuracy (p95, m) and surface count of the ``wanted`` mappers at each
     mark (mark → mapper names)."""
     from albot2d.evaluation.metrics.map_quality import map_quality
     from albot2d.geometry import Pose
 
-    out: dict[str, dict[str, Any]] = {}
+    out: dict[str, dict[str, MapQualityAt]] = {}
     for mark, names in wanted.items():
         snap = snaps.get(mark)
         if snap is None:
             continue
         out[mark] = {}
         for name in names:
-            m = snap["maps"].get(name)
+            m = snap.maps.get(name)
             if m is None:
                 continue
             q = map_quality(
-                m["segments"], world.obstacle_segments, start_pose=Pose.from_array(true_start)
+                m.segments, world.obstacle_segments, start_pose=Pose.from_array(true_start)
             )
-            out[mark][name] = {"accuracy_m_p95": q.accuracy_m_p95, "surfaces": q.surfaces}
+            out[mark][name] = MapQualityAt(q.accuracy_m_p95, q.surfaces)
     return out

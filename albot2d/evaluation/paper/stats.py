@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
+
+from albot2d.evaluation.paper.outputs import OverSeeds
 
 __all__ = ["VERDICTS", "over_seeds", "verdict_of"]
 
 VERDICTS = ("reproduced", "partly", "not reproduced", "not run")
 
 
-def over_seeds(values: Sequence[float | None], seeds: Sequence[int]) -> dict[str, Any]:
+def over_seeds(values: Sequence[float | None], seeds: Sequence[int]) -> OverSeeds:
     """``{"mean", "sd", "n", "per_seed": {seed: value}}``; None values are left out of the
     mean (sd is the sample standard deviation, 0 for one value)."""
     clean = [float(v) for v in values if v is not None and math.isfinite(float(v))]

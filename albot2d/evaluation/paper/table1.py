@@ -9,8 +9,11 @@ stop whose true distance to S is within 17–35 m is a Table 1 stop.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import TypedDict, cast
 
+from albot2d.evaluation.paper.jobs import FigureRun, JobSummary
+from albot2d.evaluation.paper.outputs import ExperimentOutput, FigureSpec
 from albot2d.evaluation.paper.stats import over_seeds, verdict_of
 
 __all__ = ["BEARING_BOUND_DEG", "CLAIM", "DISTANCE_BAND_M", "NAME", "RUNS", "compute", "figures"]
@@ -33,29 +36,47 @@ PAPER_ROWS = [  # Table 1: Albot1's map vs the physical map (bearing deg, distan
 ]
 
 
-def _stops(job: dict[str, Any], direction: str) -> list[dict[str, Any]]:
+class Stop(TypedDict):
+    """A Table 1 stop (experiments.json's ``ours.stops``)."""
+
+    seed: int
+    direction: str
+    view: int
+    travelled_m: float
+    bearing_est_deg: float
+    bearing_true_deg: float
+    distance_est_m: float
+    distance_true_m: float
+    bearing_error_deg: float
+    distance_error_m: float
+    within_bound: bool
+
+
+def _stops(job: JobSummary, direction: str) -> list[Stop]:
     lo, hi = DISTANCE_BAND_M
-    out = []
-    for h in job["mapper_results"]["albot1"]["homing"]:
-        if h["distance_true_m"] is None or not lo <= h["distance_true_m"] <= hi:
+    out: list[Stop] = []
+    for stop in job.albot1.homing:
+        h = stop.homing
+        true_b, true_d = h.bearing_true_deg, h.distance_true_m
+        err_b, err_d = h.bearing_error_deg, h.distance_error_m
+        if true_d is None or not lo <= true_d <= hi:
             continue
-        within = (
-            abs(h["bearing_error_deg"]) <= BEARING_BOUND_DEG
-            and abs(h["distance_error_m"]) <= DISTANCE_BOUND_M
-        )
+        # with the truth known (true_d), every true value and error is known
+        assert true_b is not None and err_b is not None and err_d is not None
+        within = abs(err_b) <= BEARING_BOUND_DEG and abs(err_d) <= DISTANCE_BOUND_M
         out.append({
-            "seed": job["seed"], "direction": direction, "view": h["view"],
-            "travelled_m": h["travelled_m"],
-            "bearing_est_deg": h["bearing_est_deg"], "bearing_true_deg": h["bearing_true_deg"],
-            "distance_est_m": h["distance_est_m"], "distance_true_m": h["distance_true_m"],
-            "bearing_error_deg": h["bearing_error_deg"], "distance_error_m": h["distance_error_m"],
+            "seed": job.seed, "direction": direction, "view": h.view,
+            "travelled_m": stop.travelled_m,
+            "bearing_est_deg": h.bearing_est_deg, "bearing_true_deg": true_b,
+            "distance_est_m": h.distance_est_m, "distance_true_m": true_d,
+            "bearing_error_deg": err_b, "distance_error_m": err_d,
             "within_bound": within,
         })  # fmt: skip
     return out
 
 
-def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str, Any]:
-    stops: list[dict[str, Any]] = []
+def compute(jobs: Mapping[str, Sequence[JobSummary]], seeds: Sequence[int]) -> ExperimentOutput:
+    stops: list[Stop] = []
     per_seed_fraction = []
     for k, _seed in enumerate(seeds):
         mine = _stops(jobs["fig8_anticlockwise"][k], "anticlockwise")
@@ -93,9 +114,9 @@ def compute(jobs: dict[str, list[dict[str, Any]]], seeds: list[int]) -> dict[str
     }  # fmt: skip
 
 
-def figures(fig: dict[str, Any], result: dict[str, Any]) -> list[dict[str, Any]]:
+def figures(fig: Mapping[str, FigureRun], result: ExperimentOutput) -> list[FigureSpec]:
     """Every Table 1 stop's bearing and distance error, with the paper's bound."""
-    stops = result["ours"]["stops"]
+    stops = cast("list[Stop]", result["ours"]["stops"])  # as ``compute`` wrote them
     return [
         {
             "file": "table1.png",

@@ -169,13 +169,7 @@ def run_experiment(
         profile=profile.name,
         params={
             "spec": spec.to_dict(),
-            "tour": {
-                "kind": tour.kind,
-                "requested_length_m": spec.tour_length_m,
-                "requested_as": "minimum" if spec.tour_length_is_minimum else "length",
-                "length_m": tour.length_m,
-                "waypoints": len(tour.waypoints),
-            },
+            "tour": spec.tour_record(tour),
             **evaluation_params_dict(params),
             "simulator": sim.params(),
         },

@@ -109,6 +109,17 @@ class RunSpec:
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
+    def tour_record(self, tour: Tour) -> dict[str, Any]:
+        """The tour as a report records it: its kind, the length asked for (and whether as
+        a minimum or a length), the length planned and its number of waypoints."""
+        return {
+            "kind": tour.kind,
+            "requested_length_m": self.tour_length_m,
+            "requested_as": "minimum" if self.tour_length_is_minimum else "length",
+            "length_m": tour.length_m,
+            "waypoints": len(tour.waypoints),
+        }
+
     @classmethod
     def from_report(cls, report: Mapping[str, Any], where: str = "report") -> RunSpec:
         """The spec recorded in a report written by ``albot2d run``."""

@@ -308,11 +308,14 @@ def touching_mask(
 ) -> BoolArray:
     """``(N,)``: the surface is inside or crosses P (or the forward ray, when > 0)."""
     segs = as_segments(segments)
-    if len(segs) == 0 or polygon.is_empty:
+    if len(segs) == 0 or (polygon.is_empty and forward_ray_m <= 0):
         return np.zeros(len(segs), bool)
     lines = shapely.linestrings(segs.reshape(-1, 2, 2))
-    shapely.prepare(polygon)
-    hit = shapely.intersects(polygon, lines)
+    if polygon.is_empty:  # nothing inside an empty P; the forward ray still counts
+        hit = np.zeros(len(segs), bool)
+    else:
+        shapely.prepare(polygon)
+        hit = shapely.intersects(polygon, lines)
     if forward_ray_m > 0:
         tip = (
             robot.x + forward_ray_m * math.cos(robot.theta),

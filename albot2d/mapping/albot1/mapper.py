@@ -338,6 +338,12 @@ class Albot1:
     def timings_ms(self) -> dict[str, float]:
         return self.timer.mean_ms_per(self._views)
 
+    @property
+    def tracked(self) -> TrackedSurfaces | None:
+        """The surfaces still tracked after the latest view (their ids, their geometry in
+        the current local map's frame and in that view's); ``None`` before the first view."""
+        return self._tracked
+
     # -- algorithm #2 (main loop), #3 (update-maps), #4 (move-using-PI) --------------
     def observe_view(
         self, frame_index: int, timestamp: float, view: Surfaces, increment: Pose

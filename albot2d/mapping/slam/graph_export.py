@@ -48,10 +48,8 @@ def pose_graph_edges(graph: PoseGraph) -> PoseGraphEdges:
     module docstring)."""
     import gtsam
 
-    # PoseGraph keeps its GTSAM graph and each closure's factor index to itself; this
-    # module is its one reader outside the class.
-    factors: Any = graph._graph
-    loop_index = {f: k for k, f in enumerate(graph._loop_factors)}
+    factors = graph.factor_graph
+    loop_index = {f: k for k, f in enumerate(graph.loop_factor_indices)}
     weights = graph.loop_weights
     gnc = graph.params.optimizer == "gnc" and bool(loop_index)
     values = gtsam.Values()

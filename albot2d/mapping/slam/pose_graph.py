@@ -27,13 +27,16 @@ own (GTSAM drops a factor's ``Robust`` wrapper, so the chain is Gaussian too);
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from albot2d.errors import InputError
 from albot2d.validation import check_non_negative, check_positive, check_positive_int
+
+if TYPE_CHECKING:  # gtsam is an optional extra, imported when a PoseGraph is made
+    import gtsam
 
 __all__ = ["MISSING_GTSAM", "PoseGraph", "PoseGraphParams", "shaped_information"]
 
@@ -270,6 +273,18 @@ class PoseGraph:
         self.loops.append((i, j))
         self._loop_weights = np.append(self._loop_weights, 1.0)
         self._pending = True
+
+    @property
+    def factor_graph(self) -> gtsam.NonlinearFactorGraph:
+        """The GTSAM factor graph itself (the first keyframe's prior, then each keyframe's
+        scan-matching and wheel factors and the closures, in the order they were added), for
+        readers such as the g2o export; change it only through this class."""
+        return self._graph
+
+    @property
+    def loop_factor_indices(self) -> tuple[int, ...]:
+        """Each closure's factor index in ``factor_graph`` (order of ``loops``)."""
+        return tuple(self._loop_factors)
 
     @property
     def loop_weights(self) -> NDArray[np.float64]:
