@@ -5,6 +5,8 @@ albot2d.studies.NAME``), kept out of the library's core.
   heading errors on fuzzing episodes;
 - ``link_errors``: Albot₁'s error budget, each route-map link's error by how it was made;
 - ``sensitivity``: start–stop homing against odometry noise, moves per update by region.
+- ``path_integrations``: why Albot₁ integrates paths where it does on Fig. 16's route, each
+  path integration with its cause and each lost tracked surface with its reason.
 
 They use the library only through its public API and the mapper's public hooks.
 May import: everything but the interfaces (CLI, viz).
