@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from albot2d.errors import InputError
-from albot2d.limits import COORDINATE_LIMIT_M, MAX_JSON_DEPTH
+from albot2d.limits import COORDINATE_LIMIT_M, MAX_JSON_DEPTH, MAX_SEEDS
 
 __all__ = [
     "COORDINATE_LIMIT_M",
@@ -31,6 +31,7 @@ __all__ = [
     "check_positive_int",
     "params_from_mapping",
     "parse_json",
+    "parse_seed_list",
 ]
 
 
@@ -152,3 +153,22 @@ def params_from_mapping(cls: type, values: dict[str, Any], *, where: str = "") -
             f"valid: {', '.join(sorted(fields))}"
         )
     return cls(**values)
+
+
+def parse_seed_list(text: str, option: str = "--seeds") -> list[int]:
+    """``A-B`` (inclusive), ``A,B,C``, ``N`` or a mix (``0-4,9``) → sorted distinct seeds
+    >= 0, at most ``MAX_SEEDS``; anything else is an ``InputError`` naming ``option``."""
+    seeds: set[int] = set()
+    for part in text.split(","):
+        lo, dash, hi = part.strip().partition("-")
+        try:
+            a = int(lo)
+            b = int(hi) if dash else a
+        except ValueError:
+            raise InputError(f"{option}: expected A-B, A,B,C or N, got {text!r}") from None
+        if a < 0 or b < a:
+            raise InputError(f"{option}: {part.strip()!r} is not a range of seeds >= 0")
+        if b - a >= MAX_SEEDS or len(seeds) + b - a >= MAX_SEEDS:
+            raise InputError(f"{option}: at most {MAX_SEEDS} seeds, got {part.strip()!r}")
+        seeds.update(range(a, b + 1))
+    return sorted(seeds)

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import pytest
 
-from albot2d.cli.experiments_cmd import parse_seeds
 from albot2d.errors import InputError
 from albot2d.evaluation.paper import counts, plan_jobs, table1
 from albot2d.evaluation.paper.jobs import JobSummary, MarkCounts, PathIntegrationCauses
 from albot2d.evaluation.paper.process_exp import FIG15, FIG16, method_sequences, room_exit_rows
 from albot2d.evaluation.paper.stats import over_seeds, verdict_of
+from albot2d.validation import parse_seed_list as parse_seeds
 from tests import paper_jobs as pj
 
 

@@ -29,14 +29,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
 from albot2d.errors import InputError
-from albot2d.limits import MAX_SEEDS as _MAX_SEEDS
+from albot2d.validation import parse_seed_list
 
 if TYPE_CHECKING:
     from tqdm import tqdm
 
     from albot2d.evaluation.paper.campaign import ExperimentsData, ExperimentsOutcome
 
-__all__ = ["parse_seeds", "register", "run"]
+__all__ = ["register", "run"]
 
 SMOKE_RUN = "smoke run"  # the words --quick output is marked with, everywhere it shows
 FULL_SEEDS = "0-19"
@@ -78,24 +78,6 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     p.set_defaults(handler=run)
 
 
-def parse_seeds(text: str) -> list[int]:
-    """``A-B`` (inclusive), ``A,B,C`` or ``N`` → sorted distinct seeds."""
-    seeds: set[int] = set()
-    for part in text.split(","):
-        lo, dash, hi = part.strip().partition("-")
-        try:
-            a = int(lo)
-            b = int(hi) if dash else a
-        except ValueError:
-            raise InputError(f"--seeds: expected A-B, A,B,C or N, got {text!r}") from None
-        if a < 0 or b < a:
-            raise InputError(f"--seeds: {part.strip()!r} is not a range of seeds >= 0")
-        if b - a >= _MAX_SEEDS:
-            raise InputError(f"--seeds: at most {_MAX_SEEDS} seeds, got {part.strip()!r}")
-        seeds.update(range(a, b + 1))
-    return sorted(seeds)
-
-
 def _workers(text: str | None) -> int:
     from albot2d.cli.options import positive_int
 
@@ -120,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
 
     out = _check_out(args.out)
     names = list(dict.fromkeys(args.only or EXPERIMENTS))
-    seeds = parse_seeds(args.seeds or (QUICK_SEEDS if args.quick else FULL_SEEDS))
+    seeds = parse_seed_list(args.seeds or (QUICK_SEEDS if args.quick else FULL_SEEDS))
     jobs = plan_jobs(names, seeds)  # checks the names before anything runs
     readings = check_readings(args.readings or DEFAULT_READINGS)
     workers = min(_workers(args.workers), len(jobs))

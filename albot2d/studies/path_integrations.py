@@ -58,6 +58,7 @@ from albot2d.perception.tracking import (
     start_tracking,
     trackable_mask,
 )
+from albot2d.validation import parse_seed_list
 
 __all__ = [
     "CAUSES",
@@ -388,16 +389,6 @@ def route_breakdown(
                           counts.count(0), longest)  # fmt: skip
 
 
-def _seeds(text: str) -> list[int]:
-    seeds: set[int] = set()
-    for part in text.split(","):
-        lo, dash, hi = part.strip().partition("-")
-        if not lo.isdigit() or (dash and not hi.isdigit()):
-            raise InputError(f"--seeds: expected A-B or A,B,C, got {text!r}")
-        seeds.update(range(int(lo), int(hi if dash else lo) + 1))
-    return sorted(seeds)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m albot2d.studies.path_integrations",
                                  description=(__doc__ or "").split("\n\n")[0])  # fmt: skip
@@ -412,7 +403,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         for reading in args.readings:
             for dataset in args.datasets:
-                for seed in _seeds(args.seeds):
+                for seed in parse_seed_list(args.seeds):
                     rows.append(route_breakdown(seed, dataset, reading, args.laser_noise).to_dict())
                     if not args.json:
                         _print_row(rows[-1])

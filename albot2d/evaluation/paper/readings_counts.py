@@ -22,6 +22,8 @@ from typing import Literal, TypedDict
 
 import numpy as np
 
+from albot2d.validation import parse_seed_list
+
 __all__ = ["main", "path_integration_counts"]
 
 _RUNS = {"dataset1": "fig16_dataset1", "dataset2": "fig16_dataset2"}
@@ -106,18 +108,6 @@ def path_integration_counts(
     return out
 
 
-def _seeds(text: str) -> list[int]:
-    from albot2d.errors import InputError
-
-    seeds: set[int] = set()
-    for part in text.split(","):
-        lo, dash, hi = part.strip().partition("-")
-        if not lo.isdigit() or (dash and not hi.isdigit()):
-            raise InputError(f"--seeds: expected A-B or A,B,C, got {text!r}")
-        seeds.update(range(int(lo), int(hi if dash else lo) + 1))
-    return sorted(seeds)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     from albot2d.errors import InputError
     from albot2d.evaluation.paper.runs import DEFAULT_READINGS
@@ -130,7 +120,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true", help="print the numbers as JSON")
     args = ap.parse_args(argv)
     try:
-        counts = path_integration_counts(_seeds(args.seeds), args.readings, args.workers)
+        counts = path_integration_counts(parse_seed_list(args.seeds), args.readings, args.workers)
     except InputError as exc:
         print(f"readings_counts: {exc}")
         return 2
