@@ -22,6 +22,11 @@ def test_browser():
 
 def test_shared_data():
     pytest.skip("shared data not found at /nowhere (real-data tests need ../shared)")
+
+@pytest.mark.parametrize("backend", ["numba"])
+@pytest.mark.xfail(strict=True, reason="a known defect, pinned (on the numba backend)")
+def test_known_defect(backend):
+    assert False
 """
 
 
@@ -35,7 +40,8 @@ def test_strict_skips_fail_what_ci_must_test(
     pytester.makeini("[pytest]\n")
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-rs")
     if strict:
-        result.assert_outcomes(failed=2, skipped=1)
+        # An expected failure is reported as skipped; it stays expected, whatever its words.
+        result.assert_outcomes(failed=2, skipped=1, xfailed=1)
         result.stdout.fnmatch_lines(["*CI must test it*no_such_module_of_the_test_extra*"])
     else:
-        result.assert_outcomes(skipped=3)
+        result.assert_outcomes(skipped=3, xfailed=1)
