@@ -26,7 +26,6 @@ def test_docs_limits_md_is_generated_from_the_module() -> None:
 
 def test_every_limit_is_in_the_table_and_used_where_it_is_enforced() -> None:
     from albot2d import validation
-    from albot2d.cli import experiments_cmd
     from albot2d.evaluation.fuzz import backends, campaign
     from albot2d.logs import carmen
     from worldgen import io, params, world_checks
@@ -43,7 +42,7 @@ def test_every_limit_is_in_the_table_and_used_where_it_is_enforced() -> None:
     assert io.MAX_WORLD_FILE_BYTES is limits.MAX_WORLD_FILE_BYTES
     assert campaign.MAX_TOUR_LENGTH_M is limits.MAX_TOUR_LENGTH_M
     assert backends.MAX_LOCAL_WORKERS is limits.MAX_LOCAL_WORKERS
-    assert experiments_cmd._MAX_SEEDS is limits.MAX_SEEDS
+    assert validation.MAX_SEEDS is limits.MAX_SEEDS  # parse_seed_list, for every --seeds
 
 
 def test_bounded_reads(tmp_path: Path) -> None:
