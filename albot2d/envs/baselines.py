@@ -65,9 +65,12 @@ def evaluate(
         env = gymnasium.make(full_id, max_episode_steps=max_steps, **options)
         obs, info = env.reset(seed=s)
         inner = env.unwrapped
-        policy = (
-            goto_policy(inner) if isinstance(inner, GoToEnv) else explore_policy(inner)  # type: ignore[arg-type]
-        )
+        if isinstance(inner, GoToEnv):
+            policy = goto_policy(inner)
+        elif isinstance(inner, ExploreEnv):
+            policy = explore_policy(inner)
+        else:  # ENV_IDS names only these two
+            raise TypeError(f"{full_id} has no baseline policy")
         terminated = truncated = False
         steps = collisions = 0
         total = 0.0
