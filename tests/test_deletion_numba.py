@@ -50,7 +50,7 @@ def test_numba_share_equals_numpy_on_an_office_run() -> None:
     run = build_run(RunSpec(tour_length_m=25.0))
     m = Albot1()
     checked = 0
-    for frame in itertools.islice(run.simulator.drive(run.tour, run.profile), 600):
+    for frame in itertools.islice(run.simulator.drive(run.tour, run.profile), 1500):
         before = m.map.snapshot()
         n_maps = len(m.route)
         m.observe(frame)
@@ -146,7 +146,7 @@ def test_global_map_with_and_without_quick_touching_agree_on_an_office_run() -> 
     from albot2d.mapping import Albot1, Albot1Params, GlobalMapParams, UpdateReport
 
     run = build_run(RunSpec(tour_length_m=25.0))
-    frames = list(itertools.islice(run.simulator.drive(run.tour, run.profile), 700))
+    frames = list(itertools.islice(run.simulator.drive(run.tour, run.profile), 2000))
     for rule in ("visible", "paper"):
         outputs = []
         for quick in (True, False):

@@ -61,10 +61,10 @@ def test_window_budget_splits_a_known_chain_by_kind() -> None:
 
 def test_recording_changes_nothing_and_path_integration_is_exact_without_noise() -> None:
     spec = RunSpec(noise="none", mappers=("albot1",))
-    mapper, recorder, truth, travelled = record_run(spec, max_frames=250)
+    mapper, recorder, truth, travelled = record_run(spec, max_frames=500)
     setup = build_run(spec)
     plain = Albot1()
-    for frame in islice(setup.simulator.drive(setup.tour, setup.profile), 250):
+    for frame in islice(setup.simulator.drive(setup.tour, setup.profile), 500):
         plain.observe(frame)
     assert mapper.on_localise is recorder
     np.testing.assert_array_equal(mapper.route.relative_poses(), plain.route.relative_poses())

@@ -349,3 +349,61 @@ def test_bad_cast_arguments_name_the_input() -> None:
         caster.cast((0.5, 0.5), [], 5.0)
     with pytest.raises(InputError, match=r"extra_segments\[1\]"):
         caster.cast((0.5, 0.5), FAN, 5.0, extra_segments=[[0, 0, 1, 1], [0, np.inf, 1, 1]])
+
+
+def _same_surface_brute_force(segs: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Every point against every segment; corners by exact coordinates."""
+    through_p = point_segment_distance(p, segs) <= 1e-6
+    through_q = point_segment_distance(q, segs) <= 1e-6
+    ends = [segs[:, :2], segs[:, 2:]]
+    out = []
+    for k in range(len(p)):
+        a, b = np.flatnonzero(through_p[k]), np.flatnonzero(through_q[k])
+        corners_a = {tuple(e[i]) for e in ends for i in a}
+        corners_b = {tuple(e[i]) for e in ends for i in b}
+        out.append(bool(corners_a & corners_b))
+    return np.array(out, dtype=bool)
+
+
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    cell=st.one_of(st.none(), st.floats(0.3, 8.0)),
+    spread=st.floats(0.0, 0.6),
+)
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_same_surface_equals_brute_force_on_an_office(
+    backend: str, seed: int, cell: float | None, spread: float
+) -> None:
+    """Points on walls (often at corners, on wall pieces cut at grid lines, or off every
+    wall) are on one surface exactly when a segment through each shares a corner."""
+    segs = office_segments(4)
+    caster = make_caster(backend, segs, cell_size_m=cell)
+    rng = np.random.default_rng(seed)
+    n = 40
+    k = rng.integers(0, len(segs), n)
+    t = rng.choice([0.0, 1.0, 0.5, rng.random()], n)
+    p = segs[k, :2] + t[:, None] * (segs[k, 2:] - segs[k, :2])
+    # q: along the same wall, onto a neighbour through a corner, or anywhere on the walls.
+    k2 = np.where(rng.random(n) < 0.5, k, rng.integers(0, len(segs), n))
+    t2 = np.clip(t + rng.normal(0.0, spread, n), 0.0, 1.0)
+    q = segs[k2, :2] + t2[:, None] * (segs[k2, 2:] - segs[k2, :2])
+    q[::7] += 0.01  # off every wall
+    got = caster.same_surface(p, q)
+    np.testing.assert_array_equal(got, _same_surface_brute_force(segs, p, q))
+    np.testing.assert_array_equal(caster.same_surface(p, p), _same_surface_brute_force(segs, p, p))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_same_surface_with_extra_segments(backend: str) -> None:
+    room = box_segments(0.0, 0.0, 10.0, 8.0)
+    box = box_segments(4.0, 4.0, 5.0, 5.0)
+    caster = make_caster(backend, room)
+    p = np.array([[4.5, 4.0], [4.0, 4.5], [4.5, 4.0], [2.0, 0.0], [10.0, 3.0]])
+    q = np.array([[5.0, 4.5], [4.0, 4.9], [2.0, 0.0], [10.0, 1.0], [10.0, 8.0]])
+    want = [True, True, False, True, True]  # box corner, box side, box→wall, wall corner ×2
+    np.testing.assert_array_equal(caster.same_surface(p, q, extra_segments=box), want)
+    # Without the box its points lie on nothing.
+    np.testing.assert_array_equal(caster.same_surface(p, q), [False, False, False, True, True])
+    assert list(caster.segments_through(p[:1], extra_segments=box)[1]) == [4]
+    with pytest.raises(InputError, match="as many points"):
+        caster.same_surface(p, q[:2])

@@ -110,6 +110,9 @@ def test_paper_literal_reads_the_text() -> None:
     assert math.isinf(p.triangulation.max_pi_deviation_m or 0.0)
     assert math.isinf(p.triangulation.max_pi_deviation_deg or 0.0)
     assert p.triangulation.position_endpoint == "current_real"
+    # occluded only behind something nearer: a wall thinning out at a grazing angle is not
+    assert p.extraction.continuation_distance_m == 0.0
+    assert math.isinf(p.extraction.max_endpoint_gap_m)
     assert p.move_using_pi == "as_written" and p.min_tracked == 4
     assert Albot1Params.preset("default") == Albot1Params.preset("paper") == Albot1Params()
 

@@ -43,7 +43,8 @@ def test_build_run_is_world_tour_and_simulator_made_by_hand() -> None:
 
 
 def test_names_are_resolved_once_with_the_valid_ones_listed() -> None:
-    assert set(LASER_NOISE_PRESETS) == {"sick_lms200", "zero"}
+    assert set(LASER_NOISE_PRESETS) == {"sick_lms200", "zero", "sick_lms200_any_jump"}
+    assert laser_noise_preset("sick_lms200_any_jump").mixed_pixel_edges == "any_jump"
     assert laser_noise_preset("zero").is_zero
     with pytest.raises(InputError, match="unknown laser noise 'loud'; valid: sick_lms200, zero"):
         RunSpec(laser_noise="loud")

@@ -84,7 +84,7 @@ def test_compiled_path_equals_array_path_on_an_office_run() -> None:
     m = Albot1()
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr("albot2d.mapping.albot1.mapper.triangulate", record)
-        for frame in itertools.islice(run.simulator.drive(run.tour, run.profile), 600):
+        for frame in itertools.islice(run.simulator.drive(run.tour, run.profile), 2000):
             m.observe(frame)
     assert len(calls) > 50
     located = 0

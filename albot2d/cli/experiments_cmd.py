@@ -13,8 +13,9 @@ Experiments: counts, table1, fig7, fig10, fig11_12, fig13, fig14, fig15, fig16.
 Readings (``--readings``, default ``default paper_literal``): every experiment is computed
 under each reading of the paper, each an Albot₁ driven on the same frames beside the
 others: ``default`` (albot2d's reading), ``paper_literal`` (the paper's text wherever it
-speaks: no gate against path integration, the occluding endpoint in the current view,
-algorithm #4 as written), ``original`` (the authors' C++ code), ``start_stop``, or any
+speaks: no gate against path integration, an endpoint occluded only behind something
+nearer, the occluding endpoint in the current view, algorithm #4 as written),
+``original`` (the authors' C++ code), ``start_stop``, or any
 ``albot1[KEY=VALUE,...]`` spec. The first is the primary reading: its results are each
 experiment's top-level ``ours`` and ``verdict``; ``readings`` holds every reading's.
 """

@@ -7,9 +7,13 @@ enabled (so a zero-noise laser consumes no randomness and returns exact ranges):
 
 1. angular jitter — each beam is cast at ``nominal + N(0, angle_jitter_deg)`` but reported
    at its nominal angle;
-2. mixed pixels — where two neighbouring hits differ by more than
-   ``mixed_pixel_min_jump_m``, with probability ``mixed_pixel_prob`` one of the two beams
-   (either, at random) returns a range uniformly between the foreground and background;
+2. mixed pixels — where two neighbouring beams straddle an occluding edge (their hits lie
+   on different, unconnected surfaces: ``RayCaster.same_surface``) and their ranges differ
+   by more than ``mixed_pixel_min_jump_m``, with probability ``mixed_pixel_prob`` one of
+   the two beams (either, at random) returns a range uniformly between the foreground and
+   background. A smooth wall seen at a grazing angle has no edge, however far apart its
+   neighbouring ranges are (``mixed_pixel_edges="any_jump"`` keeps albot2d's former model,
+   which blended there too);
 3. Gaussian range noise — ``N(0, range_sigma_m + range_sigma_per_m * range)``;
 4. quantisation to multiples of ``range_resolution_m`` (0 = off);
 5. validity — a beam is valid when it hit something and its range lies in
@@ -29,7 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -115,6 +119,7 @@ class LaserNoise:
     range_resolution_m: float = 0.01
     mixed_pixel_prob: float = 0.3
     mixed_pixel_min_jump_m: float = 0.2
+    mixed_pixel_edges: Literal["occluding", "any_jump"] = "occluding"
 
     def __post_init__(self) -> None:
         check_non_negative(
@@ -127,6 +132,11 @@ class LaserNoise:
         )
         check_in_range(self, "dropout_prob", 0.0, 1.0)
         check_in_range(self, "mixed_pixel_prob", 0.0, 1.0)
+        if self.mixed_pixel_edges not in ("occluding", "any_jump"):
+            raise InputError(
+                "LaserNoise.mixed_pixel_edges must be occluding or any_jump, "
+                f"got {self.mixed_pixel_edges!r}"
+            )
 
     @classmethod
     def zero(cls) -> LaserNoise:
@@ -137,6 +147,12 @@ class LaserNoise:
     def sick_lms200(cls) -> LaserNoise:
         """Plausible SICK LMS200 noise (1 cm resolution, ~5 mm + 0.1 % sigma)."""
         return cls()
+
+    @classmethod
+    def sick_lms200_any_jump(cls) -> LaserNoise:
+        """``sick_lms200`` with albot2d's former mixed-pixel model (a blend at any range jump,
+        smooth grazing walls included), to repeat numbers measured before the fix."""
+        return cls(mixed_pixel_edges="any_jump")
 
     @property
     def is_zero(self) -> bool:
@@ -154,6 +170,7 @@ class LaserNoise:
 LASER_NOISE_PRESETS: dict[str, Callable[[], LaserNoise]] = {
     "sick_lms200": LaserNoise.sick_lms200,
     "zero": LaserNoise.zero,
+    "sick_lms200_any_jump": LaserNoise.sick_lms200_any_jump,
 }
 
 
@@ -247,15 +264,51 @@ class Laser:
         )
         hit = r <= p.max_range_m
         np.minimum(r, p.max_range_m, out=r)  # no-return beams stay invalid whatever happens
+        edges = _NO_EDGES
+        if nz.mixed_pixel_prob > 0.0:
+            edges = self._mixing_edges(r, hit, lp, fan, extra_segments)
         if self.noise_backend == "numba":
-            ranges, valid = self._compiled_noise(r, hit, rng)
+            ranges, valid = self._compiled_noise(r, hit, edges, rng)
         else:
-            ranges, valid = self._numpy_noise(r, hit, rng)
+            ranges, valid = self._numpy_noise(r, hit, edges, rng)
         # The noise made ``ranges`` and ``valid`` fresh; the angles are read-only.
         return Scan.adopt(ranges, self.angles, valid, p.max_range_m, float(timestamp), self._mount)
 
+    def _mixing_edges(
+        self,
+        r: FloatArray,
+        hit: NDArray[np.bool_],
+        lp: Pose,
+        fan: BeamFan,
+        extra_segments: ArrayLike | None,
+    ) -> NDArray[np.bool_]:
+        """``(n - 1,)``: whether beams ``i`` and ``i + 1`` can return a mixed pixel (see the
+        module docstring), from the exact ranges ``r``."""
+        nz = self.noise
+        edges = np.abs(r[1:] - r[:-1]) > nz.mixed_pixel_min_jump_m
+        edges &= hit[1:]
+        edges &= hit[:-1]
+        if nz.mixed_pixel_edges == "any_jump":
+            return edges
+        at = np.flatnonzero(edges)
+        if len(at) == 0:
+            return edges
+        # The beams as cast (jittered or not): their hits lie on the walls they hit.
+        pair = np.concatenate([at, at + 1])
+        angle = fan.angles[pair] + lp.theta
+        xy = np.column_stack([lp.x + r[pair] * np.cos(angle), lp.y + r[pair] * np.sin(angle)])
+        smooth = self.caster.same_surface(
+            xy[: len(at)], xy[len(at) :], extra_segments=extra_segments
+        )
+        edges[at[smooth]] = False
+        return edges
+
     def _compiled_noise(
-        self, r: FloatArray, hit: NDArray[np.bool_], rng: np.random.Generator
+        self,
+        r: FloatArray,
+        hit: NDArray[np.bool_],
+        edges: NDArray[np.bool_],
+        rng: np.random.Generator,
     ) -> tuple[FloatArray, NDArray[np.bool_]]:
         """Steps 2–6 in one compiled call on exactly the numpy path's draws, in its order."""
         p, nz, n = self.params, self.noise, self.n_beams
@@ -267,17 +320,21 @@ class Laser:
         kernel = _noise_kernel()
         assert kernel is not None  # checked in __init__
         return kernel(
-            r, hit, nz.mixed_pixel_prob, nz.mixed_pixel_min_jump_m, mixed, nz.range_sigma_m,
+            r, hit, nz.mixed_pixel_prob, edges, mixed, nz.range_sigma_m,
             nz.range_sigma_per_m, normal, 1.0 / res if res > 0.0 else 0.0, res,
             p.min_range_m, p.max_range_m, nz.dropout_prob, dropout,
         )  # fmt: skip
 
     def _numpy_noise(
-        self, r: FloatArray, hit: NDArray[np.bool_], rng: np.random.Generator
+        self,
+        r: FloatArray,
+        hit: NDArray[np.bool_],
+        edges: NDArray[np.bool_],
+        rng: np.random.Generator,
     ) -> tuple[FloatArray, NDArray[np.bool_]]:
         p, nz = self.params, self.noise
         if nz.mixed_pixel_prob > 0.0:
-            _mix_pixels(r, hit, nz, rng)
+            _mix_pixels(r, edges, nz, rng)
         if nz.range_sigma_m > 0.0 or nz.range_sigma_per_m > 0.0:
             sigma = nz.range_sigma_per_m * r
             sigma += nz.range_sigma_m
@@ -294,6 +351,7 @@ class Laser:
 
 
 _NO_DRAWS = np.zeros(0)
+_NO_EDGES = np.zeros(0, dtype=np.bool_)
 _NO_DRAWS_2D = np.zeros((3, 0))
 
 
@@ -303,15 +361,14 @@ def _noise_kernel() -> Callable[..., tuple[FloatArray, NDArray[np.bool_]]] | Non
 
 
 def _mix_pixels(
-    r: FloatArray, hit: NDArray[np.bool_], nz: LaserNoise, rng: np.random.Generator
+    r: FloatArray, edges: NDArray[np.bool_], nz: LaserNoise, rng: np.random.Generator
 ) -> None:
-    """Blend one beam at each depth jump between the foreground and background (in place)."""
+    """Blend one beam at each edge (``Laser._mixing_edges``) between the foreground and
+    background (in place)."""
     n = len(r) - 1
     happens, side, fraction = rng.random((3, n))
-    jump = abs(r[1:] - r[:-1]) > nz.mixed_pixel_min_jump_m
-    jump &= hit[1:]
-    jump &= hit[:-1]
-    jump &= happens < nz.mixed_pixel_prob
+    jump = happens < nz.mixed_pixel_prob
+    jump &= edges
     at = np.flatnonzero(jump)
     if len(at) == 0:
         return

@@ -17,11 +17,12 @@ __all__ = ["apply_noise"]
 
 @njit(cache=True, nogil=True)
 def apply_noise(
-    r, hit, mixed_prob, mixed_jump, mixed_draws, sigma_m, sigma_per_m, normal,
+    r, hit, mixed_prob, edges, mixed_draws, sigma_m, sigma_per_m, normal,
     inv_resolution, resolution, min_range, max_range, dropout_prob, dropout_draws,
 ):  # fmt: skip
     """Steps 2–6 of the noise model on ``r`` (in place); returns ``(ranges, valid)``.
 
+    ``edges`` marks the beam pairs that can mix (``Laser._mixing_edges``);
     ``mixed_draws`` is the ``(3, n - 1)`` uniform draw (happens, side, fraction) or empty
     when mixed pixels are off; ``normal`` the ``(n,)`` standard normals or empty when
     range noise is off; ``resolution`` 0 disables quantisation; ``dropout_draws`` the
@@ -32,8 +33,7 @@ def apply_noise(
         orig = r.copy()
         for i in range(n - 1):
             left, right = orig[i], orig[i + 1]
-            if (abs(right - left) > mixed_jump and hit[i + 1] and hit[i]
-                    and mixed_draws[0, i] < mixed_prob):  # fmt: skip
+            if edges[i] and mixed_draws[0, i] < mixed_prob:
                 near = min(left, right)
                 blended = near + mixed_draws[2, i] * (max(left, right) - near)
                 r[i + 1 if mixed_draws[1, i] < 0.5 else i] = blended

@@ -60,6 +60,7 @@ __all__ = [
     "MIN_SEGMENT_LENGTH_M",
     "NEAR_PASS_MIN_PIECES",
     "NEAR_PASS_PIECES",
+    "SURFACE_TOLERANCE_M",
     "BeamFan",
     "RayCaster",
     "cast_brute_force",
@@ -86,6 +87,11 @@ def _numba_kernel() -> Callable[..., None] | None:
     """``raycast_numba.cast_beams``, imported on first use (numba takes a while to import);
     None when the compiled kernels are off."""
     return compiled_kernel("albot2d.sim.raycast_numba", "cast_beams")
+
+
+def _surface_kernel() -> Callable[..., None] | None:
+    """``raycast_numba.same_surface`` (see ``_numba_kernel``)."""
+    return compiled_kernel("albot2d.sim.raycast_numba", "same_surface")
 
 
 def numba_available() -> bool:
@@ -149,6 +155,7 @@ class RayCaster:
         # The name, not the kernel: a RayCaster pickles small and loads numba where needed.
         self._backend = _resolve_backend(backend)
         self._layout = self.grid.layout
+        self._vertex = _vertex_ids(self.grid.segments)
 
     @property
     def backend(self) -> str:
@@ -253,6 +260,135 @@ class RayCaster:
         far_ranges = cast_pieces(table, ox, oy, mid, directions, fan, r_max, tol)
         ranges[still_open] = far_ranges[still_open]
         return ranges
+
+    def segments_through(
+        self, points: ArrayLike, *, extra_segments: ArrayLike | None = None
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """Which segments pass through which of the ``(P, 2)`` ``points`` (world frame, e.g.
+        beam hits), within ``SURFACE_TOLERANCE_M``: pairs ``(point, segment)`` as two index
+        arrays, sorted by point; ``segment`` is ``0 … n_segments - 1`` for the index's
+        segments and ``n_segments + j`` for ``extra_segments[j]``. A point where walls meet
+        or overlap is on several; a point on none appears in no pair."""
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        point, seg = self._static_through(pts)
+        extra = _clean_extra(extra_segments)
+        if len(extra):
+            near = _point_segment_table(pts, extra) <= SURFACE_TOLERANCE_M
+            ep, es = np.nonzero(near)
+            point = np.concatenate([point, ep])
+            seg = np.concatenate([seg, es + self.n_segments])
+            order = np.argsort(point, kind="stable")
+            point, seg = point[order], seg[order]
+        return point, seg
+
+    def same_surface(
+        self, p: ArrayLike, q: ArrayLike, *, extra_segments: ArrayLike | None = None
+    ) -> NDArray[np.bool_]:
+        """Whether ``p[k]`` and ``q[k]`` (``(P, 2)`` points on the walls) lie on one
+        continuous run of wall: some segment through ``p[k]`` and some segment through
+        ``q[k]`` are the same or share an endpoint (a corner, or a wall drawn in pieces).
+
+        Neighbouring beams whose hits are not on one surface straddle an occluding edge,
+        where a real laser's footprint can return a mixed pixel. A point on no segment is
+        on no surface."""
+        pa = np.asarray(p, dtype=np.float64).reshape(-1, 2)
+        qa = np.asarray(q, dtype=np.float64).reshape(-1, 2)
+        n = len(pa)
+        if len(qa) != n:
+            raise InputError(f"same_surface needs as many points q as p, got {len(qa)} and {n}")
+        extra = _clean_extra(extra_segments)
+        vertex = self._vertex
+        own = _vertex_ids(extra) + (int(vertex.max(initial=-1)) + 1)
+        if self._backend == "numba":
+            kernel = _surface_kernel()
+            assert kernel is not None  # the backend was resolved to numba
+            out = np.empty(n, dtype=np.bool_)
+            grid = self.grid
+            kernel(pa, qa, grid.table, grid.piece_segment, grid.cell_start, self._layout,
+                   vertex, piece_table(extra) if len(extra) else _NO_PIECES, own,
+                   SURFACE_TOLERANCE_M, out)  # fmt: skip
+            return out
+        point, seg = self.segments_through(np.concatenate([pa, qa]), extra_segments=extra)
+        if len(extra):
+            vertex = np.concatenate([vertex, own])
+        n_vertices = int(vertex.max(initial=-1)) + 1
+        # One key per (pair k, corner of a segment through the point): p's and q's share
+        # one exactly when a segment through each is the same or meets the other's end.
+        k = point % max(n, 1)
+        keys = (k[:, None] * n_vertices + vertex[seg]).ravel()
+        from_p = np.repeat(point < n, 2)
+        shared = np.intersect1d(keys[from_p], keys[~from_p])
+        out = np.zeros(n, dtype=np.bool_)
+        out[shared // max(n_vertices, 1)] = True
+        return out
+
+    def _static_through(self, pts: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """``segments_through`` for the index's segments: only the pieces in the grid cells
+        around each point are measured."""
+        none = np.zeros(0, dtype=np.intp)
+        if len(pts) == 0 or self.n_pieces == 0:
+            return none, none
+        grid = self.grid
+        cells = grid.cells_near(pts[:, 0], pts[:, 1], SURFACE_TOLERANCE_M)
+        # The square around a point inside one cell gives the same cell four times.
+        cells[:, 1:][cells[:, 1:] == cells[:, :1]] = -1
+        cells[:, 3][cells[:, 3] == cells[:, 2]] = -1
+        cells[:, 2][cells[:, 2] == cells[:, 0]] = -1
+        owner = np.repeat(np.arange(len(pts)), cells.shape[1])
+        cells = cells.ravel()
+        keep = cells >= 0
+        owner, cells = owner[keep], cells[keep]
+        start, end = grid.cell_start[cells], grid.cell_start[cells + 1]
+        counts = end - start
+        owner = np.repeat(owner, counts)
+        if len(owner) == 0:
+            return none, none
+        piece = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts - start, counts)
+        table = grid.table
+        z = pts[owner, 0] + 1j * pts[owner, 1]
+        on = _point_piece_distance(z, table[0, piece], table[1, piece]) <= SURFACE_TOLERANCE_M
+        point, seg = owner[on], grid.piece_segment[piece[on]]
+        # A segment cut at a grid line passes through the cut point twice.
+        key = np.unique(point * self.n_segments + seg)
+        return key // self.n_segments, key % self.n_segments
+
+
+#: How far (metres) a beam's hit point may lie from the segment it hit (rounding only).
+SURFACE_TOLERANCE_M = 1e-6
+
+
+def _clean_extra(extra_segments: ArrayLike | None) -> FloatArray:
+    if extra_segments is None:
+        return np.zeros((0, 4))
+    return clean_segments(extra_segments, "extra_segments")
+
+
+def _vertex_ids(segs: FloatArray) -> NDArray[np.intp]:
+    """``(N, 2)``: one id per distinct endpoint, so segments meeting at a corner (the same
+    coordinates, bit for bit, as polygon rings give) share one."""
+    if len(segs) == 0:
+        return np.zeros((0, 2), dtype=np.intp)
+    ends = np.concatenate([segs[:, :2], segs[:, 2:]])
+    _, ids = np.unique(ends, axis=0, return_inverse=True)
+    ids = ids.reshape(-1).astype(np.intp)
+    return np.stack([ids[: len(segs)], ids[len(segs) :]], axis=1)
+
+
+def _point_piece_distance(
+    z: NDArray[np.complex128], a: NDArray[np.complex128], b: NDArray[np.complex128]
+) -> FloatArray:
+    """Distance from points ``z`` to segments ``a → b`` (complex coordinates, elementwise)."""
+    e = b - a
+    t = np.clip((np.conj(e) * (z - a)).real / np.maximum((e * np.conj(e)).real, 1e-300), 0, 1)
+    return np.abs(z - a - t * e)
+
+
+def _point_segment_table(pts: FloatArray, segs: FloatArray) -> FloatArray:
+    """``(P, M)`` distances from every point to every segment."""
+    z = (pts[:, 0] + 1j * pts[:, 1])[:, None]
+    a = (segs[:, 0] + 1j * segs[:, 1])[None, :]
+    b = (segs[:, 2] + 1j * segs[:, 3])[None, :]
+    return _point_piece_distance(z, a, b)
 
 
 def _with(table: np.ndarray, extra: np.ndarray | None) -> np.ndarray:

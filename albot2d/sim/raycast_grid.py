@@ -71,8 +71,9 @@ def piece_table(segs: FloatArray) -> NDArray[np.complex128]:
 
 def _split_at_grid(
     segs: FloatArray, x0: float, y0: float, cell: float
-) -> tuple[FloatArray, NDArray[np.intp], NDArray[np.intp]]:
-    """Cut segments where they cross grid lines: pieces ``(P, 4)`` and their cell (ix, iy).
+) -> tuple[FloatArray, NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+    """Cut segments where they cross grid lines: pieces ``(P, 4)``, their cell (ix, iy) and
+    the index of the segment each piece was cut from.
 
     Original endpoints are kept bit-exact and a cut point is shared by the two pieces it
     joins, so no ray can slip between pieces.
@@ -111,7 +112,7 @@ def _split_at_grid(
     mid = 0.5 * (pieces[:, :2] + pieces[:, 2:])
     ix = np.floor((mid[:, 0] - x0) / cell).astype(np.intp)
     iy = np.floor((mid[:, 1] - y0) / cell).astype(np.intp)
-    return pieces, ix, iy
+    return pieces, ix, iy, sid.astype(np.intp)
 
 
 class SegmentGrid:
@@ -142,11 +143,12 @@ class SegmentGrid:
         self._x0, self._y0 = xmin - cell, ymin - cell
         self._nx = math.ceil((xmax - self._x0) / cell) + 2
         self._ny = math.ceil((ymax - self._y0) / cell) + 2
-        pieces, ix, iy = _split_at_grid(segs, self._x0, self._y0, cell)
+        pieces, ix, iy, parent = _split_at_grid(segs, self._x0, self._y0, cell)
         cell_id = np.clip(iy, 0, self._ny - 1) * self._nx + np.clip(ix, 0, self._nx - 1)
         order = np.argsort(cell_id, kind="stable")
         self.n_pieces = len(pieces)
         self._table = readonly(piece_table(pieces[order]), copy=False)  # (3, n_pieces)
+        self._piece_segment = readonly(parent[order], copy=False)
         counts = np.bincount(cell_id, minlength=self._nx * self._ny)
         starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
         self._cell_start = readonly(starts, copy=False)
@@ -155,6 +157,23 @@ class SegmentGrid:
     def table(self) -> np.ndarray:
         """All pieces, ``(3, n_pieces)`` complex, cell by cell in row-major cell order."""
         return self._table
+
+    @property
+    def piece_segment(self) -> NDArray[np.intp]:
+        """``(n_pieces,)``: the index in ``segments`` of the segment each table column is
+        cut from."""
+        return self._piece_segment
+
+    def cells_near(self, x: FloatArray, y: FloatArray, eps: float) -> NDArray[np.intp]:
+        """``(P, 4)`` ids of the cells the squares ``(x, y) ± eps`` touch (repeated when
+        fewer than four): a piece lies in its own cell but for a sliver, so the piece
+        through a point is in one of them."""
+        c, nx, ny = self.cell_size_m, self._nx, self._ny
+        ix = np.clip(np.floor((np.stack([x - eps, x + eps]) - self._x0) / c), 0, nx - 1)
+        iy = np.clip(np.floor((np.stack([y - eps, y + eps]) - self._y0) / c), 0, ny - 1)
+        ix, iy = ix.astype(np.intp), iy.astype(np.intp)
+        return np.stack([iy[0] * nx + ix[0], iy[0] * nx + ix[1],
+                         iy[1] * nx + ix[0], iy[1] * nx + ix[1]], axis=1)  # fmt: skip
 
     @property
     def cell_start(self) -> NDArray[np.intp]:

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["cast_beams"]
+__all__ = ["cast_beams", "same_surface"]
 
 #: Distinct pieces seen edge-on a scan keeps track of; beyond this, all are checked.
 _EDGE_ON_SLOTS = 32
@@ -243,3 +243,67 @@ def cast_beams(table, cell_start, layout, extra, directions, ext_rel, scan, out)
     for k in range(out.size):
         r = 1.0 / out[k]
         out[k] = r if r <= r_max else math.inf
+
+
+#: Segments through one point the surface kernel keeps (walls meet in twos; overlaps are rare).
+_THROUGH_SLOTS = 16
+
+
+@njit(cache=True, nogil=True)
+def _corners_through(x, y, table, piece_segment, cell_start, layout, vertex, extra,
+                     extra_vertex, tol, out):  # fmt: skip
+    """Fill ``out`` with the corner ids of the segments within ``tol`` of ``(x, y)`` (the
+    pieces of the grid cells the square ``(x, y) ± tol`` touches, then every extra
+    segment); returns how many were written."""
+    x0, y0, c = layout[0], layout[1], layout[2]
+    nx, ny = int(layout[3]), int(layout[4])
+    ix0 = min(max(math.floor((x - tol - x0) / c), 0), nx - 1)
+    ix1 = min(max(math.floor((x + tol - x0) / c), 0), nx - 1)
+    iy0 = min(max(math.floor((y - tol - y0) / c), 0), ny - 1)
+    iy1 = min(max(math.floor((y + tol - y0) / c), 0), ny - 1)
+    m = 0
+    for iy in range(iy0, iy1 + 1):
+        for ix in range(ix0, ix1 + 1):
+            cell = iy * nx + ix
+            for j in range(cell_start[cell], cell_start[cell + 1]):
+                if m + 2 <= len(out) and _distance(x, y, table[0, j], table[1, j]) <= tol:
+                    s = piece_segment[j]
+                    out[m] = vertex[s, 0]
+                    out[m + 1] = vertex[s, 1]
+                    m += 2
+    for j in range(extra.shape[1]):
+        if m + 2 <= len(out) and _distance(x, y, extra[0, j], extra[1, j]) <= tol:
+            out[m] = extra_vertex[j, 0]
+            out[m + 1] = extra_vertex[j, 1]
+            m += 2
+    return m
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _distance(x, y, a, b):
+    """Distance from ``(x, y)`` to the segment ``a → b`` (complex ends)."""
+    er, ei = b.real - a.real, b.imag - a.imag
+    zr, zi = x - a.real, y - a.imag
+    t = (er * zr + ei * zi) / max(er * er + ei * ei, 1e-300)
+    t = min(max(t, 0.0), 1.0)
+    return math.hypot(zr - t * er, zi - t * ei)
+
+
+@njit(cache=True, nogil=True)
+def same_surface(p, q, table, piece_segment, cell_start, layout, vertex, extra,
+                 extra_vertex, tol, out):  # fmt: skip
+    """``out[k]``: whether some segment through ``p[k]`` and some through ``q[k]`` share a
+    corner id (the same segment shares both): ``RayCaster.same_surface``'s numpy path."""
+    cp = np.empty(2 * _THROUGH_SLOTS, np.intp)
+    cq = np.empty(2 * _THROUGH_SLOTS, np.intp)
+    for k in range(len(out)):
+        mp = _corners_through(p[k, 0], p[k, 1], table, piece_segment, cell_start, layout,
+                              vertex, extra, extra_vertex, tol, cp)  # fmt: skip
+        mq = _corners_through(q[k, 0], q[k, 1], table, piece_segment, cell_start, layout,
+                              vertex, extra, extra_vertex, tol, cq)  # fmt: skip
+        found = False
+        for i in range(mp):
+            for j in range(mq):
+                if cp[i] == cq[j]:
+                    found = True
+        out[k] = found

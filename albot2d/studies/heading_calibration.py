@@ -119,7 +119,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--episodes", type=int, default=20)
     ap.add_argument("--seed", type=int, default=778, help="campaign seed")
     ap.add_argument("--noise", default="typical", help="odometry noise preset")
-    ap.add_argument("--laser-noise", default="sick_lms200", help="sick_lms200 or zero")
+    ap.add_argument(
+        "--laser-noise",
+        default="sick_lms200",
+        help="a laser noise preset: sick_lms200 (default), zero or sick_lms200_any_jump",
+    )
     ap.add_argument("--worst", type=int, default=5, help="worst links listed")
     args = ap.parse_args(argv)
     episodes = [calibrate_episode(i, args.seed, args.noise, args.laser_noise)

@@ -396,7 +396,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--datasets", nargs="+", default=list(DATASETS), choices=DATASETS)
     ap.add_argument("--readings", nargs="+", default=["paper_literal"])
     ap.add_argument("--laser-noise", default="sick_lms200",
-                    help="laser noise preset (sick_lms200, the experiments'; zero)")  # fmt: skip
+                    help="laser noise preset: sick_lms200 (the experiments'), zero or "
+                         "sick_lms200_any_jump (the former mixed-pixel model)")  # fmt: skip
     ap.add_argument("--json", action="store_true", help="print every route's breakdown as JSON")
     args = ap.parse_args(argv)
     rows: list[dict[str, Any]] = []

@@ -249,7 +249,9 @@ class FrameChecker:
     A hit off every obstacle is still right when it is a mixed pixel, which the laser makes
     by design (``albot2d.sim.laser``): where the laser mixes pixels, a beam whose exact range
     and a neighbour's differ by more than ``mixed_pixel_min_jump_m`` may return a range
-    between the two. Those beams' exact ranges are computed here, independently of the
+    between the two. (The laser mixes only where the two beams straddle an occluding edge;
+    this check allows any such jump, so it does not lean on the laser's own edge test.)
+    Those beams' exact ranges are computed here, independently of the
     simulator's ray caster, by intersecting the rays with the obstacle segments.
     """
 

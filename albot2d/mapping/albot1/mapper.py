@@ -194,7 +194,9 @@ class Albot1Params:
             base = cls()
         elif name == "paper_literal":
             base = cls(
-                extraction=ExtractionParams(max_endpoint_gap_m=math.inf),
+                extraction=ExtractionParams(
+                    max_endpoint_gap_m=math.inf, continuation_distance_m=0.0
+                ),
                 triangulation=TriangulationParams(
                     max_pi_deviation_m=math.inf,
                     max_pi_deviation_deg=math.inf,
@@ -239,6 +241,13 @@ PAPER_LITERAL: dict[str, str] = {
         "current view: RTSV's candidates are trackable (criterion 3: at least one endpoint "
         "not occluded), so every tracked surface affords a point; the paper has no "
         "'uncertain endpoint' flag"
+    ),
+    "extraction.continuation_distance_m=0": (
+        "an endpoint is occluded only where something nearer hides what lies beyond it "
+        "(criterion 3: 'at least one endpoint that has not been occluded'); a wall thinning "
+        "out at a grazing angle, its next beam farther along its own line, is not occluded "
+        "(albot2d's own refinement, off here; the authors' code also counts the nearer end "
+        "across any gap as real)"
     ),
     "move_using_pi=as_written": (
         "algorithm #4 as written: a view with no tracked surface left is placed by path "
