@@ -25,7 +25,7 @@ import pytest
 
 from albot2d.frames import beam_angles
 from albot2d.geometry import Pose
-from albot2d.sim.laser import Laser, LaserNoise, LaserParams
+from albot2d.sim.laser import Laser, LaserParams, laser_noise_preset
 from albot2d.sim.raycast import BeamFan, RayCaster
 from tests.raycast_helpers import BACKENDS, office_segments
 
@@ -146,11 +146,14 @@ def test_ours_361(benchmark, world) -> None:
     rays_per_s(benchmark, 361)
 
 
-def test_laser_scan_sick_noise(benchmark, world) -> None:
-    """A whole ``Laser.scan`` with SICK-like noise (mixed pixels, noise, quantisation...)."""
+@pytest.mark.parametrize("noise", ["sick_lms200", "sick_lms200_any_jump", "zero"])
+def test_laser_scan_sick_noise(benchmark, world, noise: str) -> None:
+    """A whole ``Laser.scan`` with SICK-like noise (mixed pixels, noise, quantisation...),
+    beside the former mixed-pixel model (no occluding-edge test) and an exact laser: the
+    edge test's cost is the first two's difference."""
     name, segs, poses, r_max = world
     benchmark.group = f"raycast-{name}"
-    laser = Laser(segs, LaserParams(max_range_m=r_max), LaserNoise.sick_lms200())
+    laser = Laser(segs, LaserParams(max_range_m=r_max), laser_noise_preset(noise))
     rng = np.random.default_rng(0)
     cycle = itertools.cycle([Pose(*p) for p in poses])
     laser.scan(next(cycle), rng)  # warm up (JIT)

@@ -290,3 +290,35 @@ def test_mixed_pixels_are_exempt_other_hits_off_the_walls_are_not() -> None:
         with pytest.raises(inv.InvariantError, match="laser_hits_on_obstacles"):
             checker(frame(wrong))
             checker.finish()
+
+
+def test_a_mixed_pixel_along_one_smooth_wall_is_a_hit_off_the_walls() -> None:
+    """The laser's former model blended beams along a wall seen at a grazing angle; the
+    check holds a laser that mixes only at occluding edges to that, and accepts the former
+    model's blends when told that is the model."""
+    wall = np.array([[-1.0, 1.0, 60.0, 1.0]])
+    quiet = {"range_sigma_m": 0.0, "range_sigma_per_m": 0.0, "dropout_prob": 0.0,
+             "range_resolution_m": 0.0}  # fmt: skip
+    former = LaserNoise(**quiet, mixed_pixel_edges="any_jump")
+    rng = np.random.default_rng(0)
+    blended = [Laser(wall, noise=former).scan(Pose(), rng) for _ in range(5)]
+
+    def frames() -> list[Frame]:
+        return [Frame(i, float(i), s, Pose(), Pose(), true_pose=Pose())
+                for i, s in enumerate(blended)]  # fmt: skip
+
+    accepting = sim_inv.FrameChecker(wall, former)
+    for f in frames():
+        accepting(f)
+    assert accepting.finish() == [] and accepting.mixed_pixels > 5
+    with pytest.raises(inv.InvariantError, match="laser_hits_on_obstacles"):
+        checker = sim_inv.FrameChecker(wall, LaserNoise(**quiet))
+        for f in frames():
+            checker(f)
+        checker.finish()
+    # The corrected laser's scans of the same wall hold.
+    ok = sim_inv.FrameChecker(wall, LaserNoise(**quiet))
+    for i in range(5):
+        ok(Frame(i, float(i), Laser(wall, noise=LaserNoise(**quiet)).scan(Pose(), rng), Pose(),
+                 Pose(), true_pose=Pose()))  # fmt: skip
+    assert ok.finish() == [] and ok.mixed_pixels == 0

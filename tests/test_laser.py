@@ -21,7 +21,14 @@ from albot2d.geometry import (
 )
 from albot2d.sim.laser import Laser, LaserNoise, LaserParams
 from albot2d.sim.raycast import RayCaster, cast_brute_force
-from tests.raycast_helpers import EXACT_M, box_segments, grazing, office_segments, shapely_ranges
+from tests.raycast_helpers import (
+    BACKENDS,
+    EXACT_M,
+    box_segments,
+    grazing,
+    office_segments,
+    shapely_ranges,
+)
 from worldgen.strategies import worlds
 
 ROOM = box_segments(-4.0, -3.0, 6.0, 5.0)
@@ -277,7 +284,7 @@ def test_unknown_noise_backend_is_rejected() -> None:
         Laser(ROOM, noise_backend="gpu")
 
 
-@pytest.mark.parametrize("backend", ["numpy", "numba"])
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_a_smooth_wall_at_a_grazing_angle_has_no_mixed_pixels(backend: str) -> None:
     # One straight wall 1 m to the left, seen from 5° to 40° off its direction: the ranges
     # 1/sin(θ) of neighbouring beams differ by up to 2.3 m, yet there is no edge.
@@ -307,7 +314,7 @@ def test_a_smooth_wall_at_a_grazing_angle_has_no_mixed_pixels(backend: str) -> N
     assert off_wall > 20
 
 
-@pytest.mark.parametrize("backend", ["numpy", "numba"])
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_mixed_pixels_come_only_from_occluding_edges(backend: str) -> None:
     # A room with a pillar, its near wall drawn in three collinear pieces, seen from a
     # corner: grazing walls, a wall in pieces and concave corners join smoothly; only the

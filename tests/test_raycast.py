@@ -12,7 +12,13 @@ from hypothesis import strategies as st
 from albot2d.errors import InputError
 from albot2d.frames import beam_angles
 from albot2d.geometry import Pose, point_segment_distance, transform_segments
-from albot2d.sim.raycast import NEAR_PASS_MIN_PIECES, BeamFan, RayCaster, cast_brute_force
+from albot2d.sim.raycast import (
+    NEAR_PASS_MIN_PIECES,
+    BeamFan,
+    RayCaster,
+    cast_brute_force,
+    numba_available,
+)
 from tests.raycast_helpers import (
     BACKENDS,
     EXACT_M,
@@ -407,3 +413,31 @@ def test_same_surface_with_extra_segments(backend: str) -> None:
     assert list(caster.segments_through(p[:1], extra_segments=box)[1]) == [4]
     with pytest.raises(InputError, match="as many points"):
         caster.same_surface(p, q[:2])
+
+
+@given(seed=st.integers(0, 2**32 - 1), jump=st.sampled_from([0.0, 0.05, 0.2, 1.0]))
+def test_depth_edges_are_the_same_on_both_backends_and_follow_same_surface(
+    seed: int, jump: float
+) -> None:
+    """On scans of an office with a moving box, both backends mark the same beam pairs,
+    and those are exactly the pairs that jump by more than ``jump`` with hits on two
+    surfaces by brute force."""
+    segs = office_segments(4)
+    box = box_segments(5.0, 5.0, 5.6, 5.4)
+    rng = np.random.default_rng(seed)
+    origin = (float(rng.uniform(0.3, 15.7)), float(rng.uniform(0.3, 15.7)))
+    angles = FAN + float(rng.uniform(-math.pi, math.pi))
+    casters = [
+        make_caster(b, segs) for b in ("numpy", "numba") if b == "numpy" or numba_available()
+    ]
+    r = casters[0].cast(origin, angles, 30.0, extra_segments=box)
+    hit = np.isfinite(r)
+    r = np.minimum(r, 30.0)
+    got = [c.depth_edges(origin, angles, r, hit, jump, extra_segments=box) for c in casters]
+    for g in got[1:]:
+        np.testing.assert_array_equal(g, got[0])
+    xy = np.column_stack([origin[0] + r * np.cos(angles), origin[1] + r * np.sin(angles)])
+    both = np.vstack([segs, box])
+    one = _same_surface_brute_force(both, xy[:-1], xy[1:])
+    want = hit[1:] & hit[:-1] & (np.abs(np.diff(r)) > jump) & ~one
+    np.testing.assert_array_equal(got[0], want)

@@ -283,25 +283,17 @@ class Laser:
         extra_segments: ArrayLike | None,
     ) -> NDArray[np.bool_]:
         """``(n - 1,)``: whether beams ``i`` and ``i + 1`` can return a mixed pixel (see the
-        module docstring), from the exact ranges ``r``."""
+        module docstring), from the exact ranges ``r`` of the beams as cast."""
         nz = self.noise
-        edges = np.abs(r[1:] - r[:-1]) > nz.mixed_pixel_min_jump_m
-        edges &= hit[1:]
-        edges &= hit[:-1]
         if nz.mixed_pixel_edges == "any_jump":
+            edges = np.abs(r[1:] - r[:-1]) > nz.mixed_pixel_min_jump_m
+            edges &= hit[1:]
+            edges &= hit[:-1]
             return edges
-        at = np.flatnonzero(edges)
-        if len(at) == 0:
-            return edges
-        # The beams as cast (jittered or not): their hits lie on the walls they hit.
-        pair = np.concatenate([at, at + 1])
-        angle = fan.angles[pair] + lp.theta
-        xy = np.column_stack([lp.x + r[pair] * np.cos(angle), lp.y + r[pair] * np.sin(angle)])
-        smooth = self.caster.same_surface(
-            xy[: len(at)], xy[len(at) :], extra_segments=extra_segments
-        )
-        edges[at[smooth]] = False
-        return edges
+        return self.caster.depth_edges(
+            (lp.x, lp.y), fan.angles + lp.theta, r, hit, nz.mixed_pixel_min_jump_m,
+            extra_segments=extra_segments,
+        )  # fmt: skip
 
     def _compiled_noise(
         self,

@@ -94,6 +94,11 @@ def _surface_kernel() -> Callable[..., None] | None:
     return compiled_kernel("albot2d.sim.raycast_numba", "same_surface")
 
 
+def _edges_kernel() -> Callable[..., None] | None:
+    """``raycast_numba.depth_edges`` (see ``_numba_kernel``)."""
+    return compiled_kernel("albot2d.sim.raycast_numba", "depth_edges")
+
+
 def numba_available() -> bool:
     """Whether the compiled kernel can be used (``albot2d.compiled.kernels``)."""
     return _numba_kernel() is not None
@@ -156,6 +161,7 @@ class RayCaster:
         self._backend = _resolve_backend(backend)
         self._layout = self.grid.layout
         self._vertex = _vertex_ids(self.grid.segments)
+        self._n_vertices = int(self._vertex.max(initial=-1)) + 1
 
     @property
     def backend(self) -> str:
@@ -298,7 +304,7 @@ class RayCaster:
             raise InputError(f"same_surface needs as many points q as p, got {len(qa)} and {n}")
         extra = _clean_extra(extra_segments)
         vertex = self._vertex
-        own = _vertex_ids(extra) + (int(vertex.max(initial=-1)) + 1)
+        own = _vertex_ids(extra) + self._n_vertices
         if self._backend == "numba":
             kernel = _surface_kernel()
             assert kernel is not None  # the backend was resolved to numba
@@ -321,6 +327,52 @@ class RayCaster:
         out = np.zeros(n, dtype=np.bool_)
         out[shared // max(n_vertices, 1)] = True
         return out
+
+    def depth_edges(
+        self,
+        origin: Sequence[float],
+        angles: ArrayLike,
+        ranges: ArrayLike,
+        hit: ArrayLike,
+        min_jump_m: float,
+        *,
+        extra_segments: ArrayLike | None = None,
+    ) -> NDArray[np.bool_]:
+        """``(B - 1,)``: whether beams ``k`` and ``k + 1`` straddle an occluding edge: both
+        ``hit``, their ``ranges`` differ by more than ``min_jump_m``, and their hits (from
+        ``origin`` along the world-frame ``angles``) are not on one surface
+        (``same_surface``). A real laser's footprint can mix the two returns only there."""
+        ox, oy = (float(v) for v in origin)
+        a = np.asarray(angles, dtype=np.float64)
+        r = np.asarray(ranges, dtype=np.float64)
+        h = np.asarray(hit, dtype=np.bool_)
+        if not (len(a) == len(r) == len(h)):
+            raise InputError(
+                f"depth_edges needs one angle, range and hit flag per beam, got "
+                f"{len(a)}, {len(r)} and {len(h)}"
+            )
+        extra = _clean_extra(extra_segments)
+        if self._backend == "numba":
+            kernel = _edges_kernel()
+            assert kernel is not None  # the backend was resolved to numba
+            out = np.empty(max(len(r) - 1, 0), dtype=np.bool_)
+            grid = self.grid
+            own = _vertex_ids(extra) + self._n_vertices
+            kernel(ox, oy, a, r, h, float(min_jump_m), grid.table, grid.piece_segment,
+                   grid.cell_start, self._layout, self._vertex,
+                   piece_table(extra) if len(extra) else _NO_PIECES, own,
+                   SURFACE_TOLERANCE_M, out)  # fmt: skip
+            return out
+        edges = np.abs(r[1:] - r[:-1]) > min_jump_m
+        edges &= h[1:]
+        edges &= h[:-1]
+        at = np.flatnonzero(edges)
+        if len(at):
+            pair = np.concatenate([at, at + 1])
+            xy = np.column_stack([ox + r[pair] * np.cos(a[pair]), oy + r[pair] * np.sin(a[pair])])
+            smooth = self.same_surface(xy[: len(at)], xy[len(at) :], extra_segments=extra)
+            edges[at[smooth]] = False
+        return edges
 
     def _static_through(self, pts: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         """``segments_through`` for the index's segments: only the pieces in the grid cells

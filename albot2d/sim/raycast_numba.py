@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["cast_beams", "same_surface"]
+__all__ = ["cast_beams", "depth_edges", "same_surface"]
 
 #: Distinct pieces seen edge-on a scan keeps track of; beyond this, all are checked.
 _EDGE_ON_SLOTS = 32
@@ -307,3 +307,27 @@ def same_surface(p, q, table, piece_segment, cell_start, layout, vertex, extra,
                 if cp[i] == cq[j]:
                     found = True
         out[k] = found
+
+
+@njit(cache=True, nogil=True)
+def depth_edges(ox, oy, angles, r, hit, min_jump, table, piece_segment, cell_start, layout,
+                vertex, extra, extra_vertex, tol, out):  # fmt: skip
+    """``out[i]``: whether beams ``i`` and ``i + 1`` straddle an occluding edge
+    (``RayCaster.depth_edges``' numpy path, with ``same_surface`` inline)."""
+    cp = np.empty(2 * _THROUGH_SLOTS, np.intp)
+    cq = np.empty(2 * _THROUGH_SLOTS, np.intp)
+    for i in range(len(out)):
+        edge = hit[i] and hit[i + 1] and abs(r[i + 1] - r[i]) > min_jump
+        if edge:
+            px, py = ox + r[i] * math.cos(angles[i]), oy + r[i] * math.sin(angles[i])
+            qx = ox + r[i + 1] * math.cos(angles[i + 1])
+            qy = oy + r[i + 1] * math.sin(angles[i + 1])
+            mp = _corners_through(px, py, table, piece_segment, cell_start, layout, vertex,
+                                  extra, extra_vertex, tol, cp)  # fmt: skip
+            mq = _corners_through(qx, qy, table, piece_segment, cell_start, layout, vertex,
+                                  extra, extra_vertex, tol, cq)  # fmt: skip
+            for a in range(mp):
+                for b in range(mq):
+                    if cp[a] == cq[b]:
+                        edge = False
+        out[i] = edge

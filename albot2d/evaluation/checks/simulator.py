@@ -237,6 +237,10 @@ class ClearanceChecker:
         return self.violations
 
 
+#: How far an exact hit, recomputed from its range, may lie from the segment it hit.
+_ON_SEGMENT_M = 1e-6
+
+
 class FrameChecker:
     """Checks each simulated frame's laser hits against the true obstacles (an ``on_frame``
     hook). Frames are buffered and their hits checked in batches; ``finish()`` checks the
@@ -249,10 +253,11 @@ class FrameChecker:
     A hit off every obstacle is still right when it is a mixed pixel, which the laser makes
     by design (``albot2d.sim.laser``): where the laser mixes pixels, a beam whose exact range
     and a neighbour's differ by more than ``mixed_pixel_min_jump_m`` may return a range
-    between the two. (The laser mixes only where the two beams straddle an occluding edge;
-    this check allows any such jump, so it does not lean on the laser's own edge test.)
-    Those beams' exact ranges are computed here, independently of the
-    simulator's ray caster, by intersecting the rays with the obstacle segments.
+    between the two, and (``mixed_pixel_edges="occluding"``, the default) only where the two
+    exact hits lie on different, unconnected segments: an occluding edge, never along one
+    smooth wall (with angular jitter, at any such jump). Those beams' exact ranges are
+    computed here, independently of the simulator's ray caster, by intersecting the rays
+    with the obstacle segments.
     """
 
     def __init__(
@@ -348,8 +353,34 @@ class FrameChecker:
                     & (np.abs(own - other) > nz.mixed_pixel_min_jump_m)
                 )
                 between = (np.minimum(own, other) - tol <= r) & (r <= np.maximum(own, other) + tol)
-            mixed |= jump & between
+            jump &= between
+            # A jittered beam is cast off its nominal angle, so which surfaces it straddled
+            # is not known here: then any jump may mix.
+            if nz.mixed_pixel_edges == "occluding" and nz.angle_jitter_deg == 0.0 and jump.any():
+                k = np.flatnonzero(jump)
+                o, a = details["origin"][k], details["angles"][k]
+                p = o + own[k, None] * np.column_stack([np.cos(a[:, 0]), np.sin(a[:, 0])])
+                q = o + other[k, None] * np.column_stack([np.cos(a[:, j]), np.sin(a[:, j])])
+                jump[k[self._one_surface(p, q)]] = False
+            mixed |= jump
         return mixed
+
+    def _one_surface(self, p: FloatArray, q: FloatArray) -> NDArray[np.bool_]:
+        """Whether the exact hits ``p[k]`` and ``q[k]`` lie on one smooth run of wall: some
+        segment through each is the same or shares an endpoint with the other (plain
+        distances to every segment, independent of the simulator's ``same_surface``)."""
+        ends = np.concatenate([self.segments[:, :2], self.segments[:, 2:]])
+        _, corner = np.unique(ends, axis=0, return_inverse=True)
+        corner = corner.reshape(2, -1).T  # (N, 2): the ids of each segment's two ends
+        through_p = point_segment_distance(p, self.segments) <= _ON_SEGMENT_M
+        through_q = point_segment_distance(q, self.segments) <= _ON_SEGMENT_M
+        return np.array(
+            [
+                bool(np.intersect1d(corner[a].ravel(), corner[b].ravel()).size)
+                for a, b in zip(through_p, through_q, strict=True)
+            ],
+            dtype=bool,
+        )
 
     def _check_batch(self) -> None:
         if not self._frames:
