@@ -12,6 +12,7 @@ import shapely
 from albot2d.control import (
     ExploreDrive,
     ExplorerParams,
+    FrontierExplorer,
     GridSpec,
     KnowledgeGrid,
     reachable_floor,
@@ -140,3 +141,43 @@ def test_start_pose_is_used() -> None:
     drive = ExploreDrive(Simulator(world, seed=0), max_time_s=1.0, start=world.start)
     first = next(iter(drive.frames()))
     assert first.true_pose == Pose(world.start.x, world.start.y, world.start.theta)
+
+
+def _walled_room(stray: bool) -> tuple[FrontierExplorer, np.ndarray]:
+    """A seen room (x 0.2–3 m) and corridor (x 3–5.8 m) with a 1 m doorway in the wall
+    between them at x = 3 m, the unknown beyond the corridor's open east end; with
+    ``stray``, one occupied cell in the doorway (a mixed pixel at a jamb that no fan of the
+    laser has cleared)."""
+    spec = GridSpec.covering(0.0, 0.0, 7.0, 3.0, 0.1)
+    explorer = FrontierExplorer(spec, 0.25, ExplorerParams(initial_spin=False))
+    k = explorer.knowledge
+    xs, ys = spec.centres()
+    inside = (xs > 0.2) & (xs < 5.8) & (ys > 0.2) & (ys < 2.8)
+    wall = inside & ((ys < 0.3) | (ys > 2.7) | (xs < 0.3))
+    wall |= inside & (np.abs(xs - 3.0) < 0.06) & ~((ys > 1.0) & (ys < 2.0))
+    k.known[inside] = True
+    k.seen[inside & ~wall] = True
+    k.evidence[inside] = -2.0
+    k.evidence[wall] = 3.5
+    cell = np.zeros_like(wall)
+    if stray:
+        iy, ix = spec.cell_of(3.0, 1.5)
+        cell[iy, ix] = True
+        k.evidence[cell] = 0.9
+    return explorer, wall | cell
+
+
+def test_explorer_walled_in_by_a_stray_return_forgets_obstacles_and_goes_on() -> None:
+    pose = Pose(1.5, 1.5, 0.0)
+    open_door, _ = _walled_room(stray=False)
+    assert open_door.command(pose, 0.0) is not None and open_door.clears == 0
+    explorer, obstacles = _walled_room(stray=True)
+    command = explorer.command(pose, 0.0)
+    assert command is not None and not explorer.finished and explorer.clears == 1
+    assert explorer._path is not None and explorer._path[-1, 0] > 4.5  # through the door
+    assert not explorer.knowledge.occupied.any()  # forgotten; the next scans bring walls back
+    # The next scan sees the same stray return and nothing new: walled in again right after
+    # a clear, it is finished (it clears again only once it has seen something new).
+    explorer.knowledge.evidence[obstacles] = 3.5
+    explorer._replan = True
+    assert explorer.command(pose, 1.0) is None and explorer.finished and explorer.clears == 1

@@ -86,6 +86,7 @@ class ExplorationResult:
     plans: int
     reason: str
     max_time_s: float
+    clears: int = 0  # times the explorer forgot its obstacles to get out (FrontierExplorer)
 
     @property
     def final_coverage(self) -> float:
@@ -132,6 +133,7 @@ class ExplorationResult:
             "travelled_m": round(self.travelled_m, 3),
             "collisions": self.collisions,
             "plans": self.plans,
+            "clears": self.clears,
             "coverage_every_60s": self.table(),
         }
 
@@ -260,6 +262,7 @@ class ExploreDrive:
             plans=self.explorer.plans,
             reason=self._reason,
             max_time_s=self.max_time_s,
+            clears=self.explorer.clears,
         )
 
 
@@ -284,7 +287,8 @@ def format_coverage_table(exploration: dict[str, Any], every_s: float = 300.0) -
     lines = [
         f"exploration: {exploration['reachable_floor_m2']:.0f} m² of reachable floor; "
         f"ended: {exploration['ended']} after {exploration['duration_s']:.0f} s, "
-        f"{exploration['travelled_m']:.0f} m, {exploration['collisions']} collision steps",
+        f"{exploration['travelled_m']:.0f} m, {exploration['collisions']} collision steps, "
+        f"{exploration.get('clears', 0)} clears",
         "  time (min)  " + "  ".join(f"{r['time_s'] / 60.0:5.1f}" for r in rows),
         "  coverage    " + "  ".join(f"{100.0 * r['coverage']:4.0f}%" for r in rows),
     ]

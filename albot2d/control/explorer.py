@@ -22,7 +22,12 @@ the laser shows something in the strip the disc would sweep in the next
 starts from the passable cells within a diameter that it sees in a straight line. A goal
 it arrives at without clearing its frontier, or makes no progress towards for
 ``stuck_time_s``, is given up. It begins by turning once on the spot (the laser sees only
-forward) and is finished when no frontier is reachable.
+forward). When frontiers are left but no path reaches any (its grid has walled it in: a
+stray return, a mixed pixel at a door jamb, left an occupied cell in a doorway that no fan
+of the laser has passed through since), it forgets the grid's obstacle evidence, as ROS's
+navigation stack clears its costmaps to recover, and plans again; the walls in view come
+back with the next scan. It is finished when no frontier is left, or when no path is
+found right after such a clear (it clears again only once it has seen something new).
 """
 
 from __future__ import annotations
@@ -113,6 +118,8 @@ class FrontierExplorer:
         self._backing_s = 0.0
         self._progress_s = 0.0
         self._best_goal_dist = math.inf
+        self.clears = 0  # times the obstacle evidence was forgotten to recover
+        self._cleared = False  # and no new cell seen since
 
     # -- sensing -----------------------------------------------------------------------
 
@@ -131,7 +138,10 @@ class FrontierExplorer:
         stop_m = self.params.stop_distance_m
         if self._path is not None and blocked_ahead(scan, self.radius_m, stop_m):
             self._replan = True
-        return self.knowledge.integrate(pose, scan)
+        new = self.knowledge.integrate(pose, scan)
+        if len(new):
+            self._cleared = False
+        return new
 
     # -- acting ------------------------------------------------------------------------
 
@@ -202,14 +212,17 @@ class FrontierExplorer:
             self._path = None
             return
         seeds, seed_dist = search_seeds(self.knowledge, pose, self.radius_m, passable)
-        if len(seeds) == 0:
-            self.finished = True
-            self._path = None
-            return
-        path = plan_path(self.spec, cost, goals, seeds, seed_dist, pose)
+        path = plan_path(self.spec, cost, goals, seeds, seed_dist, pose) if len(seeds) else None
         if path is None:
-            self.finished = True
             self._path = None
+            if self._cleared:
+                self.finished = True
+                return
+            # Walled in with frontiers left: forget the obstacles and plan again.
+            self.knowledge.forget_obstacles()
+            self._cleared = True
+            self.clears += 1
+            self._plan(pose, time_s)
             return
         goal = (float(path[-1, 0]), float(path[-1, 1]))
         if self._goal is None or math.hypot(goal[0] - self._goal[0], goal[1] - self._goal[1]) > 0.5:

@@ -199,6 +199,12 @@ class KnowledgeGrid:
             self.known.reshape(-1)[cells] = True
         return new
 
+    def forget_obstacles(self) -> None:
+        """Drop all evidence of obstacles (positive log-odds back to 0): the walls the laser
+        shows next come back with its next scans, a stray return does not. What was seen
+        stays seen. A planner's recovery when its grid has walled it in."""
+        np.minimum(self.evidence, 0.0, out=self.evidence)
+
     def mark_footprint(self, pose: Pose, radius_m: float) -> None:
         """Cells whose centre lies under the robot's disc become free (unless occupied)."""
         r = self.spec.resolution_m
