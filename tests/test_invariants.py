@@ -252,8 +252,8 @@ def test_albot1_beats_raw_odometry_on_average(profile, noise, episodes, tour_m) 
     assert all(r.status != "crash" for r in records), [r.error for r in records]
     # Every invariant but the heading bound holds. That bound is Albot1's own error model at
     # 4 sigma; with the high preset Albot1 holds it in all eight episodes (largest error /
-    # bound 0.94; before the line-fit discretisation term one left it: docs/invariants.md),
-    # too close to the edge to pin here.
+    # bound 0.90 on the corrected laser; before the line-fit discretisation term one left
+    # it: docs/invariants.md), too close to the edge to pin here.
     others = [{k: v for k, v in r.violations.items() if k != "heading_error_bound"}
               for r in records]  # fmt: skip
     assert others == [{}] * episodes, others
