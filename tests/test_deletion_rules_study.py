@@ -68,6 +68,19 @@ def test_the_faithfulness_check_can_fail(run: RecordedRun) -> None:
         check_faithful(dataclasses.replace(run, maps=tuple(maps)))
 
 
+def test_albot1s_poses_do_not_depend_on_its_deletion_rule(run: RecordedRun) -> None:
+    # the former table took its poses from albot1[deletion=paper]: the same local maps at
+    # the same poses (localisation never reads the global map), and its own map is the
+    # paper rule's re-added map
+    paper = record_run(RunSpec(max_frames=FRAMES), "albot1[deletion=paper]")
+    assert paper.name == "albot1[deletion=paper]"
+    assert [(m.frame_index, m.pose) for m in paper.maps] == [
+        (m.frame_index, m.pose) for m in run.maps
+    ]
+    assert check_faithful(paper) > 0
+    assert len(paper.mapper.global_map().segments) < len(run.mapper.global_map().segments)
+
+
 def test_no_deletion_keeps_at_least_what_every_rule_keeps(run: RecordedRun) -> None:
     for poses in ("albot1", "true"):
         ceiling = rule_scores(run, None, poses)
@@ -104,6 +117,8 @@ def test_the_command_prints_the_table_and_writes_json(tmp_path: Path, capsys) ->
         (["--noise", "nosuch"], "nosuch"),
         (["--tour-length", "-3"], "tour_length_m must be a positive number"),
         (["--json", "/nonexistent-dir/x.json"], "--json: no directory"),
+        (["--albot1", "naive"], "--albot1: give albot1"),
+        (["--albot1", "albot1[deletion=nosuch]"], "nosuch"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(argv: list[str], message: str, capsys) -> None:  # type: ignore[no-untyped-def]

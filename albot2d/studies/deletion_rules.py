@@ -45,12 +45,12 @@ from numpy.typing import NDArray
 from albot2d.errors import InputError
 from albot2d.evaluation.metrics.egocentric import EgocentricQuality, in_robot_frame
 from albot2d.evaluation.run.experiment import run_experiment
-from albot2d.evaluation.run.scoring import egocentric_at
+from albot2d.evaluation.run.scoring import REVISIT_GAP_MAPS, egocentric_at, revisits_section
 from albot2d.evaluation.run.setup import RunSpec
 from albot2d.evaluation.run.trace import Stop, Trace
 from albot2d.frames import Frame
 from albot2d.geometry import Pose
-from albot2d.mapping.albot1.global_map import GlobalMap, GlobalMapParams, MapSnapshot
+from albot2d.mapping.albot1.global_map import GlobalMap, GlobalMapParams, MapSnapshot, UpdateReport
 from albot2d.mapping.albot1.mapper import Albot1
 from albot2d.mapping.protocol import Mapper
 from albot2d.perception.surfaces import transform_segments_fast
@@ -64,6 +64,7 @@ __all__ = [
     "Rule",
     "RuleRow",
     "StopScore",
+    "Transience",
     "check_faithful",
     "deletion_study",
     "format_table",
@@ -71,12 +72,12 @@ __all__ = [
     "readd",
     "record_run",
     "rule_scores",
+    "transience",
 ]
 
 FloatArray = NDArray[np.float64]
 Poses = Literal["albot1", "true"]
 POSES: tuple[Poses, ...] = ("albot1", "true")
-_MAPPER = "albot1"
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,6 +98,8 @@ RULES: tuple[Rule, ...] = (
          "`visible`, `min_visible_share=0.5`"),
     Rule("visible, min_visible_share=0", dataclasses.replace(_VISIBLE, min_visible_share=0.0),
          "`visible`, `min_visible_share=0` (any point)"),
+    Rule("visible, seen_side=any", dataclasses.replace(_VISIBLE, seen_side="any"),
+         '`visible`, `seen_side="any"`'),
     Rule("paper", GlobalMapParams.preset("paper"), "`paper`"),
     Rule("original", GlobalMapParams.preset("original"), "`original`"),
     Rule("v1", GlobalMapParams.preset("v1"), "`v1`"),
@@ -124,6 +127,7 @@ class RecordedRun:
     spec: RunSpec
     trace: Trace
     mapper: Albot1
+    name: str
     maps: tuple[RememberedMap, ...]
     remembered_after_row: NDArray[np.int64]
     walls: FloatArray
@@ -137,11 +141,14 @@ class RecordedRun:
         return stops
 
 
-def record_run(spec: RunSpec) -> RecordedRun:
-    """Drive ``spec`` through Albot₁ alone (default parameters) and keep what re-adding
+def record_run(spec: RunSpec, albot1: str = "albot1") -> RecordedRun:
+    """Drive ``spec`` through one Albot₁ alone (``albot1``: ``"albot1"``, its defaults, or
+    ``"albot1[KEY=VALUE,…]"``; the spec's own mappers are replaced) and keep what re-adding
     its local maps needs: the run's stops are captured unscored (``score=False``), so each
     keeps its seen window and Albot₁'s pose estimate there."""
-    spec = dataclasses.replace(spec, mappers=(_MAPPER,))
+    if albot1 != "albot1" and not albot1.startswith("albot1["):
+        raise InputError(f"--albot1: give albot1 or albot1[KEY=VALUE,...], got {albot1!r}")
+    spec = dataclasses.replace(spec, mappers=(albot1,))
     got: dict[str, Mapper] = {}
     remembered: list[int] = []
 
@@ -149,10 +156,10 @@ def record_run(spec: RunSpec) -> RecordedRun:
         got.update(mappers)
 
     def count(frame: Frame, travelled_m: float) -> None:
-        remembered.append(len(mapper_of(got).route))
+        remembered.append(len(mapper_of(got, albot1).route))
 
     result = run_experiment(spec, score=False, on_mappers=capture, on_frame=count)
-    mapper = mapper_of(got)
+    mapper = mapper_of(got, albot1)
     truth = result.trace.true_poses
     if truth is None or result.world is None:
         raise RuntimeError("a simulated run has its true poses and world")
@@ -163,21 +170,27 @@ def record_run(spec: RunSpec) -> RecordedRun:
         for lm in mapper.route
     )  # fmt: skip
     return RecordedRun(
-        spec, result.trace, mapper, maps, np.array(remembered, np.int64),
+        spec, result.trace, mapper, albot1, maps, np.array(remembered, np.int64),
         np.asarray(result.world.obstacle_segments, np.float64),
     )  # fmt: skip
 
 
-def mapper_of(mappers: Mapping[str, Mapper]) -> Albot1:
-    mapper = mappers.get(_MAPPER)
+def mapper_of(mappers: Mapping[str, Mapper], name: str) -> Albot1:
+    mapper = mappers.get(name)
     if not isinstance(mapper, Albot1):
-        raise RuntimeError(f"the run's {_MAPPER!r} mapper is not Albot1: {mapper!r}")
+        raise RuntimeError(f"the run's {name!r} mapper is not Albot1: {mapper!r}")
     return mapper
 
 
-def readd(maps: Sequence[RememberedMap], params: GlobalMapParams | None, poses: Poses) -> GlobalMap:
+def readd(
+    maps: Sequence[RememberedMap],
+    params: GlobalMapParams | None,
+    poses: Poses,
+    on_update: Callable[[UpdateReport], None] | None = None,
+) -> GlobalMap:
     """A fresh global map with ``maps`` added in order, each at Albot₁'s pose or its true
-    pose, under the rule ``params`` (``None``: every view inserted, nothing deleted).
+    pose, under the rule ``params`` (``None``: every view inserted, nothing deleted);
+    ``on_update`` gets each update's report (not with ``None``).
 
     The views are placed as Albot₁ places them (``transform_segments_fast``), so under
     Albot₁'s own rule at its own poses the result is its global map bit for bit."""
@@ -190,13 +203,15 @@ def readd(maps: Sequence[RememberedMap], params: GlobalMapParams | None, poses: 
         if params is None:
             gm.insert(segs, m.map_id)
         else:
-            gm.add_view(segs, m.map_id, pose)
+            report = gm.add_view(segs, m.map_id, pose)
+            if on_update is not None:
+                on_update(report)
     return gm
 
 
 def _robot_pose(run: RecordedRun, stop: Stop, poses: Poses) -> FloatArray:
     if poses == "albot1":
-        return stop.estimates[_MAPPER][0]
+        return stop.estimates[run.name][0]
     assert run.trace.true_poses is not None  # RecordedRun: a simulated run
     return run.trace.true_poses[stop.row]
 
@@ -230,16 +245,50 @@ class StopScore:
 
 
 def rule_scores(
-    run: RecordedRun, params: GlobalMapParams | None, poses: Poses
+    run: RecordedRun, params: GlobalMapParams | None, poses: Poses, gm: GlobalMap | None = None
 ) -> tuple[StopScore, ...]:
-    """Each stop's egocentric quality of the run's local maps re-added under ``params``."""
-    gm = readd(run.maps, params, poses)
+    """Each stop's egocentric quality of the run's local maps re-added under ``params``
+    (``gm``: that map, when already re-added)."""
+    gm = readd(run.maps, params, poses) if gm is None else gm
     out = []
     for stop in run.stops():
         snap = gm.snapshot(at_update=int(run.remembered_after_row[stop.row]))
         q = _score(run, stop, snap, _robot_pose(run, stop, poses))
         out.append(StopScore(stop.travelled_m, q.completeness, q.accuracy_m_p95, q.surfaces))
     return tuple(out)
+
+
+@dataclass(frozen=True, slots=True)
+class Transience:
+    """How transient a re-added map is (paper Fig. 10): surfaces added and kept at the end,
+    the revisiting updates (a view touching a map more than ``REVISIT_GAP_MAPS`` maps back,
+    as report.json's ``mappers.NAME.revisits`` counts them) and what they deleted, and the
+    mean wall time of an update (re-adding, this process, whatever else the machine ran)."""
+
+    added: int
+    kept: int
+    revisit_updates: int
+    revisit_deleted: int
+    ms_per_update: float
+
+
+def transience(
+    run: RecordedRun, params: GlobalMapParams | None, poses: Poses = "albot1"
+) -> tuple[GlobalMap, Transience]:
+    """The run's local maps re-added under ``params`` and how transient that map is."""
+    revisits = [0, 0]
+
+    def count(report: UpdateReport) -> None:
+        oldest = min(report.affected_maps, default=-1)
+        if oldest >= 0 and report.map_id - oldest > REVISIT_GAP_MAPS:
+            revisits[0] += 1
+            revisits[1] += report.deleted_current + report.deleted_older
+
+    t0 = time.perf_counter()
+    gm = readd(run.maps, params, poses, count)
+    ms = 1e3 * (time.perf_counter() - t0) / max(len(run.maps), 1)
+    added = sum(len(m.segments) for m in run.maps)
+    return gm, Transience(added, len(gm), revisits[0], revisits[1], ms)
 
 
 def check_faithful(run: RecordedRun) -> int:
@@ -257,11 +306,18 @@ def check_faithful(run: RecordedRun) -> int:
         _same(mine, its, f"after update {update} (stop at {stop.travelled_m:.1f} m)")
         compared += len(its.segments)
         again = _score(run, stop, mine, _robot_pose(run, stop, "albot1"))
-        own = egocentric_at(run.trace, stop, _MAPPER, run.walls)
+        own = egocentric_at(run.trace, stop, run.name, run.walls)
         if again != own:
             raise RuntimeError(f"stop at {stop.travelled_m:.1f} m: re-added map scores "
                                f"{again}, the run's own {own}")  # fmt: skip
     _same(gm.snapshot(), mapper.global_map(), "at the end")
+    own_revisits = revisits_section(mapper, REVISIT_GAP_MAPS)
+    _, mine_t = transience(run, mapper.params.global_map)
+    if own_revisits is None or (mine_t.revisit_updates, mine_t.revisit_deleted) != (
+        own_revisits.updates,
+        own_revisits.deleted_surfaces,
+    ):
+        raise RuntimeError(f"re-added revisits {mine_t}, Albot₁'s own {own_revisits}")
     return compared + len(gm)
 
 
@@ -283,6 +339,7 @@ class RuleRow:
     label: str
     albot1: tuple[StopScore, ...]
     true: tuple[StopScore, ...]
+    transience: Transience  # at Albot₁'s poses
 
 
 @dataclass(frozen=True, slots=True)
@@ -306,19 +363,22 @@ def deletion_study(
     spec: RunSpec,
     rules: Sequence[Rule] = RULES,
     *,
+    albot1: str = "albot1",
     on_rule: Callable[[str], None] | None = None,
 ) -> DeletionStudy:
-    """Record ``spec``'s run, check re-adding is faithful, and score every rule at every
-    stop both ways (``on_rule(name)`` before each rule: progress)."""
+    """Record ``spec``'s run through ``albot1`` (``record_run``), check re-adding is
+    faithful, and score every rule at every stop both ways (``on_rule(name)`` before each
+    rule: progress)."""
     t0 = time.process_time()
-    run = record_run(spec)
+    run = record_run(spec, albot1)
     faithful = check_faithful(run)
     rows = []
     for rule in rules:
         if on_rule is not None:
             on_rule(rule.name)
-        rows.append(RuleRow(rule.name, rule.label, rule_scores(run, rule.params, "albot1"),
-                            rule_scores(run, rule.params, "true")))  # fmt: skip
+        gm, kept = transience(run, rule.params)
+        rows.append(RuleRow(rule.name, rule.label, rule_scores(run, rule.params, "albot1", gm),
+                            rule_scores(run, rule.params, "true"), kept))  # fmt: skip
     trace = run.trace
     return DeletionStudy(
         run.spec.to_dict(), trace.n_frames, float(trace.travelled_m[-1]), len(run.maps),
@@ -372,6 +432,16 @@ def format_table(
             " / ".join(_num(row.true[i].completeness) for i in cols),
         ]
         head.append(f"| {row.label} | " + " | ".join(cells) + " |")
+    head += ["", "At Albot₁'s poses, over the whole run (revisit: a view touching a map more "
+             "than 20 maps back):"]  # fmt: skip
+    for row in study.rows:
+        t = row.transience
+        gone = t.added - t.kept
+        head.append(
+            f"- {row.rule}: {t.kept:,} of {t.added:,} surfaces kept, {gone:,} deleted "
+            f"({100 * gone / max(t.added, 1):.0f} %); {t.revisit_updates:,} revisiting updates "
+            f"deleted {t.revisit_deleted:,}; {t.ms_per_update:.2f} ms per update"
+        )
     return "\n".join(head)
 
 
@@ -410,7 +480,7 @@ def _spec(args: argparse.Namespace) -> RunSpec:
         tour_kind=args.tour_kind,
         tour_length_m=default.tour_length_m if length is None else length,
         tour_length_is_minimum=args.min_tour_length is not None,
-        mappers=(_MAPPER,),
+        mappers=("albot1",),
         max_frames=args.max_frames,
     )
 
@@ -439,6 +509,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         type=float,
         metavar="METRES",
         help="a tour at least METRES long (100: the 282 m loop of the former table)",
+    )
+    ap.add_argument(
+        "--albot1",
+        default="albot1",
+        metavar="SPEC",
+        help="the Albot₁ whose poses are used: albot1 (default) or "
+        "albot1[KEY=VALUE,...], e.g. albot1[deletion=paper]; its own map is "
+        "the one re-adding is checked against",
     )
     ap.add_argument("--max-frames", type=int, help="cut the run short after this many frames")
     ap.add_argument(
@@ -471,7 +549,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"deletion_rules: re-adding under {name}", file=sys.stderr)
 
     try:
-        study = deletion_study(spec, on_rule=progress)
+        study = deletion_study(spec, albot1=args.albot1, on_rule=progress)
     except InputError as exc:
         print(f"deletion_rules: {exc}", file=sys.stderr)
         return 2
