@@ -23,6 +23,7 @@ from albot2d.studies.deletion_rules import (
     readd,
     record_run,
     rule_scores,
+    transience,
 )
 
 # ~42 m of the default run: stops at 20 and 40 m and the end
@@ -91,6 +92,8 @@ def test_no_deletion_keeps_at_least_what_every_rule_keeps(run: RecordedRun) -> N
             assert len(scores) == len(ceiling)
             for s, c in zip(scores, ceiling, strict=True):
                 assert s.surfaces <= c.surfaces, (rule.name, poses, s.travelled_m)
+        _, kept = transience(run, None, poses)
+        assert (kept.added, kept.kept, kept.revisit_updates) == (total, total, 0)
         # v1 deletes most of what is added (albot2d 0.1's reading)
         v1 = rule_scores(run, RULES[-1].params, poses)
         assert v1[-1].surfaces < 0.5 * ceiling[-1].surfaces
