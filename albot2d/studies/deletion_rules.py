@@ -2,13 +2,16 @@
 
 Owns the "Measured" table of docs/albot1.md's section "The global map's deletion rule
 (algorithm #5)". One run (``RunSpec``, by default the default ``albot2d run``: office seed
-0, dataset 1, ``typical`` noise, the default loop tour) is driven through Albot₁ with its
-default parameters; its route map keeps every remembered local map (the view's surfaces,
-the pose Albot₁ gave it) and the run's frames give each its true pose. The local maps are
+0, dataset 1, ``typical`` noise, the default loop tour) is driven through Albot₁ (its
+defaults, or ``--albot1 'albot1[KEY=VALUE,…]'``); its route map keeps every remembered
+local map (the view's surfaces, the pose Albot₁ gave it) and the run's frames give each its
+true pose. The local maps are
 then re-added, in order, into a fresh ``GlobalMap`` under each rule of ``RULES`` (the
-presets of ``GlobalMapParams.preset``, ``visible`` with lower ``min_visible_share``, and
-``no deletion``: ``GlobalMap.insert``, which adds a view deleting nothing, the ceiling),
-once at Albot₁'s poses and once at the true poses.
+presets of ``GlobalMapParams.preset``, ``visible`` with lower ``min_visible_share`` or
+either seen side, and ``no deletion``: ``GlobalMap.insert``, which adds a view deleting
+nothing, the ceiling), once at Albot₁'s poses and once at the true poses. At Albot₁'s poses
+each rule's transience is counted too (``Transience``: surfaces kept, revisiting updates
+as report.json counts them, time per update).
 
 At each of the run's own homing stops every re-added map is scored exactly as the run
 scores Albot₁'s map there (``scoring.egocentric_at`` on the stop's seen window, the map
@@ -18,12 +21,12 @@ global map, so its poses, and the stops, are the same under any rule.
 
 Faithfulness is checked, not assumed: re-added under Albot₁'s own rule at its own poses,
 the map must equal the mapper's global map (same surfaces, same ids, bit for bit) at every
-stop and at the end, with the same scores (``RuntimeError`` otherwise).
+stop and at the end, with the same scores and revisits (``RuntimeError`` otherwise).
 
 Run from the command line (see ``--help``)::
 
     python -m albot2d.studies.deletion_rules                        # the default run
-    python -m albot2d.studies.deletion_rules --min-tour-length 100  # the 282 m tour
+    python -m albot2d.studies.deletion_rules --min-tour-length 100  # the 283 m tour
     python -m albot2d.studies.deletion_rules --max-frames 600 --json out.json
 """
 
