@@ -89,11 +89,6 @@ def _numba_kernel() -> Callable[..., None] | None:
     return compiled_kernel("albot2d.sim.raycast_numba", "cast_beams")
 
 
-def _surface_kernel() -> Callable[..., None] | None:
-    """``raycast_numba.same_surface`` (see ``_numba_kernel``)."""
-    return compiled_kernel("albot2d.sim.raycast_numba", "same_surface")
-
-
 def _edges_kernel() -> Callable[..., None] | None:
     """``raycast_numba.depth_edges`` (see ``_numba_kernel``)."""
     return compiled_kernel("albot2d.sim.raycast_numba", "depth_edges")
@@ -279,7 +274,7 @@ class RayCaster:
         point, seg = self._static_through(pts)
         extra = _clean_extra(extra_segments)
         if len(extra):
-            near = _point_segment_table(pts, extra) <= SURFACE_TOLERANCE_M
+            near = point_segment_distance(pts, extra) <= SURFACE_TOLERANCE_M
             ep, es = np.nonzero(near)
             point = np.concatenate([point, ep])
             seg = np.concatenate([seg, es + self.n_segments])
@@ -296,27 +291,18 @@ class RayCaster:
 
         Neighbouring beams whose hits are not on one surface straddle an occluding edge,
         where a real laser's footprint can return a mixed pixel. A point on no segment is
-        on no surface."""
+        on no surface. (The laser asks this through ``depth_edges``, whose compiled kernel
+        makes the same test inline.)"""
         pa = np.asarray(p, dtype=np.float64).reshape(-1, 2)
         qa = np.asarray(q, dtype=np.float64).reshape(-1, 2)
         n = len(pa)
         if len(qa) != n:
             raise InputError(f"same_surface needs as many points q as p, got {len(qa)} and {n}")
         extra = _clean_extra(extra_segments)
-        vertex = self._vertex
-        own = _vertex_ids(extra) + self._n_vertices
-        if self._backend == "numba":
-            kernel = _surface_kernel()
-            assert kernel is not None  # the backend was resolved to numba
-            out = np.empty(n, dtype=np.bool_)
-            grid = self.grid
-            kernel(pa, qa, grid.table, grid.piece_segment, grid.cell_start, self._layout,
-                   vertex, piece_table(extra) if len(extra) else _NO_PIECES, own,
-                   SURFACE_TOLERANCE_M, out)  # fmt: skip
-            return out
         point, seg = self.segments_through(np.concatenate([pa, qa]), extra_segments=extra)
+        vertex = self._vertex
         if len(extra):
-            vertex = np.concatenate([vertex, own])
+            vertex = np.concatenate([vertex, _vertex_ids(extra) + self._n_vertices])
         n_vertices = int(vertex.max(initial=-1)) + 1
         # One key per (pair k, corner of a segment through the point): p's and q's share
         # one exactly when a segment through each is the same or meets the other's end.
@@ -382,14 +368,8 @@ class RayCaster:
             return none, none
         grid = self.grid
         cells = grid.cells_near(pts[:, 0], pts[:, 1], SURFACE_TOLERANCE_M)
-        # The square around a point inside one cell gives the same cell four times.
-        cells[:, 1:][cells[:, 1:] == cells[:, :1]] = -1
-        cells[:, 3][cells[:, 3] == cells[:, 2]] = -1
-        cells[:, 2][cells[:, 2] == cells[:, 0]] = -1
         owner = np.repeat(np.arange(len(pts)), cells.shape[1])
         cells = cells.ravel()
-        keep = cells >= 0
-        owner, cells = owner[keep], cells[keep]
         start, end = grid.cell_start[cells], grid.cell_start[cells + 1]
         counts = end - start
         owner = np.repeat(owner, counts)
@@ -400,7 +380,8 @@ class RayCaster:
         z = pts[owner, 0] + 1j * pts[owner, 1]
         on = _point_piece_distance(z, table[0, piece], table[1, piece]) <= SURFACE_TOLERANCE_M
         point, seg = owner[on], grid.piece_segment[piece[on]]
-        # A segment cut at a grid line passes through the cut point twice.
+        # A cell listed twice for a point, or a segment cut at a grid line through the point,
+        # gives a pair twice.
         key = np.unique(point * self.n_segments + seg)
         return key // self.n_segments, key % self.n_segments
 
@@ -433,14 +414,6 @@ def _point_piece_distance(
     e = b - a
     t = np.clip((np.conj(e) * (z - a)).real / np.maximum((e * np.conj(e)).real, 1e-300), 0, 1)
     return np.abs(z - a - t * e)
-
-
-def _point_segment_table(pts: FloatArray, segs: FloatArray) -> FloatArray:
-    """``(P, M)`` distances from every point to every segment."""
-    z = (pts[:, 0] + 1j * pts[:, 1])[:, None]
-    a = (segs[:, 0] + 1j * segs[:, 1])[None, :]
-    b = (segs[:, 2] + 1j * segs[:, 3])[None, :]
-    return _point_piece_distance(z, a, b)
 
 
 def _with(table: np.ndarray, extra: np.ndarray | None) -> np.ndarray:

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["cast_beams", "depth_edges", "same_surface"]
+__all__ = ["cast_beams", "depth_edges"]
 
 #: Distinct pieces seen edge-on a scan keeps track of; beyond this, all are checked.
 _EDGE_ON_SLOTS = 32
@@ -290,30 +290,11 @@ def _distance(x, y, a, b):
 
 
 @njit(cache=True, nogil=True)
-def same_surface(p, q, table, piece_segment, cell_start, layout, vertex, extra,
-                 extra_vertex, tol, out):  # fmt: skip
-    """``out[k]``: whether some segment through ``p[k]`` and some through ``q[k]`` share a
-    corner id (the same segment shares both): ``RayCaster.same_surface``'s numpy path."""
-    cp = np.empty(2 * _THROUGH_SLOTS, np.intp)
-    cq = np.empty(2 * _THROUGH_SLOTS, np.intp)
-    for k in range(len(out)):
-        mp = _corners_through(p[k, 0], p[k, 1], table, piece_segment, cell_start, layout,
-                              vertex, extra, extra_vertex, tol, cp)  # fmt: skip
-        mq = _corners_through(q[k, 0], q[k, 1], table, piece_segment, cell_start, layout,
-                              vertex, extra, extra_vertex, tol, cq)  # fmt: skip
-        found = False
-        for i in range(mp):
-            for j in range(mq):
-                if cp[i] == cq[j]:
-                    found = True
-        out[k] = found
-
-
-@njit(cache=True, nogil=True)
 def depth_edges(ox, oy, angles, r, hit, min_jump, table, piece_segment, cell_start, layout,
                 vertex, extra, extra_vertex, tol, out):  # fmt: skip
     """``out[i]``: whether beams ``i`` and ``i + 1`` straddle an occluding edge
-    (``RayCaster.depth_edges``' numpy path, with ``same_surface`` inline)."""
+    (``RayCaster.depth_edges``' numpy path, with ``RayCaster.same_surface``'s test inline:
+    some segment through each hit is the same or shares a corner id with the other's)."""
     cp = np.empty(2 * _THROUGH_SLOTS, np.intp)
     cq = np.empty(2 * _THROUGH_SLOTS, np.intp)
     for i in range(len(out)):

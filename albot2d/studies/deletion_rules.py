@@ -299,7 +299,7 @@ def check_faithful(run: RecordedRun) -> int:
     map equals Albot₁'s global map at every stop and at the end, with the run's own scores
     there; returns the number of surfaces compared. ``RuntimeError`` on any difference."""
     mapper = run.mapper
-    gm = readd(run.maps, mapper.params.global_map, "albot1")
+    gm, mine_t = transience(run, mapper.params.global_map)
     if gm.n_updates != mapper.map.n_updates:
         raise RuntimeError(f"re-added {gm.n_updates} updates, Albot₁ made {mapper.map.n_updates}")
     compared = 0
@@ -315,7 +315,6 @@ def check_faithful(run: RecordedRun) -> int:
                                f"{again}, the run's own {own}")  # fmt: skip
     _same(gm.snapshot(), mapper.global_map(), "at the end")
     own_revisits = revisits_section(mapper, REVISIT_GAP_MAPS)
-    _, mine_t = transience(run, mapper.params.global_map)
     if own_revisits is None or (mine_t.revisit_updates, mine_t.revisit_deleted) != (
         own_revisits.updates,
         own_revisits.deleted_surfaces,

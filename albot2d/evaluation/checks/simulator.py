@@ -275,6 +275,7 @@ class FrameChecker:
         self.batch_frames = batch_frames
         self.segments = np.asarray(obstacle_segments, dtype=np.float64).reshape(-1, 4)
         self._grid: SegmentGrid | None = None
+        self._corner: NDArray[np.intp] | None = None
         self._frames: list[Frame] = []
         self.frames = 0
         self.hits = 0
@@ -369,9 +370,11 @@ class FrameChecker:
         """Whether the exact hits ``p[k]`` and ``q[k]`` lie on one smooth run of wall: some
         segment through each is the same or shares an endpoint with the other (plain
         distances to every segment, independent of the simulator's ``same_surface``)."""
-        ends = np.concatenate([self.segments[:, :2], self.segments[:, 2:]])
-        _, corner = np.unique(ends, axis=0, return_inverse=True)
-        corner = corner.reshape(2, -1).T  # (N, 2): the ids of each segment's two ends
+        if self._corner is None:  # (N, 2): the ids of each segment's two ends
+            ends = np.concatenate([self.segments[:, :2], self.segments[:, 2:]])
+            _, ids = np.unique(ends, axis=0, return_inverse=True)
+            self._corner = ids.reshape(2, -1).T
+        corner = self._corner
         through_p = point_segment_distance(p, self.segments) <= _ON_SEGMENT_M
         through_q = point_segment_distance(q, self.segments) <= _ON_SEGMENT_M
         return np.array(
